@@ -1,0 +1,1 @@
+"""The four evogym benchmark tasks on top of tsim."""

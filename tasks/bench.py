@@ -1,0 +1,46 @@
+"""Throughput benchmark: random valid 5x5 bodies (fixed seed), sinusoidal open-loop actions."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from tasks.env import BatchEnv
+from tsim import runtime
+from tsim.sampling import sample_robot
+
+
+def sinusoid(t: int, n_act: int, period: float = 20.0) -> np.ndarray:
+    phase = 2 * np.pi * np.arange(n_act) / max(n_act, 1)
+    return 1.1 + 0.5 * np.sin(2 * np.pi * t / period + phase)
+
+
+def bench(task: str = "Walker-v0", robots: int = 128, steps: int = 100, seed: int = 0) -> dict:
+    """Time `steps` env steps of `robots` robots; compilation and the first step are excluded."""
+    if robots < 1 or steps < 1:
+        raise ValueError("robots and steps must be >= 1")
+    rng = np.random.default_rng(seed)
+    bodies = [sample_robot((5, 5), rng) for _ in range(robots)]
+    t0 = time.perf_counter()
+    env = BatchEnv(task, bodies, episode_steps=steps + 1)
+    A = env.sim.max_actuators
+    env.step(np.ones((robots, A)))  # compiles the kernel (or loads it from Taichi's cache)
+    compile_s = time.perf_counter() - t0
+    acts = [sinusoid(t, A)[None, :].repeat(robots, 0) for t in range(steps)]
+    t0 = time.perf_counter()
+    sim_s = 0.0
+    for t in range(steps):
+        env.step(acts[t])
+    wall = time.perf_counter() - t0
+    # physics alone, no observations or rewards
+    env.reset()
+    t1 = time.perf_counter()
+    for t in range(steps):
+        env.sim.set_actions(acts[t])
+        env.sim.step()
+    sim_s = time.perf_counter() - t1
+    return {"robot_steps_per_s": robots * steps / wall,
+            "physics_robot_steps_per_s": robots * steps / sim_s,
+            "compile_s": compile_s, "threads": runtime.threads(), "robots": robots,
+            "steps": steps, "task": task}

@@ -1,0 +1,23 @@
+"""Statistical parity on evogym's 160 random robots (issue 2 acceptance 3, issue 3 acceptance 3):
+per task Spearman(ours, evogym) >= 0.9 x evogym's Spearman against its own +1e-6 rerun, and the
+median |return difference| <= 4 x evogym's own pooled chaos median."""
+
+import pytest
+
+from tasks.validate import validate_returns
+
+
+@pytest.fixture(scope="module")
+def report(data_dir):
+    return validate_returns(data_dir / "returns")["tasks"]
+
+
+def test_all_four_tasks_present(report):
+    assert set(report) == {"Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"}
+
+
+@pytest.mark.parametrize("task", ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"])
+def test_returns_rank_and_size_like_evogym(report, task):
+    t = report[task]
+    assert t["spearman"] >= 0.9 * t["spearman_evogym_vs_perturbed"]
+    assert t["median_abs_diff"] <= 4 * t["chaos_median_abs_return_diff"]

@@ -1,0 +1,32 @@
+"""Taichi start-up: one `ti.init` per process, f64, CPU unless a GPU is asked for."""
+
+from __future__ import annotations
+
+import os
+
+import taichi as ti
+
+_ARCH: str | None = None
+
+
+def init(arch: str | None = None) -> str:
+    """Initialise Taichi once; later calls with another arch raise (Taichi cannot switch)."""
+    global _ARCH
+    arch = arch or os.environ.get("SGR_ARCH", "cpu")
+    if arch not in ("cpu", "gpu", "cuda", "vulkan", "metal"):
+        raise ValueError(f"unknown arch {arch!r}; use cpu, gpu, cuda, vulkan or metal")
+    if _ARCH is not None:
+        if arch != _ARCH:
+            raise ValueError(f"Taichi already runs on {_ARCH}; cannot switch to {arch} in one process")
+        return _ARCH
+    threads = os.environ.get("SGR_THREADS")
+    kwargs = {"cpu_max_num_threads": int(threads)} if threads else {}
+    ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32,
+            log_level=ti.WARN, **kwargs)
+    _ARCH = arch
+    return _ARCH
+
+
+def threads() -> int:
+    n = os.environ.get("SGR_THREADS")
+    return int(n) if n else (os.cpu_count() or 1)

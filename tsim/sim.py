@@ -1,0 +1,241 @@
+"""`BatchSim`: many worlds of one task (one robot each, bodies may differ) advanced together.
+
+The simulator knows bodies, worlds and actions; it knows nothing of tasks, rewards or evolution.
+Positions and velocities it reports are evogym's snapshot values (world units); a world that
+became unstable or non-finite is frozen at its last good snapshot and flagged.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from tsim import constants as C
+from tsim import kernels as K
+from tsim import runtime
+from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
+from tsim.world import World
+
+
+def _as_body(body: Body | object, passive_ok: bool) -> Body:
+    matrix = body.matrix if isinstance(body, Body) else body
+    if passive_ok:
+        m = as_body_matrix(matrix)
+        if not is_connected(m):
+            raise ValueError("bad body matrix: voxels are not 4-connected (disconnected body)")
+    else:
+        m = check_robot(matrix)
+    return body if isinstance(body, Body) else build_body(m)
+
+
+class BatchSim:
+    """B worlds of `world`, robot b built from `bodies[b]` and placed with its matrix's bottom-left
+    cell at grid cell `origin`. `passive_ok` admits bodies without actuators (evogym loads those as
+    plain objects; the reference traces contain a few)."""
+
+    def __init__(self, world: World, bodies: Sequence[Body | object], origin: tuple[int, int],
+                 *, arch: str | None = None, passive_ok: bool = False):
+        if len(bodies) == 0:
+            raise ValueError("BatchSim needs at least one body")
+        runtime.init(arch)
+        self.world = world
+        self.origin = (int(origin[0]), int(origin[1]))
+        self.bodies = [_as_body(b, passive_ok) for b in bodies]
+        self.free_objects = world.free_objects
+        self._build()
+        self.reset()
+
+    # ------------------------------------------------------------------ layout
+    def _build(self) -> None:
+        bodies, objs = self.bodies, self.free_objects
+        B = len(bodies)
+        parts = [[b] + [o.body for o in objs] for b in bodies]
+        n_pts = np.array([sum(p.n_points for p in ps) for ps in parts])
+        n_edges = np.array([sum(p.n_edges for p in ps) for ps in parts])
+        n_vox = np.array([sum(p.n_voxels for p in ps) for ps in parts])
+        self.n_robot_points = np.array([b.n_points for b in bodies])
+        self.n_actuators = np.array([b.n_actuators for b in bodies])
+        P, E, V = int(n_pts.max()), int(n_edges.max()), int(n_vox.max())
+        A = max(1, int(self.n_actuators.max()))
+        self.max_actuators = int(self.n_actuators.max())
+        self.max_robot_points = int(self.n_robot_points.max())
+
+        pos0 = np.zeros((B, P, 2))
+        edge_i = np.zeros((B, E, 4), dtype=np.int32)
+        edge_f = np.zeros((B, E, K.N_EDGE_F))
+        vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
+        lists = np.zeros((B, V, 2), dtype=np.int32)
+        counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
+        obj_start = []  # point offset of each free object (same in every world after the robot)
+        for w, ps in enumerate(parts):
+            p_off = e_off = v_off = 0
+            surf, surf_robot, rigid = [], 0, []
+            starts = []
+            for obj_id, part in enumerate(ps):
+                place = (self.origin if obj_id == 0 else objs[obj_id - 1].cell)
+                pts = part.place(*place)
+                starts.append(p_off)
+                pos0[w, p_off:p_off + part.n_points] = pts.T
+                sl = slice(e_off, e_off + part.n_edges)
+                edge_i[w, sl, 0] = part.edge_a + p_off
+                edge_i[w, sl, 1] = part.edge_b + p_off
+                edge_i[w, sl, 2:4] = part.edge_drivers if obj_id == 0 else -1
+                edge_f[w, sl, K.E_REST] = part.edge_rest
+                edge_f[w, sl, K.E_K] = part.edge_k
+                edge_f[w, sl, K.E_GOAL] = part.edge_rest
+                edge_f[w, sl, K.E_LEQ] = part.edge_rest
+                vs = slice(v_off, v_off + part.n_voxels)
+                vox_i[w, vs, K.V_PTS:K.V_PTS + 4] = part.voxel_points + p_off
+                vox_i[w, vs, K.V_OPEN:K.V_OPEN + 4] = part.voxel_open
+                vox_i[w, vs, K.V_TYPE] = part.voxel_type
+                vox_i[w, vs, K.V_OBJ] = obj_id
+                vox_i[w, vs, K.V_ROW] = part.voxel_rc[:, 0]
+                vox_i[w, vs, K.V_COL] = part.voxel_rc[:, 1]
+                s_idx = list(np.nonzero(part.voxel_is_surface)[0] + v_off)
+                surf += s_idx
+                if obj_id == 0:
+                    surf_robot = len(s_idx)
+                rigid += list(np.nonzero(part.voxel_type == C.RIGID)[0] + v_off)
+                p_off += part.n_points
+                e_off += part.n_edges
+                v_off += part.n_voxels
+            obj_start = starts
+            lists[w, :len(surf), 0] = surf
+            lists[w, :len(rigid), 1] = rigid
+            counts[w, K.N_PTS] = p_off
+            counts[w, K.N_EDGES] = e_off
+            counts[w, K.N_VOX] = v_off
+            counts[w, K.N_SURF] = len(surf)
+            counts[w, K.N_SURF_ROBOT] = surf_robot
+            counts[w, K.N_RIGID] = len(rigid)
+            counts[w, K.N_ACT] = bodies[w].n_actuators
+        # free objects sit right after the robot, so their offset differs per world
+        self._obj_offsets = [[int(self.n_robot_points[w]) + sum(o.body.n_points for o in objs[:k])
+                              for w in range(B)] for k in range(len(objs))]
+        del obj_start
+
+        t = self.world.terrain
+        nt = max(1, len(t.corners))
+        ter_f = np.zeros((nt, 12))
+        ter_i = np.zeros((nt, 4), dtype=np.int32)
+        if len(t.corners):
+            ter_f[:, :8] = t.corners.reshape(-1, 8)
+            ter_f[:, 8] = t.corners[:, :, 0].min(axis=1)
+            ter_f[:, 9] = t.corners[:, :, 0].max(axis=1)
+            ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
+            ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
+            ter_i[:] = t.open
+        self._pos0 = pos0
+        self._counts0 = counts
+        self._edge_f0 = edge_f
+        self.edge_i = edge_i
+        self.vox_i = vox_i
+        self.lists = lists
+        self.ter_f = ter_f
+        self.ter_i = ter_i
+        self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
+        self.state = np.zeros((B, P, 8))
+        self.work = np.zeros((B, P, K.N_WORK))
+        self.box = np.zeros((B, V, 4))
+        self.qf = np.zeros((B, 2, 4, 4))
+        self.qi = np.zeros((B, 2, 4, 2), dtype=np.int32)
+        self.actions = np.ones((B, A))
+
+    # ------------------------------------------------------------------ control
+    @property
+    def n_worlds(self) -> int:
+        return len(self.bodies)
+
+    def reset(self) -> None:
+        """Back to the initial placement at rest (evogym `reset`), every world running again."""
+        self.state[:] = 0.0
+        self.state[:, :, 0:2] = self._pos0
+        self.state[:, :, 4:6] = self._pos0
+        self.counts = self._counts0.copy()
+        self.edge_f = self._edge_f0.copy()
+        self.actions[:] = 1.0
+        self.time = np.zeros(self.n_worlds, dtype=np.int64)
+
+    def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
+        """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].
+
+        Accepts a (B, max_actuators) array (entries past a robot's actuator count are ignored) or
+        a list of B 1-D arrays of each robot's exact actuator count.
+        """
+        B = self.n_worlds
+        if isinstance(actions, np.ndarray) and actions.dtype != object:
+            a = np.asarray(actions, dtype=np.float64)
+            if a.shape != (B, self.max_actuators):
+                raise ValueError(f"wrong action shape: expected ({B}, {self.max_actuators}), "
+                                 f"got {a.shape}")
+            rows = [a[w, :self.n_actuators[w]] for w in range(B)]
+        else:
+            if len(actions) != B:
+                raise ValueError(f"wrong action shape: expected {B} rows, got {len(actions)}")
+            rows = []
+            for w, r in enumerate(actions):
+                r = np.asarray(r, dtype=np.float64).reshape(-1)
+                if r.shape != (self.n_actuators[w],):
+                    raise ValueError(f"wrong action shape for robot {w}: expected "
+                                     f"({self.n_actuators[w]},), got {r.shape}")
+                rows.append(r)
+        for w, r in enumerate(rows):
+            if not np.all(np.isfinite(r)):
+                raise ValueError(f"non-finite actions for robot {w}: {r[~np.isfinite(r)][:3]}")
+            self.actions[w, :len(r)] = np.clip(r, C.ACTION_MIN, C.ACTION_MAX)
+
+    def step(self, n: int = 1) -> None:
+        """Advance every running world by n env steps (30 substeps each)."""
+        for _ in range(n):
+            running = self.counts[:, K.STATUS] == K.RUNNING
+            K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f, self.vox_i,
+                          self.lists, self.box, self.qf, self.qi, self.actions, self.ter_f, self.ter_i,
+                          self.ter_grid, C.SUBSTEPS)
+            self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
+
+    def deactivate(self, mask: np.ndarray) -> None:
+        """Freeze worlds (e.g. terminated episodes) so they cost nothing and stop moving."""
+        mask = np.asarray(mask, dtype=bool)
+        sel = mask & (self.counts[:, K.STATUS] == K.RUNNING)
+        self.counts[sel, K.STATUS] = K.INACTIVE
+
+    # ------------------------------------------------------------------ read-out
+    @property
+    def status(self) -> np.ndarray:
+        return self.counts[:, K.STATUS].copy()
+
+    @property
+    def unstable(self) -> np.ndarray:
+        """Worlds frozen by evogym's self-collision instability rule or a non-finite state."""
+        s = self.counts[:, K.STATUS]
+        return (s == K.UNSTABLE) | (s == K.NONFINITE)
+
+    def robot_pos(self, w: int) -> np.ndarray:
+        """(2, n) robot point positions of world w, evogym point order, world units."""
+        return self.state[w, :self.n_robot_points[w], 0:2].T.copy()
+
+    def robot_vel(self, w: int) -> np.ndarray:
+        return self.state[w, :self.n_robot_points[w], 2:4].T.copy()
+
+    def object_pos(self, w: int, name: str) -> np.ndarray:
+        k, obj = self._free_object(name)
+        off = self._obj_offsets[k][w]
+        return self.state[w, off:off + obj.body.n_points, 0:2].T.copy()
+
+    def object_vel(self, w: int, name: str) -> np.ndarray:
+        k, obj = self._free_object(name)
+        off = self._obj_offsets[k][w]
+        return self.state[w, off:off + obj.body.n_points, 2:4].T.copy()
+
+    def _free_object(self, name: str):
+        for k, o in enumerate(self.free_objects):
+            if o.name == name:
+                return k, o
+        raise KeyError(f"no free object {name!r} in world {self.world.name}")
+
+    def robot_com(self) -> np.ndarray:
+        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass)."""
+        mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
+        s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
+        return s / self.n_robot_points[:, None]

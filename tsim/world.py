@@ -1,0 +1,148 @@
+"""Worlds: evogym world files turned into static terrain and free objects.
+
+Fixed terrain never moves in evogym (material 5: every corner point is fixed), so it is kept as
+static geometry with a dense cell grid for contact look-ups, not as simulated points. Free objects
+(Thrower's package) are simulated like the robot.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from functools import cache
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+
+from tsim import constants as C
+from tsim.body import Body, build_body
+
+TASK_WORLDS = ("Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0")
+
+
+@dataclass(frozen=True, eq=False)
+class WorldObject:
+    name: str
+    body: Body
+    cell: tuple[int, int]  # grid cell of the bottom-left of the object's bounding box
+    pos0: np.ndarray  # (2, n) exact initial positions
+
+    @property
+    def is_fixed(self) -> bool:
+        return bool(np.all(self.body.voxel_type == C.FIXED))
+
+
+@dataclass(frozen=True)
+class Terrain:
+    """Static surface voxels of every fixed object, with a cell -> voxel look-up grid.
+
+    `corners[i]` holds voxel i's corners (TL, TR, BR, BL) as exact doubles; `open[i]` flags its
+    sides without a connection (top, right, bottom, left), the only sides that can be contact edges;
+    `edge_corners[i, s]` are the two corner slots of side s in evogym's edge orientation.
+    """
+
+    corners: np.ndarray  # (n, 4, 2)
+    open: np.ndarray  # (n, 4) bool
+    edge_corners: np.ndarray  # (n, 4, 2) corner slots (0..3) of each side's endpoints a, b
+    grid: np.ndarray  # (grid_w, grid_h) int voxel index or -1 (includes cells off the surface: -1)
+    n_points: int  # number of terrain points (for evogym's global point count)
+
+
+@dataclass(frozen=True, eq=False)
+class World:
+    name: str
+    grid_w: int
+    grid_h: int
+    objects: tuple[WorldObject, ...]  # in evogym load order after the robot: sorted by name
+    terrain: Terrain
+
+    @property
+    def free_objects(self) -> tuple[WorldObject, ...]:
+        return tuple(o for o in self.objects if not o.is_fixed)
+
+    @property
+    def fixed_objects(self) -> tuple[WorldObject, ...]:
+        return tuple(o for o in self.objects if o.is_fixed)
+
+    def object(self, name: str) -> WorldObject:
+        for o in self.objects:
+            if o.name == name:
+                return o
+        raise KeyError(f"world {self.name} has no object {name!r}")
+
+
+def _object_from_json(name: str, data: dict, grid_w: int) -> WorldObject:
+    idx = [int(i) for i in data["indices"]]
+    xs = [i % grid_w for i in idx]
+    ys = [i // grid_w for i in idx]
+    x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+    w, h = x1 - x0 + 1, y1 - y0 + 1
+    m = np.zeros((h, w), dtype=np.int64)
+
+    def local(i: int) -> int:
+        return (y1 - i // grid_w) * w + (i % grid_w - x0)
+
+    for i, t in zip(idx, data["types"], strict=False):
+        m.flat[local(i)] = int(t)
+    pairs = {tuple(sorted((local(int(a)), local(int(b)))))
+             for a, nbs in data["neighbors"].items() for b in nbs}
+    conn = np.array(sorted(pairs), dtype=np.int64).T.reshape(2, -1)
+    body = build_body(m, conn, allow_fixed=True)
+    return WorldObject(name=name, body=body, cell=(x0, y0), pos0=body.place(x0, y0))
+
+
+def load_world(path: str | Path) -> World:
+    """Read an evogym world JSON file (grid size, objects with indices, types, neighbours)."""
+    path = Path(path)
+    try:
+        data = json.loads(path.read_text())
+        grid_w, grid_h = int(data["grid_width"]), int(data["grid_height"])
+        items = data["objects"].items()
+    except (OSError, ValueError, KeyError, AttributeError) as exc:
+        raise ValueError(f"bad world file {path}: {exc}") from None
+    objects = tuple(_object_from_json(n, d, grid_w) for n, d in sorted(items))
+    terrain = _build_terrain(objects, grid_w, grid_h)
+    return World(name=path.stem, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
+
+
+@cache
+def task_world(task: str) -> World:
+    """One of the four shipped task worlds (evogym's files, MIT licence, see tsim/worlds)."""
+    if task not in TASK_WORLDS:
+        raise ValueError(f"unknown task {task!r}; known tasks: {', '.join(TASK_WORLDS)}")
+    with resources.as_file(resources.files("tsim") / "worlds" / f"{task}.json") as p:
+        return load_world(p)
+
+
+# evogym edge orientation of a voxel's sides in corner slots (TL=0, TR=1, BR=2, BL=3):
+# surface sides run clockwise (outward normal = direction rotated +90 deg); inner sides keep
+# their creation direction (top TL->TR, right TR->BR, bottom BL->BR, left TL->BL).
+_SURFACE_SIDES = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+_INNER_SIDES = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
+
+
+def _build_terrain(objects: tuple[WorldObject, ...], grid_w: int, grid_h: int) -> Terrain:
+    corners, opens, sides, cells = [], [], [], []
+    n_points = 0
+    for obj in (o for o in objects if o.is_fixed):
+        b = obj.body
+        n_points += b.n_points
+        surface = b.voxel_is_surface
+        for v in range(b.n_voxels):
+            if not surface[v]:
+                continue
+            corners.append(obj.pos0[:, b.voxel_points[v]].T)
+            opens.append(b.voxel_open[v])
+            sides.append(np.where(b.voxel_open[v][:, None], _SURFACE_SIDES, _INNER_SIDES))
+            r, c = b.voxel_rc[v]
+            cells.append((obj.cell[0] + c, obj.cell[1] + b.matrix.shape[0] - 1 - r))
+    grid = -np.ones((grid_w, grid_h), dtype=np.int64)
+    for i, (gx, gy) in enumerate(cells):
+        grid[gx, gy] = i
+    return Terrain(
+        corners=np.array(corners, dtype=np.float64).reshape(-1, 4, 2),
+        open=np.array(opens, dtype=bool).reshape(-1, 4),
+        edge_corners=np.array(sides, dtype=np.int64).reshape(-1, 4, 2),
+        grid=grid, n_points=n_points,
+    )
