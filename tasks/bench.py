@@ -29,7 +29,6 @@ def bench(task: str = "Walker-v0", robots: int = 128, steps: int = 100, seed: in
     compile_s = time.perf_counter() - t0
     acts = [sinusoid(t, A)[None, :].repeat(robots, 0) for t in range(steps)]
     t0 = time.perf_counter()
-    sim_s = 0.0
     for t in range(steps):
         env.step(acts[t])
     wall = time.perf_counter() - t0

@@ -67,15 +67,12 @@ class BatchSim:
         vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
         lists = np.zeros((B, V, 2), dtype=np.int32)
         counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
-        obj_start = []  # point offset of each free object (same in every world after the robot)
         for w, ps in enumerate(parts):
             p_off = e_off = v_off = 0
             surf, surf_robot, rigid = [], 0, []
-            starts = []
             for obj_id, part in enumerate(ps):
                 place = (self.origin if obj_id == 0 else objs[obj_id - 1].cell)
                 pts = part.place(*place)
-                starts.append(p_off)
                 pos0[w, p_off:p_off + part.n_points] = pts.T
                 sl = slice(e_off, e_off + part.n_edges)
                 edge_i[w, sl, 0] = part.edge_a + p_off
@@ -100,7 +97,6 @@ class BatchSim:
                 p_off += part.n_points
                 e_off += part.n_edges
                 v_off += part.n_voxels
-            obj_start = starts
             lists[w, :len(surf), 0] = surf
             lists[w, :len(rigid), 1] = rigid
             counts[w, K.N_PTS] = p_off
@@ -113,7 +109,6 @@ class BatchSim:
         # free objects sit right after the robot, so their offset differs per world
         self._obj_offsets = [[int(self.n_robot_points[w]) + sum(o.body.n_points for o in objs[:k])
                               for w in range(B)] for k in range(len(objs))]
-        del obj_start
 
         t = self.world.terrain
         nt = max(1, len(t.corners))
