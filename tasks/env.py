@@ -92,16 +92,26 @@ class BatchEnv:
         return O.com(pos, np.ones(pos.shape[:2], dtype=bool))
 
     # ------------------------------------------------------------------ API
-    def reset(self) -> np.ndarray:
-        self.sim.reset()
-        self.t = 0
-        self.terminated = np.zeros(self.n_worlds, dtype=bool)
-        self._pos0 = self._robot()[0].copy()
+    def reset(self, mask: np.ndarray | None = None) -> np.ndarray:
+        """Start new episodes: all worlds, or only those where `mask` (B,) is True."""
+        self.sim.reset(mask)
+        if mask is None:
+            self.elapsed = np.zeros(self.n_worlds, dtype=np.int64)
+            self.terminated = np.zeros(self.n_worlds, dtype=bool)
+            self._pos0 = self._robot()[0].copy()
+        else:
+            self.elapsed[mask] = 0
+            self.terminated[mask] = False
         self._obs = self._observe()
         return self._obs.copy()
 
+    @property
+    def t(self) -> int:
+        """Steps taken by the longest-running world since its reset."""
+        return int(self.elapsed.max())
+
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        if self.t >= self.episode_steps:
+        if np.any(self.elapsed >= self.episode_steps):
             raise RuntimeError("episode is over (truncated); call reset()")
         self.sim.set_actions(actions)
         pos_before = self._robot()[0].copy()
@@ -109,7 +119,7 @@ class BatchEnv:
         pkg_before = self._package_com() if self._has_package else None
         active = ~self.terminated
         self.sim.step()
-        self.t += 1
+        self.elapsed += 1
         unstable = self.sim.unstable & active
         com_after = O.com(self._robot()[0], self._mask)
         reward = self._reward(com_before, com_after, pkg_before)
@@ -124,8 +134,8 @@ class BatchEnv:
         self.terminated |= done
         self.sim.deactivate(self.terminated)
         self._obs = self._observe()
-        truncated = np.full(self.n_worlds, self.t >= self.episode_steps) & ~self.terminated
-        info = {"unstable": unstable, "t": self.t}
+        truncated = (self.elapsed >= self.episode_steps) & ~self.terminated
+        info = {"unstable": unstable, "t": self.elapsed.copy()}
         return self._obs.copy(), reward, self.terminated.copy(), truncated, info
 
     # ------------------------------------------------------------------ task definitions
@@ -171,6 +181,11 @@ class BatchEnv:
             cols = start[:, None] + np.arange(sight.shape[1])[None, :]
             obs[np.arange(B)[:, None], cols] = sight
         return obs[:, :self.max_obs_dim]
+
+    def observe(self) -> np.ndarray:
+        """Observations of the current state, recomputed (e.g. after editing `sim.state`)."""
+        self._obs = self._observe()
+        return self._obs.copy()
 
     def robot_obs(self, w: int) -> np.ndarray:
         """Robot w's observation without padding."""

@@ -142,15 +142,23 @@ class BatchSim:
     def n_worlds(self) -> int:
         return len(self.bodies)
 
-    def reset(self) -> None:
-        """Back to the initial placement at rest (evogym `reset`), every world running again."""
-        self.state[:] = 0.0
-        self.state[:, :, 0:2] = self._pos0
-        self.state[:, :, 4:6] = self._pos0
-        self.counts = self._counts0.copy()
-        self.edge_f = self._edge_f0.copy()
-        self.actions[:] = 1.0
-        self.time = np.zeros(self.n_worlds, dtype=np.int64)
+    def reset(self, mask: np.ndarray | None = None) -> None:
+        """Back to the initial placement at rest (evogym `reset`), running again; `mask` (B,) bool
+        resets only those worlds."""
+        sel = np.ones(self.n_worlds, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        if sel.shape != (self.n_worlds,):
+            raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
+        if mask is None:
+            self.counts = self._counts0.copy()
+            self.edge_f = self._edge_f0.copy()
+            self.time = np.zeros(self.n_worlds, dtype=np.int64)
+        self.state[sel] = 0.0
+        self.state[sel, :, 0:2] = self._pos0[sel]
+        self.state[sel, :, 4:6] = self._pos0[sel]
+        self.counts[sel] = self._counts0[sel]
+        self.edge_f[sel] = self._edge_f0[sel]
+        self.actions[sel] = 1.0
+        self.time[sel] = 0
 
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].

@@ -1,0 +1,138 @@
+"""gymnasium adapters: `SgrEnv` (one robot) and `SgrVectorEnv` (many robots, one Taichi batch).
+
+Both wrap `BatchEnv`, so a single env and a batch compute exactly the same numbers. Spaces are
+evogym's: actions Box(0.6, 1.6, (n_actuators,)), observations Box(-100, 100, (obs_dim,)), float64.
+Truncation of `gymnasium.make("sgr/<task>", body=m)` comes from gymnasium's TimeLimit with the
+paper's episode length; pass `max_episode_steps=` for another (evogym's: `EVOGYM_STEPS[task]`).
+`gymnasium.make_vec("sgr/<task>", num_envs=n, body=m)` or `(..., bodies=[...])` gives the
+batched `SgrVectorEnv`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import gymnasium as gym
+import numpy as np
+from gymnasium.vector import AutoresetMode, VectorEnv
+
+from tasks.env import BatchEnv
+from tasks.specs import TASKS
+from tsim import constants as C
+
+OBS_BOUND = 100.0
+_NO_LIMIT = 2**62  # BatchEnv's own limit is disabled; TimeLimit / episode_steps decides
+EVOGYM_STEPS = {name: spec.evogym_steps for name, spec in TASKS.items()}
+
+
+def _obs_space(n: int) -> gym.spaces.Box:
+    return gym.spaces.Box(-OBS_BOUND, OBS_BOUND, (n,), dtype=np.float64)
+
+
+def _action_space(n: int) -> gym.spaces.Box:
+    return gym.spaces.Box(C.ACTION_MIN, C.ACTION_MAX, (n,), dtype=np.float64)
+
+
+class SgrEnv(gym.Env):
+    """One evogym task with one robot. `body` is the 5x5 (or any) voxel matrix."""
+
+    metadata = {"render_modes": [], "render_fps": 50}
+
+    def __init__(self, task: str, body: Any, episode_steps: int | None = None,
+                 render_mode: str | None = None):
+        if render_mode is not None:
+            raise ValueError(f"render_mode {render_mode!r} is not supported; use tsim.render")
+        self._env = BatchEnv(task, [body], episode_steps=_NO_LIMIT if episode_steps is None
+                             else episode_steps)
+        self.task = task
+        self.observation_space = _obs_space(int(self._env.obs_dims[0]))
+        self.action_space = _action_space(int(self._env.n_actuators[0]))
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)  # the simulation itself is deterministic
+        return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
+
+    def step(self, action):
+        a = np.asarray(action, dtype=np.float64)
+        if a.shape != self.action_space.shape:
+            raise ValueError(f"wrong action shape: expected {self.action_space.shape}, got {a.shape}")
+        obs, r, term, trunc, info = self._env.step(a[None, :])
+        return (obs[0, :self.observation_space.shape[0]].copy(), float(r[0]), bool(term[0]),
+                bool(trunc[0]), {"unstable": bool(info["unstable"][0])})
+
+    def robot_points(self) -> np.ndarray:
+        """(2, N) robot point positions in evogym's point order, world units."""
+        return self._env.sim.robot_pos(0)
+
+    def object_points(self, name: str = "package") -> np.ndarray:
+        """(2, M) points of a free object, e.g. Thrower-v0's box ("package")."""
+        return self._env.sim.object_pos(0, name)
+
+    @property
+    def batch_env(self) -> BatchEnv:
+        return self._env
+
+
+class SgrVectorEnv(VectorEnv):
+    """All robots of `bodies` in one batched simulation (gymnasium VectorEnv, same-step autoreset).
+
+    Mixed bodies: observation and action lengths differ per robot, so rows are padded to the
+    largest: observations (num_envs, max_obs_dim) with zeros after robot i's `obs_dims[i]`
+    entries, actions (num_envs, max_actuators) of which robot i reads its first `n_actuators[i]`.
+    When a robot's episode ends its world is reset in the same call; the final observation is
+    in `info["final_obs"]` (rows of finished robots) with `info["_final_obs"]` the mask.
+    """
+
+    metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
+
+    def __init__(self, task: str, bodies: Sequence[Any] | None = None, *, body: Any = None,
+                 num_envs: int | None = None, max_episode_steps: int | None = None):
+        if (bodies is None) == (body is None):
+            raise ValueError("give either bodies=[...] (one per robot) or body= with num_envs")
+        if bodies is None:
+            bodies = [body] * (1 if num_envs is None else int(num_envs))
+        elif num_envs not in (None, 1, len(bodies)):  # make_vec passes num_envs=1 by default
+            raise ValueError(f"num_envs={num_envs} but {len(bodies)} bodies given")
+        self._env = BatchEnv(task, list(bodies), episode_steps=max_episode_steps)
+        self.num_envs = self._env.n_worlds
+        self.obs_dims = self._env.obs_dims.copy()
+        self.n_actuators = self._env.n_actuators.copy()
+        self.single_observation_space = _obs_space(self._env.max_obs_dim)
+        self.single_action_space = _action_space(self._env.sim.max_actuators)
+        self.observation_space = gym.vector.utils.batch_space(self.single_observation_space,
+                                                              self.num_envs)
+        self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
+
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        return self._env.reset(), {}
+
+    def step(self, actions):
+        obs, reward, term, trunc, info = self._env.step(np.asarray(actions, dtype=np.float64))
+        done = term | trunc
+        out = {"unstable": info["unstable"], "_unstable": np.ones(self.num_envs, dtype=bool)}
+        if done.any():
+            out["final_obs"] = np.where(done[:, None], obs, 0.0)
+            out["_final_obs"] = done
+            obs = self._env.reset(mask=done)
+        return obs, reward, term, trunc, out
+
+    def robot_points(self, i: int) -> np.ndarray:
+        """(2, N_i) point positions of robot i, evogym's point order, world units."""
+        return self._env.sim.robot_pos(i)
+
+    @property
+    def batch_env(self) -> BatchEnv:
+        return self._env
+
+
+def register_envs() -> None:
+    """Register `sgr/<task>` ids (idempotent); `import tasks` does this."""
+    for name, spec in TASKS.items():
+        env_id = f"sgr/{name}"
+        if env_id in gym.registry:
+            continue
+        gym.register(env_id, entry_point="tasks.gym_env:SgrEnv",
+                     vector_entry_point="tasks.gym_env:SgrVectorEnv", kwargs={"task": name},
+                     max_episode_steps=spec.paper_steps)

@@ -1,0 +1,73 @@
+"""gymnasium adapters: registration, check_env, evogym's spaces, point read-out, the VectorEnv."""
+
+import gymnasium as gym
+import numpy as np
+import pytest
+from gymnasium.utils.env_checker import check_env
+
+import tasks  # noqa: F401 - registers the sgr/ ids
+from tasks.env import BatchEnv, obs_dim
+from tasks.specs import TASKS
+
+BODY = np.array([[3, 3, 3, 3, 3], [3, 3, 3, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3]])
+
+
+@pytest.mark.filterwarnings("ignore::UserWarning")
+@pytest.mark.parametrize("task", list(TASKS))
+def test_check_env_passes_with_evogym_spaces(task):
+    env = gym.make(f"sgr/{task}", body=BODY)
+    check_env(env.unwrapped, skip_render_check=True)
+    n_points = env.unwrapped.robot_points().shape[1]
+    assert env.observation_space.shape == (obs_dim(task, n_points),)
+    assert (env.observation_space.low[0], env.observation_space.high[0]) == (-100.0, 100.0)
+    assert env.action_space.shape == (22,)  # BODY has 22 actuators
+    assert (env.action_space.low[0], env.action_space.high[0]) == (0.6, 1.6)
+    assert env.spec.max_episode_steps == TASKS[task].paper_steps
+
+
+def test_time_limit_truncates_at_the_paper_length_and_is_overridable():
+    env = gym.make("sgr/Thrower-v0", body=BODY, max_episode_steps=5)
+    env.reset(seed=0)
+    for _ in range(4):
+        assert not env.step(np.ones(22))[3]
+    assert env.step(np.ones(22))[3]
+
+
+def test_robot_and_box_points_follow_evogym_point_order():
+    env = gym.make("sgr/Thrower-v0", body=BODY).unwrapped
+    obs, _ = env.reset()
+    p = env.robot_points()
+    box = env.object_points("package")
+    assert p.shape == (2, 36) and box.shape[0] == 2
+    com = p.mean(axis=1)
+    # the observation holds relative x of every point, then relative y (spec section 6)
+    assert np.allclose(obs[6:6 + 36], p[0] - com[0], atol=1e-15)
+    assert np.allclose(obs[6 + 36:6 + 72], p[1] - com[1], atol=1e-15)
+    assert np.allclose(obs[2:4], box.mean(axis=1) - com, atol=1e-15)
+
+
+def test_wrong_action_shape_names_the_problem():
+    env = gym.make("sgr/Walker-v0", body=BODY).unwrapped
+    env.reset()
+    with pytest.raises(ValueError, match="wrong action shape"):
+        env.step(np.ones(21))
+    with pytest.raises(ValueError, match="non-finite"):
+        env.step(np.full(22, np.nan))
+
+
+def test_vector_env_matches_batch_env_and_autoresets_finished_robots():
+    small = np.array([[0, 0, 0], [2, 3, 2], [4, 0, 4]])
+    vec = gym.make_vec("sgr/Walker-v0", bodies=[BODY, small], max_episode_steps=4)
+    ref = BatchEnv("Walker-v0", [BODY, small], episode_steps=4)
+    obs, _ = vec.reset(seed=1)
+    assert np.array_equal(obs, ref.reset())
+    assert vec.single_action_space.shape == (22,) and vec.action_space.shape == (2, 22)
+    acts = np.full((2, 22), 1.3)
+    for _ in range(3):
+        o, r, term, trunc, _ = vec.step(acts)
+        o2, r2, *_ = ref.step(acts)
+        assert np.array_equal(o, o2) and np.array_equal(r, r2) and not trunc.any()
+    o, r, term, trunc, info = vec.step(acts)
+    o2, *_ = ref.step(acts)
+    assert trunc.all() and np.array_equal(info["final_obs"], o2)
+    assert np.array_equal(o, ref.reset())  # same-step autoreset returns the reset observation

@@ -1,0 +1,334 @@
+"""Headless rendering of sgr worlds to RGB frames and GIFs (numpy only: no OpenGL, no display).
+
+Colours and the actuator strain shading follow evogym's viewer (spec section 9) so our GIFs read
+like evogym's: voxels are filled quads through their four current corner points, surface edges are
+drawn on top as 1-px outlines. The rasterizer is vectorized over all triangles of a frame (two per
+voxel, half-plane tests on each triangle's pixel bounding box); where quads overlap the one painted
+later (robot over objects over terrain, later voxels over earlier) wins.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from pathlib import Path
+
+import numpy as np
+
+from tsim import constants as C
+from tsim.body import Body, build_body
+from tsim.world import World, task_world
+
+BACKGROUND = (244, 245, 247)
+GRID = (204, 204, 204)
+RIGID_COLOR = (38, 38, 38)  # rigid (1) and fixed terrain (5)
+SOFT_COLOR = (191, 191, 191)
+OUTLINE = (0, 63, 92)
+
+# ColorBrewer's 9-class "Oranges" and "Blues" (the anchors of matplotlib's maps of the same name);
+# evogym's 100-entry actuator tables are these interpolated linearly at i/99 and rounded.
+_ORANGE_ANCHORS = ("fff5eb", "fee6ce", "fdd0a2", "fdae6b", "fd8d3c", "f16913", "d94801", "a63603",
+                   "7f2704")
+_BLUE_ANCHORS = ("f7fbff", "deebf7", "c6dbef", "9ecae1", "6baed6", "4292c6", "2171b5", "08519c",
+                 "08306b")
+
+
+def _table(anchors: Sequence[str], n: int = 100) -> np.ndarray:
+    rgb = np.array([[int(h[i:i + 2], 16) for i in (0, 2, 4)] for h in anchors], dtype=np.float64)
+    x = np.linspace(0.0, 1.0, n)
+    knots = np.linspace(0.0, 1.0, len(anchors))
+    return np.round(np.stack([np.interp(x, knots, rgb[:, j]) for j in range(3)], axis=1)).astype(np.uint8)
+
+
+ORANGES = _table(_ORANGE_ANCHORS)  # (100, 3) uint8, H actuators
+BLUES = _table(_BLUE_ANCHORS)  # (100, 3) uint8, V actuators
+
+# sides of a voxel as corner slots (TL=0, TR=1, BR=2, BL=3): top, right, bottom, left
+_SIDE_CORNERS = np.array([[0, 1], [1, 2], [2, 3], [3, 0]])
+_MAX_CELLS = 1 << 21  # pixel tests per vectorized chunk (bounds memory for huge triangles)
+
+
+def strain_index(s: np.ndarray) -> np.ndarray:
+    """evogym's colour-table index for actuator strain s: stretched (s > 1) lighter, compressed darker.
+
+    evogym reuses the previous voxel's colour when s == 1 exactly; we use index 50 instead.
+    """
+    s = np.asarray(s, dtype=np.float64)
+    stretched = np.clip(((2.0 - s) * 50.0).astype(np.int64), 0, 50)
+    compressed = np.clip(((1.0 - s) * 50.0).astype(np.int64), 0, 50) + 50
+    return np.clip(np.where(s > 1.0, stretched, compressed), 0, 99)
+
+
+def actuator_strain(body: Body, points: np.ndarray) -> np.ndarray:
+    """(n_act,) mean current length of each actuator's driven edges / 0.1 (evogym's shading input)."""
+    d = points[:, body.edge_b] - points[:, body.edge_a]
+    length = np.hypot(d[0], d[1])
+    total = np.zeros(body.n_actuators)
+    count = np.zeros(body.n_actuators)
+    for slot in range(body.edge_drivers.shape[1]):
+        drv = body.edge_drivers[:, slot]
+        on = drv >= 0
+        np.add.at(total, drv[on], length[on])
+        np.add.at(count, drv[on], 1.0)
+    return total / np.maximum(count, 1.0) / C.MAIN_REST
+
+
+def voxel_colors(body: Body, points: np.ndarray) -> np.ndarray:
+    """(n_voxels, 3) uint8 fill colour of each voxel of `body` with its points at `points` (2, n)."""
+    t = body.voxel_type
+    out = np.zeros((body.n_voxels, 3), dtype=np.uint8)
+    out[(t == C.RIGID) | (t == C.FIXED)] = RIGID_COLOR
+    out[t == C.SOFT] = SOFT_COLOR
+    if body.n_actuators:
+        idx = strain_index(actuator_strain(body, points))
+        v = body.actuator_voxels
+        is_h = t[v] == C.H_ACT
+        out[v] = np.where(is_h[:, None], ORANGES[idx], BLUES[idx])
+    return out
+
+
+def _fill_triangles(owner: np.ndarray, tris: np.ndarray, ids: np.ndarray) -> None:
+    """Write max(id) into `owner` (H, W) for every pixel whose centre lies in a triangle (T, 3, 2)."""
+    H, W = owner.shape
+    lo = np.ceil(tris.min(axis=1) - 0.5).astype(np.int64)
+    hi = np.floor(tris.max(axis=1) - 0.5).astype(np.int64)
+    lo = np.maximum(lo, 0)
+    hi = np.minimum(hi, [W - 1, H - 1])
+    area = ((tris[:, 1, 0] - tris[:, 0, 0]) * (tris[:, 2, 1] - tris[:, 0, 1])
+            - (tris[:, 1, 1] - tris[:, 0, 1]) * (tris[:, 2, 0] - tris[:, 0, 0]))
+    keep = np.all(hi >= lo, axis=1) & (area != 0)
+    if not keep.any():
+        return
+    tris, lo, hi, ids, sign = tris[keep], lo[keep], hi[keep], ids[keep], np.sign(area[keep])
+    sx, sy = (hi - lo + 1).max(axis=0)
+    step = max(1, _MAX_CELLS // int(sx * sy))
+    flat = owner.reshape(-1)
+    for k in range(0, len(tris), step):
+        t, l, h, s = tris[k:k + step], lo[k:k + step], hi[k:k + step], sign[k:k + step]
+        xs = l[:, 0:1] + np.arange(sx)  # (t, sx) pixel columns
+        ys = l[:, 1:2] + np.arange(sy)  # (t, sy) pixel rows
+        px = (xs + 0.5)[:, None, :]
+        py = (ys + 0.5)[:, :, None]
+        inside = (xs <= h[:, 0:1])[:, None, :] & (ys <= h[:, 1:2])[:, :, None]
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            ax, ay = t[:, a, 0, None, None], t[:, a, 1, None, None]
+            ex, ey = t[:, b, 0, None, None] - ax, t[:, b, 1, None, None] - ay
+            inside &= (ex * (py - ay) - ey * (px - ax)) * s[:, None, None] >= 0
+        pix = ys[:, :, None] * W + xs[:, None, :]
+        tid = np.broadcast_to(ids[k:k + step, None, None], inside.shape)
+        np.maximum.at(flat, pix[inside], tid[inside])
+
+
+def _draw_segments(img: np.ndarray, seg: np.ndarray, color: tuple[int, int, int]) -> None:
+    """1-px lines for segments (E, 2, 2) in pixel coordinates, sampled at <= 1 px spacing."""
+    if len(seg) == 0:
+        return
+    H, W = img.shape[:2]
+    d = seg[:, 1] - seg[:, 0]
+    n = int(min(np.ceil(np.abs(d).max()) + 1, 4 * (H + W)))
+    t = np.linspace(0.0, 1.0, max(n, 2))
+    p = seg[:, None, 0, :] + t[None, :, None] * d[:, None, :]  # (E, n, 2)
+    x = np.floor(p[..., 0]).astype(np.int64).ravel()
+    y = np.floor(p[..., 1]).astype(np.int64).ravel()
+    ok = (x >= 0) & (x < W) & (y >= 0) & (y < H)
+    img[y[ok], x[ok]] = color
+
+
+class _Part:
+    """One drawable body: its voxel quads, outline segments (inset toward the voxel centre so an
+    outline stays on its own voxel's pixels) and, for static terrain, fixed colours."""
+
+    def __init__(self, body: Body, static_points: np.ndarray | None = None):
+        self.body = body
+        open_v, open_s = np.nonzero(body.voxel_open)
+        self.seg_voxel = open_v
+        self.seg_points = body.voxel_points[open_v[:, None], _SIDE_CORNERS[open_s]]  # (E, 2)
+        self.static = static_points
+        self.colors = voxel_colors(body, static_points) if static_points is not None else None
+
+    def geometry(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World-space quads (V, 4, 2), outline segments (E, 2, 2) and voxel centres (V, 2)."""
+        quads = points.T[self.body.voxel_points]
+        centres = quads.mean(axis=1)
+        seg = points.T[self.seg_points]
+        return quads, seg, centres
+
+
+class Camera:
+    """Follows the tracked points' bounding-box centre with exponential smoothing, at a fixed scale.
+
+    The view never shows more than `floor_margin` voxels below y = 0, so the ground stays near the
+    bottom edge instead of the robot sitting mid-frame above empty space.
+    """
+
+    def __init__(self, width: int, height: int, px_per_unit: float, follow: float = 0.15,
+                 floor_margin: float = 2.0):
+        self.width, self.height, self.scale = width, height, px_per_unit
+        self.follow = follow
+        self.floor_y = -floor_margin * C.CELL
+        self.centre: np.ndarray | None = None
+
+    def reset(self) -> None:
+        self.centre = None
+
+    def update(self, tracked: np.ndarray) -> tuple[float, float]:
+        """Move toward the points (2, K); return the view's top-left corner in world units, snapped
+        to whole pixels so static terrain does not shimmer."""
+        target = (tracked.min(axis=1) + tracked.max(axis=1)) / 2.0
+        half_h = self.height / (2.0 * self.scale)
+        target[1] = max(target[1], self.floor_y + half_h)
+        if self.centre is None or not np.all(np.isfinite(self.centre)):
+            self.centre = target.copy()
+        else:
+            self.centre = self.centre + self.follow * (target - self.centre)
+        x0 = np.round((self.centre[0] - self.width / (2.0 * self.scale)) * self.scale) / self.scale
+        y1 = np.round((self.centre[1] + half_h) * self.scale) / self.scale
+        return float(x0), float(y1)
+
+
+class Renderer:
+    """Draws one robot `body` in `world` (static terrain plus free objects such as Thrower's package).
+
+    Scale is fixed: `view_voxels` voxels across the image width (evogym shows 40 x 20 voxels).
+    """
+
+    def __init__(self, world: World | str, body: Body | object, width: int = 640, height: int = 320, *,
+                 view_voxels: float = 40.0, grid: bool = True, follow: float = 0.15,
+                 track_objects: bool = True):
+        if width < 1 or height < 1:
+            raise ValueError(f"image size must be positive, got {width}x{height}")
+        self.world = task_world(world) if isinstance(world, str) else world
+        self.body = body if isinstance(body, Body) else build_body(body)
+        self.width, self.height = int(width), int(height)
+        self.scale = self.width / (view_voxels * C.CELL)  # pixels per world unit
+        self.grid = grid
+        self.track_objects = track_objects
+        self.camera = Camera(self.width, self.height, self.scale, follow)
+        fixed = [_Part(o.body, o.pos0) for o in self.world.fixed_objects]
+        self._static_quads = np.concatenate([p.geometry(p.static)[0] for p in fixed] or [np.zeros((0, 4, 2))])
+        self._static_colors = np.concatenate([p.colors for p in fixed] or [np.zeros((0, 3), np.uint8)])
+        self._static_seg = np.concatenate([self._inset(p, p.static) for p in fixed]
+                                          or [np.zeros((0, 2, 2))])
+        self._objects = {o.name: (_Part(o.body), o.pos0) for o in self.world.free_objects}
+        self._robot = _Part(self.body)
+
+    @staticmethod
+    def _inset(part: _Part, points: np.ndarray) -> np.ndarray:
+        """Outline segments moved half a pixel's worth toward their voxel centre (finished in pixels)."""
+        quads, seg, centres = part.geometry(points)
+        return np.concatenate([seg, np.repeat(centres[part.seg_voxel][:, None, :], 2, axis=1)], axis=2)
+
+    def reset(self) -> None:
+        """Forget the camera position (next frame centres on the robot at once)."""
+        self.camera.reset()
+
+    def _to_px(self, xy: np.ndarray, x0: float, y1: float) -> np.ndarray:
+        out = np.empty_like(xy)
+        out[..., 0] = (xy[..., 0] - x0) * self.scale
+        out[..., 1] = (y1 - xy[..., 1]) * self.scale
+        return out
+
+    def _background(self, x0: float, y1: float) -> np.ndarray:
+        img = np.empty((self.height, self.width, 3), dtype=np.uint8)
+        img[:] = BACKGROUND
+        if self.grid:
+            step = C.CELL * self.scale
+            cols = np.floor((np.ceil(x0 / C.CELL) * C.CELL - x0) * self.scale
+                            + step * np.arange(int(self.width / step) + 2)).astype(np.int64)
+            rows = np.floor((y1 - np.floor(y1 / C.CELL) * C.CELL) * self.scale
+                            + step * np.arange(int(self.height / step) + 2)).astype(np.int64)
+            img[:, cols[(cols >= 0) & (cols < self.width)]] = GRID
+            img[rows[(rows >= 0) & (rows < self.height)], :] = GRID
+        return img
+
+    def frame(self, robot_points: np.ndarray, object_points: dict[str, np.ndarray] | None = None
+              ) -> np.ndarray:
+        """RGB image (height, width, 3) uint8 of the robot at `robot_points` (2, n) and free objects
+        at `object_points[name]` (2, m); objects not given are drawn at their initial position."""
+        object_points = object_points or {}
+        robot_points = np.asarray(robot_points, dtype=np.float64)
+        objs = [(part, np.asarray(object_points.get(name, pos0), dtype=np.float64))
+                for name, (part, pos0) in self._objects.items()]
+        tracked = [robot_points] + ([p for _, p in objs] if self.track_objects else [])
+        x0, y1 = self.camera.update(np.concatenate(tracked, axis=1))
+        x_lo, x_hi = x0 - C.CELL, x0 + self.width / self.scale + C.CELL
+        y_lo, y_hi = y1 - self.height / self.scale - C.CELL, y1 + C.CELL
+
+        # static terrain culled to the view, then objects, then the robot on top
+        sq = self._static_quads
+        vis = ((sq[:, :, 0].max(1) >= x_lo) & (sq[:, :, 0].min(1) <= x_hi)
+               & (sq[:, :, 1].max(1) >= y_lo) & (sq[:, :, 1].min(1) <= y_hi))
+        quads, colors = [sq[vis]], [self._static_colors[vis]]
+        ss = self._static_seg
+        seg_vis = ((ss[:, :2, 0].max(1) >= x_lo) & (ss[:, :2, 0].min(1) <= x_hi)
+                   & (ss[:, :2, 1].max(1) >= y_lo) & (ss[:, :2, 1].min(1) <= y_hi))
+        segs = [ss[seg_vis]]
+        for part, pts in [*objs, (self._robot, robot_points)]:
+            quads.append(part.geometry(pts)[0])
+            colors.append(voxel_colors(part.body, pts))
+            segs.append(self._inset(part, pts))
+        quads_px = self._to_px(np.concatenate(quads), x0, y1)
+        palette = np.concatenate(colors)
+
+        owner = np.full((self.height, self.width), -1, dtype=np.int64)
+        tris = np.concatenate([quads_px[:, [0, 1, 2]], quads_px[:, [0, 2, 3]]])
+        ids = np.tile(np.arange(len(quads_px)), 2)
+        _fill_triangles(owner, tris, ids)
+        img = self._background(x0, y1)
+        hit = owner >= 0
+        img[hit] = palette[owner[hit]]
+
+        seg = np.concatenate(segs)  # (E, 2, 4): endpoint xy and its voxel centre xy
+        ends = self._to_px(seg[..., :2], x0, y1)
+        centre = self._to_px(seg[..., 2:], x0, y1)
+        d = centre - ends
+        norm = np.maximum(np.abs(d).max(axis=-1, keepdims=True), 1e-9)
+        _draw_segments(img, ends + 0.5 * d / norm, OUTLINE)
+        return img
+
+
+def render_episode(task: str, body: Body | object, policy: Callable[[int, np.ndarray], np.ndarray],
+                   steps: int | None = None, width: int = 640, height: int = 320, *, every: int = 1,
+                   **renderer_kw) -> list[np.ndarray]:
+    """Simulate one robot on `task` for `steps` env steps (task default if None) with actions
+    `policy(t, obs)` and return frames: the reset state, then every `every`-th step (and the last).
+
+    Stops early when the episode terminates (goal reached or unstable).
+    """
+    from tasks.env import BatchEnv  # tasks depends on tsim; import here to keep tsim free of it
+
+    if every < 1:
+        raise ValueError(f"every must be >= 1, got {every}")
+    env = BatchEnv(task, [body], episode_steps=steps)
+    renderer = Renderer(env.sim.world, env.sim.bodies[0], width, height, **renderer_kw)
+    names = [o.name for o in env.sim.free_objects]
+
+    def snap() -> np.ndarray:
+        objs = {n: env.sim.object_pos(0, n) for n in names}
+        return renderer.frame(env.sim.robot_pos(0), objs)
+
+    frames = [snap()]
+    obs = env.robot_obs(0)
+    for t in range(env.episode_steps):
+        action = np.asarray(policy(t, obs), dtype=np.float64).reshape(-1)
+        _, _, term, _, _ = env.step([action])
+        obs = env.robot_obs(0)
+        last = bool(term[0]) or t + 1 == env.episode_steps
+        if (t + 1) % every == 0 or last:
+            frames.append(snap())
+        if term[0]:
+            break
+    return frames
+
+
+def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
+    """Write RGB frames as a looping GIF (imageio's pillow writer); returns the path."""
+    import imageio.v3 as iio
+
+    if len(frames) == 0:
+        raise ValueError("no frames to write")
+    if fps <= 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    iio.imwrite(path, np.stack(frames), extension=".gif", duration=1000.0 / fps, loop=0)
+    return path
