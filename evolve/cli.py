@@ -1,4 +1,4 @@
-"""`sgr` command line: demo, validate, bench."""
+"""`sgr` command line: evolve, demo, validate, bench."""
 
 from __future__ import annotations
 
@@ -58,6 +58,30 @@ def _validate(args: argparse.Namespace) -> int:
     return 0
 
 
+REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
+DEFAULT_CONFIG = REPO_CONFIGS / "sgr" / "quick.yaml"
+
+
+def _evolve(args: argparse.Namespace) -> int:
+    from evolve.experiment import Experiment
+
+    if args.resume:
+        if args.config or args.generations or args.pop or args.seed is not None:
+            raise ValueError("--resume continues a run with its own config; drop the other options")
+        exp = Experiment.resume(args.resume, quiet=args.quiet)
+        print(f"resuming {args.resume} at generation {exp.search.generation}")
+    else:
+        config = args.config or str(DEFAULT_CONFIG)
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        out = args.out or str(Path("runs") / f"{Path(config).stem}-seed{args.seed or 0}-{stamp}")
+        exp = Experiment.create(config, out, {"generations": args.generations, "pop_size": args.pop,
+                                              "seed": args.seed}, quiet=args.quiet)
+        print(f"run directory: {out}")
+    exp.run_all()
+    exp.finish()
+    return 0
+
+
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
 
@@ -75,6 +99,15 @@ def _bench(args: argparse.Namespace) -> int:
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="sgr", description="Batched evogym-faithful soft-robot toolkit")
     sub = p.add_subparsers(dest="cmd", required=True)
+    e = sub.add_parser("evolve", help="run an evolution experiment (default: a short SGR Walker-v0 run)")
+    e.add_argument("--config", help="YAML experiment config (default configs/sgr/quick.yaml)")
+    e.add_argument("--generations", type=int)
+    e.add_argument("--pop", type=int)
+    e.add_argument("--seed", type=int)
+    e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
+    e.add_argument("--resume", metavar="DIR", help="continue an interrupted run from its last checkpoint")
+    e.add_argument("--quiet", action="store_true")
+    e.set_defaults(fn=_evolve)
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
     d.add_argument("--task", default="Walker-v0")
     d.add_argument("--robots", type=int, default=32)

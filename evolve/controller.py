@@ -1,0 +1,94 @@
+"""Plain dense controllers and their batched forward pass inside the simulation loop.
+
+A controller maps a robot's evogym observation to one output per body cell; the robot's actions
+are the outputs at its actuator cells in evogym's actuator order, mapped from tanh's (-1, 1) onto
+evogym's action range: action = 1.1 + 0.5 * y, i.e. (0.6, 1.6).
+The JSON form holds everything needed to run a controller with numpy alone (no neat-python).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+ACT_FNS = {"tanh": np.tanh, "identity": lambda z: z, "relu": lambda z: np.maximum(z, 0.0),
+           "sigmoid": lambda z: 1.0 / (1.0 + np.exp(-z))}
+ACTION_CENTRE, ACTION_HALF_RANGE = 1.1, 0.5
+
+
+@dataclass
+class DenseController:
+    """Layers y = act(x @ W + b). `input_size` is the observation length; the first layer may have
+    more rows (the zero-padded k x k input grid), which multiply zeros."""
+
+    weights: list[np.ndarray]
+    biases: list[np.ndarray]
+    activations: list[str]
+    input_size: int
+    action_cells: np.ndarray  # flat body-cell index of each actuator, evogym's action order
+
+    def outputs(self, obs: np.ndarray) -> np.ndarray:
+        x = np.zeros(self.weights[0].shape[0])
+        x[:self.input_size] = obs
+        for W, b, a in zip(self.weights, self.biases, self.activations, strict=True):
+            x = ACT_FNS[a](x @ W + b)
+        return x
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """The slow, obvious forward pass for one robot (the test oracle of `ControllerBatch`)."""
+        return ACTION_CENTRE + ACTION_HALF_RANGE * self.outputs(obs)[self.action_cells]
+
+    def to_json(self) -> dict:
+        return {"format": "sgr-dense-controller-1",
+                "input_size": self.input_size,
+                "input_padding": int(self.weights[0].shape[0]) - self.input_size,
+                "layers": [{"weights": W.tolist(), "biases": b.tolist(), "activation": a}
+                           for W, b, a in zip(self.weights, self.biases, self.activations, strict=True)],
+                "action_cells": self.action_cells.tolist(),
+                "action_map": "action = 1.1 + 0.5 * output[action_cells]",
+                "doc": "x = observation zero-padded by input_padding; for each layer x = "
+                       "activation(x @ weights + biases) (weights are [in][out])"}
+
+    @classmethod
+    def from_json(cls, d: dict) -> DenseController:
+        layers = d["layers"]
+        return cls([np.asarray(L["weights"], dtype=np.float64) for L in layers],
+                   [np.asarray(L["biases"], dtype=np.float64) for L in layers],
+                   [L["activation"] for L in layers], int(d["input_size"]),
+                   np.asarray(d["action_cells"], dtype=np.int64))
+
+
+class ControllerBatch:
+    """Every robot's controller evaluated together: padded (B, in, out) weight stacks, einsum."""
+
+    def __init__(self, controllers: Sequence[DenseController], obs_width: int, action_width: int):
+        B = len(controllers)
+        n_layers = len(controllers[0].weights)
+        if any(len(c.weights) != n_layers for c in controllers):
+            raise ValueError("all controllers of a batch need the same number of layers")
+        self.activations = controllers[0].activations
+        self.Ws, self.bs = [], []
+        for layer in range(n_layers):
+            rows = obs_width if layer == 0 else max(c.weights[layer].shape[0] for c in controllers)
+            cols = max(c.weights[layer].shape[1] for c in controllers)
+            W = np.zeros((B, rows, cols))
+            b = np.zeros((B, cols))
+            for i, c in enumerate(controllers):
+                w = c.weights[layer][:c.input_size] if layer == 0 else c.weights[layer]
+                W[i, :w.shape[0], :w.shape[1]] = w
+                b[i, :w.shape[1]] = c.biases[layer]
+            self.Ws.append(W)
+            self.bs.append(b)
+        self.cells = np.zeros((B, action_width), dtype=np.int64)
+        for i, c in enumerate(controllers):
+            self.cells[i, :len(c.action_cells)] = c.action_cells
+        self._rows = np.arange(B)[:, None]
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """(B, obs_width) padded observations -> (B, action_width) padded actions."""
+        x = obs
+        for W, b, a in zip(self.Ws, self.bs, self.activations, strict=True):
+            x = ACT_FNS[a](np.einsum("bi,bio->bo", x, W) + b)
+        return ACTION_CENTRE + ACTION_HALF_RANGE * x[self._rows, self.cells]

@@ -1,0 +1,131 @@
+"""Running an experiment: config -> run directory, generation loop, checkpoints, resume."""
+
+from __future__ import annotations
+
+import configparser
+import io
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import neat
+
+from evolve.config import load_config
+from evolve.genome import BodyAwareGenome
+from evolve.neat_search import NeatSearch
+from evolve.rundir import RunDir
+
+
+def problem_class(method: str):
+    if method == "sgr":
+        from evolve.sgr import SgrProblem
+        return SgrProblem
+    raise ValueError(f"method {method!r} is not available yet")
+
+
+def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
+    """The neat-python INI with pop_size and method-specific values taken from the YAML config."""
+    cp = configparser.ConfigParser()
+    cp.read(path)
+    for section in ("NEAT", "DefaultGenome"):
+        if section not in cp:
+            raise ValueError(f"{path}: neat config lacks the [{section}] section")
+    cp["NEAT"]["pop_size"] = str(cfg["pop_size"])
+    # neat-python reads the genome section under the genome class's name
+    cp[BodyAwareGenome.__name__] = dict(cp["DefaultGenome"])
+    cp.remove_section("DefaultGenome")
+    for section, values in overrides.items():
+        for k, v in values.items():
+            cp[BodyAwareGenome.__name__ if section == "DefaultGenome" else section][k] = v
+    buf = io.StringIO()
+    cp.write(buf)
+    return buf.getvalue()
+
+
+def load_neat_config(ini_path: Path) -> neat.Config:
+    try:
+        return neat.Config(BodyAwareGenome, neat.DefaultReproduction, neat.DefaultSpeciesSet,
+                           neat.DefaultStagnation, str(ini_path))
+    except Exception as exc:  # neat-python raises RuntimeError/KeyError for bad INI keys
+        raise ValueError(f"{ini_path}: bad neat-python config: {exc}") from None
+
+
+def genome_json(genome) -> dict:
+    return {"key": genome.key,
+            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
+                       "aggregation": n.aggregation} for n in genome.nodes.values()],
+            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
+                            for c in genome.connections.values()]}
+
+
+class Experiment:
+    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False):
+        self.run, self.cfg, self.quiet = run, cfg, quiet
+        self.neat_config = load_neat_config(run.path / "neat.ini")
+        self.problem = problem_class(cfg["method"])(cfg, self.neat_config)
+        self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
+                                 seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
+                                 state=state)
+
+    @classmethod
+    def create(cls, config_path: str, out: str, overrides: dict, quiet: bool = False) -> Experiment:
+        cfg = load_config(config_path, overrides)
+        ini = neat_ini_text(cfg["neat_config"], cfg, problem_class(cfg["method"]).neat_overrides(cfg))
+        with tempfile.TemporaryDirectory() as tmp:  # a bad INI must fail before the run exists
+            (Path(tmp) / "neat.ini").write_text(ini)
+            load_neat_config(Path(tmp) / "neat.ini")
+        run = RunDir(out)
+        run.create(cfg, ini)
+        exp = cls(run, cfg, quiet=quiet)
+        run.save_checkpoint(0, exp.search.state())
+        return exp
+
+    @classmethod
+    def resume(cls, out: str, quiet: bool = False) -> Experiment:
+        run = RunDir(out)
+        cfg = run.config()
+        state = run.latest_checkpoint()
+        if state is None:
+            raise ValueError(f"{out} has no checkpoint to resume from")
+        run.truncate_rows(state["generation"])
+        return cls(run, cfg, state=state, quiet=quiet)
+
+    def run_all(self) -> None:
+        cfg, search = self.cfg, self.search
+        t_start = time.perf_counter()
+        while search.generation < cfg["generations"]:
+            row = search.step()
+            self.run.append_row(row)
+            self._write_champion()
+            if search.generation % cfg["checkpoint_every"] == 0 or search.generation == cfg["generations"]:
+                self.run.save_checkpoint(search.generation, search.state())
+            self._progress(row, time.perf_counter() - t_start)
+
+    def _write_champion(self) -> None:
+        best = self.search.best
+        if best is None:
+            return
+        champ = {"format": "sgr-champion-1", "method": self.cfg["method"], "task": self.cfg["task"],
+                 "episode_steps": self.cfg["episode_steps"], "fitness": best["fitness"],
+                 "generation": best["generation"], "genome": genome_json(best["genome"])}
+        champ.update(self.problem.champion(best["phenotype"]))
+        self.run.write_champion(champ)
+
+    def _progress(self, row: dict, elapsed: float) -> None:
+        if self.quiet:
+            return
+        best = self.search.best["fitness"] if self.search.best else math.nan
+        print(f"gen {row['generation'] + 1:>4}/{self.cfg['generations']}  best {row['best']:8.3f}  "
+              f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
+              f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
+              f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
+              f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+
+    def finish(self) -> None:
+        """End-of-run artefacts; rendering and plotting come from tsim.render / evolve.plots."""
+        best = self.search.best
+        if best is not None and not self.quiet:
+            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
+                  f"{self.run.path / 'champion.json'}")

@@ -1,0 +1,153 @@
+"""A neat-python population advanced one generation at a time, with batched evaluation.
+
+neat-python's `Population.run` evaluates one callback per generation; we need more control:
+decode every genome once (cached by key), drop invalid genomes before selection (the SGR paper
+removes them), skip re-simulating elites (their fitness is known and the simulation is
+deterministic), and snapshot the whole state (including Python's `random`, which neat-python
+uses) so a resumed run continues exactly.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+import statistics
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+from neat.reporting import ReporterSet
+
+Decode = Callable[[Any], Any]  # genome -> phenotype with .valid and .body
+Evaluate = Callable[[Sequence[Any]], np.ndarray]  # valid phenotypes -> fitness
+
+
+class NeatSearch:
+    def __init__(self, neat_config, decode: Decode, evaluate: Evaluate, *, seed: int,
+                 body_distance_weight: float = 0.0, state: dict | None = None):
+        self.config = neat_config
+        self.decode = decode
+        self.evaluate = evaluate
+        gc = neat_config.genome_config
+        gc.body_distance_weight = body_distance_weight
+        gc.body_cache = {}
+        self.reporters = ReporterSet()
+        self.phenotypes: dict[int, Any] = {}
+        if state is None:
+            random.seed(seed)
+            self.stagnation = neat_config.stagnation_type(neat_config.stagnation_config, self.reporters)
+            self.reproduction = neat_config.reproduction_type(neat_config.reproduction_config,
+                                                              self.reporters, self.stagnation)
+            self.population = self.reproduction.create_new(neat_config.genome_type, gc,
+                                                           neat_config.pop_size)
+            self.species = neat_config.species_set_type(neat_config.species_set_config, self.reporters)
+            self.generation = 0
+            self.best: dict | None = None
+            self.pending_build_s = self._decode_all()
+            self.species.speciate(neat_config, self.population, self.generation)
+        else:
+            self._restore(state)
+
+    # ------------------------------------------------------------------ one generation
+    def step(self) -> dict:
+        """Evaluate the current generation, then breed and speciate the next. Returns the row of
+        generations.csv for the evaluated generation."""
+        t0 = time.perf_counter()
+        build_s = self.pending_build_s + self._decode_all()
+        todo = [k for k, g in self.population.items() if self.phenotypes[k].valid and g.fitness is None]
+        t1 = time.perf_counter()
+        if todo:
+            fit = self.evaluate([self.phenotypes[k] for k in todo])
+            for k, f in zip(todo, fit, strict=True):
+                self.population[k].fitness = float(f)
+        sim_s = time.perf_counter() - t1
+        valid = {k: g for k, g in self.population.items() if self.phenotypes[k].valid}
+        n_invalid = len(self.population) - len(valid)
+        row = self._stats(valid, n_invalid, len(todo))
+        self._track_best(valid)
+        t2 = time.perf_counter()
+        self._drop(valid)
+        self.population = self.reproduction.reproduce(self.config, self.species, self.config.pop_size,
+                                                      self.generation)
+        if not self.species.species:  # complete extinction: start afresh (reset_on_extinction)
+            self.population = self.reproduction.create_new(self.config.genome_type,
+                                                           self.config.genome_config,
+                                                           self.config.pop_size)
+        neat_s = time.perf_counter() - t2
+        self.pending_build_s = self._decode_all()
+        t3 = time.perf_counter()
+        self.species.speciate(self.config, self.population, self.generation)
+        neat_s += time.perf_counter() - t3
+        row.update(build_s=build_s, sim_s=sim_s, neat_s=neat_s, total_s=time.perf_counter() - t0)
+        self.generation += 1
+        return row
+
+    def _decode_all(self) -> float:
+        t = time.perf_counter()
+        self.phenotypes = {k: self.phenotypes.get(k) or self.decode(g) for k, g in self.population.items()}
+        # speciation compares with last generation's representatives: keep their bodies too
+        old = self.config.genome_config.body_cache
+        cache = {k: p.body for k, p in self.phenotypes.items()}
+        for s in self.species.species.values():
+            r = s.representative
+            if r is not None and r.key not in cache:
+                cache[r.key] = old[r.key] if r.key in old else self.decode(r).body
+        self.config.genome_config.body_cache = cache
+        return time.perf_counter() - t
+
+    def _drop(self, valid: dict) -> None:
+        """Invalid genomes leave the population and their species before selection."""
+        self.population = valid
+        for sid in list(self.species.species):
+            s = self.species.species[sid]
+            s.members = {k: g for k, g in s.members.items() if k in valid}
+            if not s.members:
+                del self.species.species[sid]
+
+    def _stats(self, valid: dict, n_invalid: int, episodes: int) -> dict:
+        f = [g.fitness for g in valid.values()]
+        return {"generation": self.generation,
+                "best": max(f) if f else float("nan"),
+                "mean": statistics.fmean(f) if f else float("nan"),
+                "median": statistics.median(f) if f else float("nan"),
+                "n_species": len(self.species.species), "n_valid": len(valid),
+                "n_invalid": n_invalid, "episodes": episodes}
+
+    def _track_best(self, valid: dict) -> None:
+        if not valid:
+            return
+        k, g = max(valid.items(), key=lambda kv: (kv[1].fitness, -kv[0]))
+        if self.best is None or g.fitness > self.best["fitness"]:
+            self.best = {"fitness": g.fitness, "generation": self.generation, "key": k,
+                         "genome": g, "phenotype": self.phenotypes[k]}
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        nxt = next(self.reproduction.genome_indexer)
+        self.reproduction.genome_indexer = itertools.count(nxt)
+        repro = dict(self.reproduction.__dict__, genome_indexer=nxt, reporters=None)
+        best = None if self.best is None else {k: v for k, v in self.best.items() if k != "phenotype"}
+        return {"generation": self.generation, "population": self.population, "species": self.species,
+                "reproduction": repro, "random": random.getstate(), "best": best,
+                "pending_build_s": self.pending_build_s}
+
+    def _restore(self, state: dict) -> None:
+        self.generation = state["generation"]
+        self.population = state["population"]
+        self.species = state["species"]
+        self.species.reporters = self.reporters
+        self.reproduction = self.config.reproduction_type(self.config.reproduction_config,
+                                                          self.reporters, None)
+        repro = dict(state["reproduction"])
+        repro["genome_indexer"] = itertools.count(repro["genome_indexer"])
+        repro["reporters"] = self.reporters
+        self.reproduction.__dict__.update(repro)
+        self.stagnation = self.reproduction.stagnation
+        self.stagnation.reporters = self.reporters
+        random.setstate(state["random"])
+        self.pending_build_s = state["pending_build_s"]
+        self._decode_all()
+        self.best = state["best"]
+        if self.best is not None:
+            self.best["phenotype"] = self.decode(self.best["genome"])

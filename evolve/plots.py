@@ -1,0 +1,153 @@
+"""Fitness plots of run directories (PNG, matplotlib's Agg canvas: no display needed).
+
+`plot_runs` compares methods: runs are grouped by (method, task) from their config.yaml, and each
+group becomes one curve, the mean over seeds of the best fitness per generation, with a min..max
+band over seeds, so the spread between seeds is visible rather than hidden in a mean.
+`plot_run` shows one run's best, mean and median fitness.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import yaml
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+from matplotlib.lines import Line2D
+
+UNKNOWN = "unknown"
+
+
+@dataclass(frozen=True)
+class Curve:
+    """Per-generation statistics of one (method, task) group across its runs (seeds)."""
+
+    method: str
+    task: str
+    generation: np.ndarray  # (G,) generations present in at least one run
+    mean: np.ndarray  # (G,) mean over runs of the best fitness
+    low: np.ndarray  # (G,) min over runs
+    high: np.ndarray  # (G,) max over runs
+    n_runs: int
+
+
+def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
+    """Columns of `run_dir/generations.csv` as float arrays (non-numeric cells become NaN)."""
+    f = Path(run_dir) / "generations.csv"
+    if not f.is_file():
+        raise ValueError(f"{run_dir} has no generations.csv")
+    with f.open(newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+
+    def num(v: str | None) -> float:
+        try:
+            return float(v)
+        except (TypeError, ValueError):
+            return float("nan")
+
+    return {k: np.array([num(r.get(k)) for r in rows]) for k in rows[0]}
+
+
+def run_labels(run_dir: str | Path) -> tuple[str, str]:
+    """(method, task) of a run from its config.yaml; a missing method falls back to the name of the
+    run directory's parent (runs are often stored as <experiment>/<seed>), a missing task to
+    "unknown"."""
+    run_dir = Path(run_dir)
+    cfg: dict = {}
+    f = run_dir / "config.yaml"
+    if f.is_file():
+        loaded = yaml.safe_load(f.read_text())
+        cfg = loaded if isinstance(loaded, dict) else {}
+    parent = run_dir.resolve().parent.name or UNKNOWN
+    return str(cfg.get("method") or parent), str(cfg.get("task") or UNKNOWN)
+
+
+def summarize_runs(run_dirs: Sequence[str | Path]) -> dict[tuple[str, str], Curve]:
+    """Group runs by (method, task) and aggregate their best fitness per generation across runs.
+
+    Runs may have different lengths (e.g. still running): each generation is aggregated over the
+    runs that reached it. Runs with no rows are skipped.
+    """
+    groups: dict[tuple[str, str], list[dict[str, float]]] = {}
+    for d in run_dirs:
+        cols = read_generations(d)
+        if not cols or "best" not in cols or "generation" not in cols:
+            continue
+        best_by_gen = {int(g): b for g, b in zip(cols["generation"], cols["best"], strict=True)
+                       if np.isfinite(g)}
+        groups.setdefault(run_labels(d), []).append(best_by_gen)
+    curves = {}
+    for (method, task), runs in sorted(groups.items()):
+        gens = np.array(sorted(set().union(*runs)), dtype=np.int64)
+        table = np.array([[r.get(int(g), np.nan) for g in gens] for r in runs])  # (runs, G)
+        table = np.where(np.isfinite(table), table, np.nan)  # +-inf (no valid robot) counts as missing
+        keep = ~np.all(np.isnan(table), axis=0)
+        t = table[:, keep]
+        mean, low, high = np.nanmean(t, axis=0), np.nanmin(t, axis=0), np.nanmax(t, axis=0)
+        curves[(method, task)] = Curve(method, task, gens[keep], mean, low, high, len(runs))
+    return curves
+
+
+def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve]) -> list[Line2D]:
+    """One line (mean best fitness) and one min..max band per group; returns the lines in key order."""
+    lines = []
+    for (method, task), c in curves.items():
+        seeds = f"{c.n_runs} run{'s' if c.n_runs != 1 else ''}"
+        (line,) = ax.plot(c.generation, c.mean, label=f"{method} / {task} (mean of {seeds}; band min-max)")
+        ax.fill_between(c.generation, c.low, c.high, color=line.get_color(), alpha=0.2, linewidth=0)
+        lines.append(line)
+    return lines
+
+
+def _save(fig: Figure, out: str | Path) -> Path:
+    out = Path(out)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    FigureCanvasAgg(fig)
+    fig.savefig(out, format="png", dpi=120)
+    return out
+
+
+def plot_runs(run_dirs: Sequence[str | Path], out: str | Path) -> Path:
+    """PNG comparing (method, task) groups of runs: mean best fitness per generation with a min..max
+    band over seeds. Returns the PNG path; `summarize_runs` gives the groups it draws."""
+    curves = summarize_runs(run_dirs)
+    if not curves:
+        raise ValueError("no run with generations to plot among " + ", ".join(map(str, run_dirs)))
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.add_subplot()
+    draw_curves(ax, curves)
+    tasks = sorted({t for _, t in curves})
+    ax.set_title(f"Best fitness per generation: {', '.join(tasks)}")
+    ax.set_xlabel("generation")
+    ax.set_ylabel("best fitness")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    return _save(fig, out)
+
+
+def plot_run(run_dir: str | Path, out: str | Path) -> Path:
+    """PNG of one run's best, mean and median fitness per generation; returns the PNG path."""
+    cols = read_generations(run_dir)
+    if "generation" not in cols:
+        raise ValueError(f"{run_dir}/generations.csv has no rows")
+    method, task = run_labels(run_dir)
+    fig = Figure(figsize=(8, 4.5))
+    ax = fig.add_subplot()
+    for name in ("best", "mean", "median"):
+        if name in cols:
+            ax.plot(cols["generation"], cols[name], label=name)
+    ax.set_title(f"{method} / {task}: {Path(run_dir).name}")
+    ax.set_xlabel("generation")
+    ax.set_ylabel("fitness")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize="small")
+    fig.tight_layout()
+    return _save(fig, out)
