@@ -13,9 +13,12 @@ from pathlib import Path
 import neat
 
 from evolve.config import load_config
-from evolve.genome import BodyAwareGenome
+from evolve.genome import BodyAwareGenome, FlexibleReproduction
 from evolve.neat_search import NeatSearch
 from evolve.rundir import RunDir
+
+SECTIONS = {"DefaultGenome": BodyAwareGenome.__name__,
+            "DefaultReproduction": FlexibleReproduction.__name__}
 
 
 def problem_class(method: str):
@@ -29,16 +32,17 @@ def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
     """The neat-python INI with pop_size and method-specific values taken from the YAML config."""
     cp = configparser.ConfigParser()
     cp.read(path)
-    for section in ("NEAT", "DefaultGenome"):
+    for section in ("NEAT", *SECTIONS):
         if section not in cp:
             raise ValueError(f"{path}: neat config lacks the [{section}] section")
     cp["NEAT"]["pop_size"] = str(cfg["pop_size"])
-    # neat-python reads the genome section under the genome class's name
-    cp[BodyAwareGenome.__name__] = dict(cp["DefaultGenome"])
-    cp.remove_section("DefaultGenome")
+    # neat-python reads each section under its class's name
+    for default, ours in SECTIONS.items():
+        cp[ours] = dict(cp[default])
+        cp.remove_section(default)
     for section, values in overrides.items():
         for k, v in values.items():
-            cp[BodyAwareGenome.__name__ if section == "DefaultGenome" else section][k] = v
+            cp[SECTIONS.get(section, section)][k] = v
     buf = io.StringIO()
     cp.write(buf)
     return buf.getvalue()
@@ -46,7 +50,7 @@ def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
 
 def load_neat_config(ini_path: Path) -> neat.Config:
     try:
-        return neat.Config(BodyAwareGenome, neat.DefaultReproduction, neat.DefaultSpeciesSet,
+        return neat.Config(BodyAwareGenome, FlexibleReproduction, neat.DefaultSpeciesSet,
                            neat.DefaultStagnation, str(ini_path))
     except Exception as exc:  # neat-python raises RuntimeError/KeyError for bad INI keys
         raise ValueError(f"{ini_path}: bad neat-python config: {exc}") from None

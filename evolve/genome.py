@@ -1,4 +1,5 @@
-"""neat-python genome whose speciation distance adds the body distance (SGR paper eq. 1).
+"""neat-python classes we extend: a genome whose speciation distance adds the body distance
+(SGR paper eq. 1), and a reproduction that survives more species than the population can hold.
 
 distance = NEAT genomic distance + v * body_distance(body, body'). The bodies come from a cache
 the search fills (by genome key) before every speciation, so no genome is decoded twice.
@@ -6,7 +7,7 @@ the search fills (by genome key) before every speciation, so no genome is decode
 
 from __future__ import annotations
 
-from neat import DefaultGenome
+from neat import DefaultGenome, DefaultReproduction
 
 from evolve.body_distance import body_distance
 
@@ -19,3 +20,22 @@ class BodyAwareGenome(DefaultGenome):
             bodies = config.body_cache
             d += v * body_distance(bodies[self.key], bodies[other.key])
         return d
+
+
+class FlexibleReproduction(DefaultReproduction):
+    """neat-python 2's reproduction with a total-preserving spawn adjustment that cannot fail:
+    largest species shrink first, smallest grow first, and when there are more species than
+    pop_size / min_species_size the per-species minimum is lowered for that generation instead
+    of aborting the run (neat-python 2.0 raises there, and also gives up after one pass)."""
+
+    def _adjust_spawn_exact(self, spawn_amounts, pop_size, min_species_size):
+        floor = max(1, min(min_species_size, pop_size // max(1, len(spawn_amounts))))
+        spawn = [max(floor, int(s)) for s in spawn_amounts]
+        while sum(spawn) > pop_size:
+            i = max(range(len(spawn)), key=lambda j: (spawn[j], -j))
+            if spawn[i] <= floor:
+                break
+            spawn[i] -= 1
+        while sum(spawn) < pop_size:
+            spawn[min(range(len(spawn)), key=lambda j: (spawn[j], j))] += 1
+        return spawn

@@ -9,6 +9,7 @@ band over seeds, so the spread between seeds is visible rather than hidden in a 
 from __future__ import annotations
 
 import csv
+import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -21,6 +22,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 UNKNOWN = "unknown"
+_WRAPPED = re.compile(r"^\s*[A-Za-z_][\w.]*\((.*)\)\s*$")
 
 
 @dataclass(frozen=True)
@@ -47,8 +49,9 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
         return {}
 
     def num(v: str | None) -> float:
+        m = _WRAPPED.match(v or "")  # numpy 2 reprs, e.g. "np.float64(1.5)"
         try:
-            return float(v)
+            return float(m.group(1) if m else v)
         except (TypeError, ValueError):
             return float("nan")
 

@@ -1,0 +1,33 @@
+import random
+
+import neat
+import pytest
+
+from evolve.experiment import load_neat_config, neat_ini_text
+
+
+@pytest.fixture()
+def neat_config(tmp_path, repo_root):
+    """The SGR neat config with the given pop size and CPPN outputs, as `sgr evolve` builds it."""
+    def make(pop: int = 16, outputs: int = 1) -> neat.Config:
+        cfg = {"pop_size": pop}
+        ini = neat_ini_text(str(repo_root / "configs/neat/sgr.ini"), cfg,
+                            {"DefaultGenome": {"num_outputs": str(outputs)}})
+        p = tmp_path / f"neat-{pop}-{outputs}.ini"
+        p.write_text(ini)
+        return load_neat_config(p)
+    return make
+
+
+@pytest.fixture()
+def genomes():
+    """Fresh, then mutated, genomes of a neat config."""
+    def make(config: neat.Config, n: int, mutations: int = 6, seed: int = 0) -> list:
+        random.seed(seed)
+        repro = neat.DefaultReproduction(config.reproduction_config, neat.reporting.ReporterSet(), None)
+        gs = list(repro.create_new(config.genome_type, config.genome_config, n).values())
+        for g in gs:
+            for _ in range(mutations):
+                g.mutate(config.genome_config)
+        return gs
+    return make

@@ -1,0 +1,75 @@
+"""Runs: config errors name the key; a killed run resumes to the same numbers; run-dir contents."""
+
+import json
+
+import pytest
+import yaml
+
+from evolve.cli import main
+from evolve.experiment import Experiment
+from evolve.rundir import RunDir
+
+TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
+        "episode_steps": 15, "checkpoint_every": 2, "render_champion": False}
+
+
+def _write(tmp_path, repo_root, **changes):
+    cfg = {**TINY, "neat_config": str(repo_root / "configs/neat/sgr.ini"), **changes}
+    p = tmp_path / "cfg.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"popsize": 3}, "unknown key 'popsize'"),
+    ({"task": "Jumper-v9"}, "key 'task': unknown task 'Jumper-v9'"),
+    ({"generations": "ten"}, "key 'generations' must be int"),
+    ({"cppn_outputs": 3}, "key 'cppn_outputs' must be 1 or 2"),
+    ({"max_weight": True}, "key 'max_weight' must be float"),
+    ({"method": "cmaes"}, "key 'method' must be one of"),
+])
+def test_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):
+    p = _write(tmp_path, repo_root, **changes)
+    assert main(["evolve", "--config", str(p), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "run" / "generations.csv").exists()
+
+
+def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
+    p = _write(tmp_path, repo_root)
+    full = Experiment.create(str(p), str(tmp_path / "full"), {}, quiet=True)
+    full.run_all()
+
+    crashed = Experiment.create(str(p), str(tmp_path / "crash"), {}, quiet=True)
+    step = crashed.search.step
+    calls = {"n": 0}
+
+    def dying_step():
+        calls["n"] += 1
+        if calls["n"] == 4:  # killed while evaluating generation 3, after the gen-2 checkpoint
+            raise KeyboardInterrupt
+        return step()
+
+    crashed.search.step = dying_step
+    with pytest.raises(KeyboardInterrupt):
+        crashed.run_all()
+    assert len(RunDir(tmp_path / "crash").rows()) == 3  # generation 2 was logged after the checkpoint
+    assert main(["evolve", "--resume", str(tmp_path / "crash"), "--quiet"]) == 0
+
+    cols = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
+    a = [[r[c] for c in cols] for r in RunDir(tmp_path / "full").rows()]
+    b = [[r[c] for c in cols] for r in RunDir(tmp_path / "crash").rows()]
+    assert len(a) == 4 and a == b
+    ca = json.loads((tmp_path / "full" / "champion.json").read_text())
+    cb = json.loads((tmp_path / "crash" / "champion.json").read_text())
+    assert ca == cb and ca["controller"]["layers"][0]["activation"] == "tanh"
+    assert len(ca["body"]) == 5 and ca["fitness"] == max(float(r[1]) for r in a)
+
+
+def test_a_run_directory_is_not_overwritten(tmp_path, repo_root, capsys):
+    p = _write(tmp_path, repo_root, generations=1)
+    out = str(tmp_path / "r")
+    assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 0
+    assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 2
+    assert "already holds a run" in capsys.readouterr().err
