@@ -1,7 +1,7 @@
 """Time headless rendering of one episode (simulation included), then the GIF write.
 
     python bench/render_bench.py [--task Thrower-v0] [--steps 300] [--width 640] [--height 320]
-                                 [--every 1] [--gif /tmp/render_bench.gif]
+                                 [--every 1] [--rgb] [--gif /tmp/render_bench.gif]
 
 Acceptance target: a 300-step Thrower-v0 episode at 640x320 in <= 10 s on a 2-core machine.
 """
@@ -27,22 +27,24 @@ def main(argv: list[str] | None = None) -> dict:
     p.add_argument("--width", type=int, default=640)
     p.add_argument("--height", type=int, default=320)
     p.add_argument("--every", type=int, default=1, help="render every k-th step")
+    p.add_argument("--rgb", action="store_true", help="RGB frames instead of palette-index frames")
     p.add_argument("--gif", default="", help="also write (and time) a GIF here")
     args = p.parse_args(argv)
 
     t_import = time.perf_counter()
     from tasks.bench import sinusoid
+    from tasks.render_episode import render_episode
     from tsim.body import build_body
-    from tsim.render import render_episode, write_gif
+    from tsim.render import write_gif
 
     body = build_body(np.array(BODY))
     n_act = body.n_actuators
     t0 = time.perf_counter()
     frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
-                            args.width, args.height, every=args.every)
+                            args.width, args.height, every=args.every, indexed=not args.rgb)
     episode_s = time.perf_counter() - t0
     result = {"task": args.task, "steps": args.steps, "size": f"{args.width}x{args.height}",
-              "every": args.every, "frames": len(frames), "episode_s": round(episode_s, 3),
+              "every": args.every, "rgb": args.rgb, "frames": len(frames), "episode_s": round(episode_s, 3),
               "frames_per_s": round(len(frames) / episode_s, 1),
               "import_s": round(t0 - t_import, 3)}
     if args.gif:

@@ -1,4 +1,4 @@
-"""`sgr` command line: evolve, demo, validate, bench."""
+"""`sgr` command line: evolve, render, plot, demo, validate, bench."""
 
 from __future__ import annotations
 
@@ -82,6 +82,58 @@ def _evolve(args: argparse.Namespace) -> int:
     return 0
 
 
+def parse_body(text: str) -> np.ndarray:
+    """BODY argument: rows separated by commas, one digit per voxel ("33333,33033,...") or a
+    .json / .npy file holding the matrix."""
+    path = Path(text)
+    if path.suffix in (".json", ".npy"):
+        if not path.is_file():
+            raise ValueError(f"bad body matrix: file not found: {path}")
+        data = np.load(path) if path.suffix == ".npy" else json.loads(path.read_text())
+        if isinstance(data, dict):
+            data = data.get("body", data.get("matrix"))
+        return np.asarray(data)
+    rows = text.split(",")
+    if not all(r and r.isdigit() for r in rows) or len({len(r) for r in rows}) != 1:
+        raise ValueError(f"bad body matrix: {text!r} is not equal-length rows of digits separated "
+                         "by commas (e.g. 33333,33333,33033,33033,33033)")
+    return np.array([[int(ch) for ch in r] for r in rows])
+
+
+def _render(args: argparse.Namespace) -> int:
+    from evolve.champion import champion_gif
+    from tasks.bench import sinusoid
+    from tasks.render_episode import render_episode
+    from tsim.body import check_robot
+    from tsim.render import write_gif
+
+    if args.run_dir:
+        if args.task or args.body:
+            raise ValueError("give either RUN_DIR or --task with --body, not both")
+        out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps)
+    else:
+        if not (args.task and args.body):
+            raise ValueError("sgr render needs RUN_DIR, or --task and --body")
+        body = check_robot(parse_body(args.body))
+        n_act = int(np.count_nonzero((body == 3) | (body == 4)))
+        frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
+                                args.width, args.height, indexed=True)
+        out = write_gif(frames, args.out or "robot.gif", fps=args.fps)
+    print(f"wrote {out}")
+    return 0
+
+
+def _plot(args: argparse.Namespace) -> int:
+    from evolve.plots import plot_run, plot_runs
+
+    if len(args.run_dirs) == 1 and not args.compare:
+        out = plot_run(args.run_dirs[0], args.out or Path(args.run_dirs[0]) / "fitness.png")
+    else:
+        out = plot_runs(args.run_dirs, args.out or "fitness.png")
+    print(f"wrote {out}")
+    return 0
+
+
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
 
@@ -108,6 +160,21 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--resume", metavar="DIR", help="continue an interrupted run from its last checkpoint")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)
+    r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
+    r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
+    r.add_argument("--task")
+    r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
+    r.add_argument("--steps", type=int, help="episode length (default: the task's paper length)")
+    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif or robot.gif)")
+    r.add_argument("--width", type=int, default=640)
+    r.add_argument("--height", type=int, default=320)
+    r.add_argument("--fps", type=float, default=30.0)
+    r.set_defaults(fn=_render)
+    pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged")
+    pl.add_argument("run_dirs", nargs="+", metavar="RUN_DIR")
+    pl.add_argument("--out", help="PNG path (default RUN_DIR/fitness.png for one run, else fitness.png)")
+    pl.add_argument("--compare", action="store_true", help="group style even for a single run")
+    pl.set_defaults(fn=_plot)
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
     d.add_argument("--task", default="Walker-v0")
     d.add_argument("--robots", type=int, default=32)

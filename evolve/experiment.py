@@ -128,8 +128,16 @@ class Experiment:
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
     def finish(self) -> None:
-        """End-of-run artefacts; rendering and plotting come from tsim.render / evolve.plots."""
+        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
+        from evolve.champion import champion_gif
+        from evolve.plots import plot_run
+
+        plot_run(self.run.path, self.run.path / "fitness.png")
         best = self.search.best
-        if best is not None and not self.quiet:
+        if best is None:
+            return
+        if self.cfg.get("render_champion", True):
+            champion_gif(self.run.path)
+        if not self.quiet:
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
-                  f"{self.run.path / 'champion.json'}")
+                  f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")

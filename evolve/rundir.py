@@ -77,7 +77,7 @@ class RunDir:
 
     def append_row(self, row: dict) -> None:
         rows = self.rows()
-        rows.append({k: (repr(v) if isinstance(v, float) else v) for k, v in row.items()})
+        rows.append({k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()})
         self._write_rows(rows)
 
     def truncate_rows(self, generation: int) -> None:
