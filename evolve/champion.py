@@ -7,12 +7,16 @@ from pathlib import Path
 import numpy as np
 
 from evolve.controller import DenseController
+from evolve.graph_controller import FORMAT as GRAPH_FORMAT
+from evolve.graph_controller import GraphController
 from evolve.rundir import RunDir
 
 
-def load_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController]:
+def load_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
     champ = RunDir(run_dir).champion()
-    return champ, np.asarray(champ["body"]), DenseController.from_json(champ["controller"])
+    c = champ["controller"]
+    ctrl = GraphController.from_json(c) if c.get("format") == GRAPH_FORMAT else DenseController.from_json(c)
+    return champ, np.asarray(champ["body"]), ctrl
 
 
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,

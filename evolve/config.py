@@ -32,7 +32,7 @@ PER_METHOD: dict[str, dict[str, tuple[Any, Any]]] = {
     "sgr": {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
             "body_distance_weight": (float, 0.1)},
     "direct": {"body_distance_weight": (float, 0.0)},
-    "nested": {"inner_pop_size": (int, 12), "inner_generations": (int, 1),
+    "nested": {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
                "controller_neat_config": (str, None)},
 }
 REQUIRED_FOR = {"nested": ("controller_neat_config",)}

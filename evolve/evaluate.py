@@ -5,7 +5,8 @@ Shared by all methods; a robot's fitness is its episode return in evogym's rewar
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Protocol
 
 import numpy as np
 
@@ -13,15 +14,18 @@ from evolve.controller import ControllerBatch, DenseController
 from tasks.env import BatchEnv
 
 
-def rollout(task: str, bodies: Sequence[np.ndarray], controllers: Sequence[DenseController],
-            episode_steps: int | str | None = None) -> np.ndarray:
-    """Episode return of each (body, controller) pair, simulated together."""
-    if len(bodies) != len(controllers):
-        raise ValueError(f"{len(bodies)} bodies but {len(controllers)} controllers")
+class BatchPolicy(Protocol):
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """(B, max_obs_dim) padded observations -> (B, max_actuators) padded actions."""
+
+
+def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callable[[BatchEnv], BatchPolicy],
+                   episode_steps: int | str | None = None) -> np.ndarray:
+    """Episode return of every body driven by the batched policy built for the env's layout."""
     if len(bodies) == 0:
         return np.zeros(0)
     env = BatchEnv(task, list(bodies), episode_steps=episode_steps)
-    policy = ControllerBatch(controllers, env.max_obs_dim, env.sim.max_actuators)
+    policy = make_policy(env)
     obs = env.reset()
     total = np.zeros(env.n_worlds)
     for _ in range(env.episode_steps):
@@ -30,3 +34,13 @@ def rollout(task: str, bodies: Sequence[np.ndarray], controllers: Sequence[Dense
         if np.all(term | trunc):
             break
     return total
+
+
+def rollout(task: str, bodies: Sequence[np.ndarray], controllers: Sequence[DenseController],
+            episode_steps: int | str | None = None) -> np.ndarray:
+    """Episode return of each (body, dense controller) pair, simulated together."""
+    if len(bodies) != len(controllers):
+        raise ValueError(f"{len(bodies)} bodies but {len(controllers)} controllers")
+    return rollout_policy(task, bodies, lambda env: ControllerBatch(controllers, env.max_obs_dim,
+                                                                    env.sim.max_actuators),
+                          episode_steps)

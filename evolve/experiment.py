@@ -25,6 +25,12 @@ def problem_class(method: str):
     if method == "sgr":
         from evolve.sgr import SgrProblem
         return SgrProblem
+    if method == "direct":
+        from evolve.direct import DirectProblem
+        return DirectProblem
+    if method == "nested":
+        from evolve.nested import NestedProblem
+        return NestedProblem
     raise ValueError(f"method {method!r} is not available yet")
 
 
@@ -69,9 +75,11 @@ class Experiment:
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self.neat_config = load_neat_config(run.path / "neat.ini")
         self.problem = problem_class(cfg["method"])(cfg, self.neat_config)
+        if state is not None and hasattr(self.problem, "restore"):
+            self.problem.restore(state["problem"])
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
-                                 state=state)
+                                 state=state, reevaluate=cfg["method"] == "nested")
 
     @classmethod
     def create(cls, config_path: str, out: str, overrides: dict, quiet: bool = False) -> Experiment:
@@ -83,7 +91,7 @@ class Experiment:
         run = RunDir(out)
         run.create(cfg, ini)
         exp = cls(run, cfg, quiet=quiet)
-        run.save_checkpoint(0, exp.search.state())
+        run.save_checkpoint(0, exp.state())
         return exp
 
     @classmethod
@@ -96,6 +104,12 @@ class Experiment:
         run.truncate_rows(state["generation"])
         return cls(run, cfg, state=state, quiet=quiet)
 
+    def state(self) -> dict:
+        state = self.search.state()
+        if hasattr(self.problem, "state"):
+            state["problem"] = self.problem.state()
+        return state
+
     def run_all(self) -> None:
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
@@ -104,7 +118,7 @@ class Experiment:
             self.run.append_row(row)
             self._write_champion()
             if search.generation % cfg["checkpoint_every"] == 0 or search.generation == cfg["generations"]:
-                self.run.save_checkpoint(search.generation, search.state())
+                self.run.save_checkpoint(search.generation, self.state())
             self._progress(row, time.perf_counter() - t_start)
 
     def _write_champion(self) -> None:

@@ -24,18 +24,24 @@ Evaluate = Callable[[Sequence[Any]], np.ndarray]  # valid phenotypes -> fitness
 
 
 class NeatSearch:
-    def __init__(self, neat_config, decode: Decode, evaluate: Evaluate, *, seed: int,
-                 body_distance_weight: float = 0.0, state: dict | None = None):
+    def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
+                 body_distance_weight: float = 0.0, state: dict | None = None,
+                 reevaluate: bool = False):
+        """`seed` None leaves Python's `random` as it is (populations nested in another search);
+        `reevaluate` simulates elites again instead of reusing their fitness (when evaluation has
+        side effects, e.g. the nested baseline evolves a body's controllers)."""
         self.config = neat_config
         self.decode = decode
         self.evaluate = evaluate
+        self.reevaluate = reevaluate
         gc = neat_config.genome_config
         gc.body_distance_weight = body_distance_weight
         gc.body_cache = {}
         self.reporters = ReporterSet()
         self.phenotypes: dict[int, Any] = {}
         if state is None:
-            random.seed(seed)
+            if seed is not None:
+                random.seed(seed)
             self.stagnation = neat_config.stagnation_type(neat_config.stagnation_config, self.reporters)
             self.reproduction = neat_config.reproduction_type(neat_config.reproduction_config,
                                                               self.reporters, self.stagnation)
@@ -54,17 +60,30 @@ class NeatSearch:
         """Evaluate the current generation, then breed and speciate the next. Returns the row of
         generations.csv for the evaluated generation."""
         t0 = time.perf_counter()
-        build_s = self.pending_build_s + self._decode_all()
-        todo = [k for k, g in self.population.items() if self.phenotypes[k].valid and g.fitness is None]
+        todo = self.ask()
         t1 = time.perf_counter()
-        if todo:
-            fit = self.evaluate([self.phenotypes[k] for k in todo])
-            for k, f in zip(todo, fit, strict=True):
-                self.population[k].fitness = float(f)
+        result = self.evaluate([p for _, p in todo]) if todo else np.zeros(0)
+        fit, episodes = result if isinstance(result, tuple) else (result, len(todo))
         sim_s = time.perf_counter() - t1
+        row = self.tell(fit, episodes)
+        row.update(build_s=self._build_s, sim_s=sim_s, neat_s=row["neat_s"],
+                   total_s=time.perf_counter() - t0)
+        return row
+
+    def ask(self) -> list[tuple[int, Any]]:
+        """(key, phenotype) of the genomes of this generation that need a fitness."""
+        self._build_s = self.pending_build_s + self._decode_all()
+        self._todo = [k for k, g in self.population.items() if self.phenotypes[k].valid
+                      and (g.fitness is None or self.reevaluate)]
+        return [(k, self.phenotypes[k]) for k in self._todo]
+
+    def tell(self, fitness: Sequence[float], episodes: int | None = None) -> dict:
+        """Fitness for the genomes `ask` returned; breeds the next generation."""
+        for k, f in zip(self._todo, fitness, strict=True):
+            self.population[k].fitness = float(f)
         valid = {k: g for k, g in self.population.items() if self.phenotypes[k].valid}
         n_invalid = len(self.population) - len(valid)
-        row = self._stats(valid, n_invalid, len(todo))
+        row = self._stats(valid, n_invalid, len(self._todo) if episodes is None else episodes)
         self._track_best(valid)
         t2 = time.perf_counter()
         self._drop(valid)
@@ -78,8 +97,7 @@ class NeatSearch:
         self.pending_build_s = self._decode_all()
         t3 = time.perf_counter()
         self.species.speciate(self.config, self.population, self.generation)
-        neat_s += time.perf_counter() - t3
-        row.update(build_s=build_s, sim_s=sim_s, neat_s=neat_s, total_s=time.perf_counter() - t0)
+        row["neat_s"] = neat_s + time.perf_counter() - t3
         self.generation += 1
         return row
 

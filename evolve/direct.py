@@ -1,0 +1,71 @@
+"""Direct-encoding NEAT baseline: one NEAT network per genome is both body generator and controller.
+
+Inputs: 2 body coordinates + the observation (zero-padded to the largest robot of the grid);
+outputs: 5 material outputs + one per body cell. Body: each cell's (x, y) with the observation
+inputs at 0, argmax of the 5 material outputs. Control: coordinates 0, the observation in the
+rest; actions are the cell outputs at actuator cells (evogym's order), 1.1 + 0.5 * y.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from evolve.cppn import CompiledCPPN
+from evolve.evaluate import rollout_policy
+from evolve.graph_controller import GraphController
+from evolve.neat_batch import GraphPolicy, NetworkBatch
+from evolve.sgr_decoder import is_valid_robot
+from evolve.substrate import N_TYPES, cell_coordinates
+from tasks.env import obs_dim
+from tsim.body import build_body
+
+N_COORDS = 2
+
+
+def n_inputs(task: str, shape: tuple[int, int]) -> int:
+    return N_COORDS + obs_dim(task, (shape[0] + 1) * (shape[1] + 1))
+
+
+@dataclass
+class DirectPhenotype:
+    body: np.ndarray
+    valid: bool
+    genome: object = None
+
+
+class DirectProblem:
+    def __init__(self, cfg: dict, neat_config):
+        self.cfg = cfg
+        self.gc = neat_config.genome_config
+        self.shape = tuple(cfg["robot_shape"])
+        self.cells = cell_coordinates(self.shape)
+
+    @staticmethod
+    def neat_overrides(cfg: dict) -> dict:
+        shape = tuple(cfg["robot_shape"])
+        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
+                                  "num_outputs": str(N_TYPES + shape[0] * shape[1])}}
+
+    def decode(self, genome) -> DirectPhenotype:
+        x = np.zeros((len(self.cells), len(self.gc.input_keys)))
+        x[:, :N_COORDS] = self.cells
+        out = CompiledCPPN(genome, self.gc)(x)[:, :N_TYPES]
+        body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
+        return DirectPhenotype(body, is_valid_robot(body), genome)
+
+    def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> np.ndarray:
+        def make_policy(env):
+            nets = NetworkBatch([p.genome for p in phenotypes], self.gc)
+            cells = [b.actuator_flat for b in env.sim.bodies]
+            return GraphPolicy(nets, cells, env.sim.max_actuators, N_COORDS, N_TYPES)
+        return rollout_policy(self.cfg["task"], [p.body for p in phenotypes], make_policy,
+                              self.cfg["episode_steps"])
+
+    def champion(self, p: DirectPhenotype) -> dict:
+        b = build_body(p.body)
+        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),
+                                           N_COORDS, N_TYPES, b.actuator_flat)
+        return {"body": p.body.tolist(), "controller": ctrl.to_json()}

@@ -1,0 +1,70 @@
+"""A NEAT network controller in plain JSON (the baselines' champions), runnable with numpy only.
+
+Nodes are listed in evaluation order with their incoming links; value = activation(bias +
+response * sum(w * value(src))) with neat-python's activation scalings (see `evolve.cppn`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from neat.graphs import feed_forward_layers
+
+from evolve.controller import ACTION_CENTRE, ACTION_HALF_RANGE
+from evolve.cppn import ACTIVATIONS
+
+FORMAT = "sgr-graph-controller-1"
+
+
+@dataclass
+class GraphController:
+    input_keys: list[int]
+    output_keys: list[int]
+    nodes: list[dict]  # {"key", "bias", "response", "activation", "links": [[src, weight], ...]}
+    input_size: int  # observation length
+    input_offset: int  # observation enters inputs [offset, offset + input_size)
+    output_offset: int  # action of actuator i = output[output_offset + action_cells[i]]
+    action_cells: np.ndarray
+
+    @classmethod
+    def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
+                    output_offset: int, action_cells: np.ndarray) -> GraphController:
+        conns = [c.key for c in genome.connections.values() if c.enabled]
+        inputs, outputs = list(genome_config.input_keys), list(genome_config.output_keys)
+        layers, required = feed_forward_layers(inputs, outputs, conns)
+        known = required | set(inputs)
+        nodes = []
+        for layer in layers:
+            for k in sorted(layer):
+                ng = genome.nodes[k]
+                links = [[i, genome.connections[(i, o)].weight] for i, o in conns if o == k and i in known]
+                nodes.append({"key": k, "bias": ng.bias, "response": ng.response,
+                              "activation": ng.activation, "links": links})
+        return cls(inputs, outputs, nodes, input_size, input_offset, output_offset,
+                   np.asarray(action_cells, dtype=np.int64))
+
+    def outputs(self, obs: np.ndarray) -> np.ndarray:
+        x = np.zeros(len(self.input_keys))
+        x[self.input_offset:self.input_offset + self.input_size] = obs[:self.input_size]
+        v = dict(zip(self.input_keys, x, strict=True))
+        for n in self.nodes:
+            s = sum(w * v[i] for i, w in n["links"])
+            v[n["key"]] = float(ACTIVATIONS[n["activation"]](np.float64(n["bias"] + n["response"] * s)))
+        return np.array([v.get(k, 0.0) for k in self.output_keys])
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        return ACTION_CENTRE + ACTION_HALF_RANGE * self.outputs(obs)[self.output_offset + self.action_cells]
+
+    def to_json(self) -> dict:
+        return {"format": FORMAT, "input_keys": self.input_keys, "output_keys": self.output_keys,
+                "nodes": self.nodes, "input_size": self.input_size, "input_offset": self.input_offset,
+                "output_offset": self.output_offset, "action_cells": self.action_cells.tolist(),
+                "doc": "inputs: zeros with the observation at [input_offset, +input_size); nodes in "
+                       "order: value = activation(bias + response * sum(w * value[src])), neat-python "
+                       "activations; action = 1.1 + 0.5 * output[output_offset + action_cells]"}
+
+    @classmethod
+    def from_json(cls, d: dict) -> GraphController:
+        return cls(list(d["input_keys"]), list(d["output_keys"]), list(d["nodes"]), int(d["input_size"]),
+                   int(d["input_offset"]), int(d["output_offset"]), np.asarray(d["action_cells"]))

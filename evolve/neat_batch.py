@@ -1,0 +1,121 @@
+"""Many arbitrary-topology neat-python networks evaluated together.
+
+Each genome is compiled to layers by depth (neat-python's feed-forward layering); layer d of every
+genome is padded to the widest layer d in the batch, so one layer is one einsum over the whole
+batch: values[:, slots_d] = act(bias + response * (values @ W_d)). Slots: the inputs, then each
+depth's padded block, then one slot that stays 0 (outputs no enabled path reaches read it, as in
+neat-python).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+from neat.graphs import feed_forward_layers
+
+from evolve.cppn import ACTIVATIONS
+
+ACT_NAMES = tuple(ACTIVATIONS)
+
+
+def _layers(genome, genome_config):
+    conns = [c.key for c in genome.connections.values() if c.enabled]
+    inputs = list(genome_config.input_keys)
+    layers, required = feed_forward_layers(inputs, list(genome_config.output_keys), conns)
+    known = required | set(inputs)
+    incoming: dict[int, list] = {}
+    for i, o in conns:
+        if i in known:
+            incoming.setdefault(o, []).append((i, genome.connections[(i, o)].weight))
+    for layer in layers:
+        for node in layer:
+            agg = genome.nodes[node].aggregation
+            if agg != "sum":
+                raise ValueError(f"aggregation {agg!r} is not supported by batched networks (sum only)")
+    return [sorted(layer) for layer in layers], incoming
+
+
+class NetworkBatch:
+    """`forward(x)` with x (B, Q, n_inputs) -> (B, Q, n_outputs): network b applied to its Q rows."""
+
+    def __init__(self, genomes: Sequence, genome_config):
+        """`genome_config`: one for all genomes, or one per genome (input counts may differ, e.g.
+        controllers of different bodies; the batch takes the largest, smaller ones read zeros)."""
+        many = isinstance(genome_config, (list, tuple))
+        configs = list(genome_config) if many else [genome_config] * len(genomes)
+        self.n_in = max(len(c.input_keys) for c in configs)
+        self.n_out = len(configs[0].output_keys)
+        if any(len(c.output_keys) != self.n_out for c in configs):
+            raise ValueError("all networks of a batch need the same number of outputs")
+        compiled = [_layers(g, c) for g, c in zip(genomes, configs, strict=True)]
+        B = len(genomes)
+        depth = max((len(L) for L, _ in compiled), default=0)
+        widths = [max((len(L[d]) if d < len(L) else 0) for L, _ in compiled) for d in range(depth)]
+        starts = np.concatenate([[self.n_in], self.n_in + np.cumsum(widths)]).astype(int)
+        self.n_slots = int(starts[-1]) + 1
+        zero_slot = self.n_slots - 1
+        self.blocks = []  # per depth: (start, W (B, n_slots, w), bias, response, act index)
+        for d, w in enumerate(widths):
+            self.blocks.append((int(starts[d]), np.zeros((B, self.n_slots, w)), np.zeros((B, w)),
+                                np.zeros((B, w)), np.zeros((B, w), dtype=np.int64)))
+        self.out_slot = np.full((B, self.n_out), zero_slot, dtype=np.int64)
+        act_index = {a: i for i, a in enumerate(ACT_NAMES)}
+        for b, ((layers, incoming), genome, gc) in enumerate(zip(compiled, genomes, configs, strict=True)):
+            slot = {k: j for j, k in enumerate(gc.input_keys)}
+            for d, layer in enumerate(layers):
+                for j, node in enumerate(layer):
+                    slot[node] = int(starts[d]) + j
+            for d, layer in enumerate(layers):
+                _, W, bias, resp, act = self.blocks[d]
+                for j, node in enumerate(layer):
+                    ng = genome.nodes[node]
+                    if ng.activation not in act_index:
+                        raise ValueError(f"activation {ng.activation!r} is not supported; "
+                                         f"use one of {sorted(act_index)}")
+                    for i, w in incoming.get(node, []):
+                        W[b, slot[i], j] += w
+                    bias[b, j], resp[b, j], act[b, j] = ng.bias, ng.response, act_index[ng.activation]
+            for o, k in enumerate(gc.output_keys):
+                if k in slot:
+                    self.out_slot[b, o] = slot[k]
+        self._used = [sorted(set(np.unique(a).tolist())) for *_, a in self.blocks]
+
+    def forward(self, x: np.ndarray) -> np.ndarray:
+        B, Q, n = x.shape
+        if n != self.n_in or B != len(self.out_slot):
+            raise ValueError(f"expected inputs ({len(self.out_slot)}, Q, {self.n_in}), got {x.shape}")
+        v = np.zeros((B, Q, self.n_slots))
+        v[:, :, :n] = x
+        for (start, W, bias, resp, act), used in zip(self.blocks, self._used, strict=True):
+            z = bias[:, None, :] + resp[:, None, :] * np.einsum("bqs,bsw->bqw", v, W)
+            out = np.zeros_like(z)
+            for a in used:
+                m = (act == a)[:, None, :]
+                out = np.where(m, ACTIVATIONS[ACT_NAMES[a]](z), out)
+            v[:, :, start:start + W.shape[2]] = out
+        idx = np.broadcast_to(self.out_slot[:, None, :], (B, Q, self.n_out))
+        return np.take_along_axis(v, idx, axis=2)
+
+
+class GraphPolicy:
+    """Batched NEAT-network controllers: robot b's observation enters inputs
+    [input_offset, input_offset + obs_len) (others 0); its actions are the outputs at
+    output_offset + action cell, mapped like the dense controllers: 1.1 + 0.5 * y."""
+
+    def __init__(self, nets: NetworkBatch, action_cells: Sequence[np.ndarray], action_width: int,
+                 input_offset: int = 0, output_offset: int = 0):
+        self.nets, self.input_offset = nets, input_offset
+        B = len(action_cells)
+        self.cols = np.full((B, action_width), output_offset, dtype=np.int64)
+        for b, cells in enumerate(action_cells):
+            self.cols[b, :len(cells)] = output_offset + np.asarray(cells)
+        self._rows = np.arange(B)[:, None]
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        B, D = obs.shape
+        x = np.zeros((B, 1, self.nets.n_in))
+        w = min(D, self.nets.n_in - self.input_offset)
+        x[:, 0, self.input_offset:self.input_offset + w] = obs[:, :w]
+        y = self.nets.forward(x)[:, 0, :]
+        return 1.1 + 0.5 * y[self._rows, self.cols]

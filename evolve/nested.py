@@ -1,0 +1,130 @@
+"""Nested-loop NEAT baseline: an outer NEAT population of body networks, and for every distinct
+body an inner NEAT population of controllers that persists across outer generations.
+
+Body network: (x, y) of a cell -> 5 material outputs, argmax. Controller network: the observation
+zero-padded to a k x k grid (k = ceil(sqrt(obs length))) -> one output per cell; actions are the
+outputs at actuator cells. Per outer generation every body's inner population runs
+`inner_generations` generations; the controllers of all bodies are simulated as one batch per
+inner generation. A body's fitness is the best return its inner population has reached.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from evolve.cppn import CompiledCPPN
+from evolve.evaluate import rollout_policy
+from evolve.graph_controller import GraphController
+from evolve.neat_batch import GraphPolicy, NetworkBatch
+from evolve.neat_search import NeatSearch
+from evolve.sgr_decoder import is_valid_robot
+from evolve.substrate import N_TYPES, cell_coordinates, controller_side
+from tasks.env import obs_dim
+from tsim.body import build_body
+
+
+@dataclass
+class BodyPhenotype:
+    body: np.ndarray
+    valid: bool
+
+
+@dataclass
+class ControllerPhenotype:
+    genome: object
+    body: np.ndarray
+    valid: bool = True
+
+
+class NestedProblem:
+    def __init__(self, cfg: dict, neat_config, run_path: Path | None = None):
+        from evolve.experiment import load_neat_config, neat_ini_text
+
+        self.cfg = cfg
+        self.gc = neat_config.genome_config
+        self.shape = tuple(cfg["robot_shape"])
+        self.cells = cell_coordinates(self.shape)
+        n_cells = str(self.shape[0] * self.shape[1])
+        self._ini = lambda k: neat_ini_text(
+            cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
+            {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": n_cells}})
+        self._load = load_neat_config
+        self._configs: dict[int, object] = {}
+        self.inner: dict[bytes, NeatSearch] = {}
+        self.run_path = run_path
+
+    @staticmethod
+    def neat_overrides(cfg: dict) -> dict:
+        return {"DefaultGenome": {"num_inputs": "2", "num_outputs": str(N_TYPES)}}
+
+    def _controller_config(self, k: int):
+        if k not in self._configs:
+            import tempfile
+
+            with tempfile.TemporaryDirectory() as tmp:
+                p = Path(tmp) / f"controller-k{k}.ini"
+                p.write_text(self._ini(k))
+                self._configs[k] = self._load(p)
+        return self._configs[k]
+
+    def decode(self, genome) -> BodyPhenotype:
+        out = CompiledCPPN(genome, self.gc)(self.cells)
+        body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
+        return BodyPhenotype(body, is_valid_robot(body))
+
+    def _inner_for(self, body: np.ndarray) -> NeatSearch:
+        key = body.tobytes()
+        if key not in self.inner:
+            k = controller_side(obs_dim(self.cfg["task"], build_body(body).n_points))
+            self.inner[key] = NeatSearch(self._controller_config(k),
+                                         lambda g, b=body: ControllerPhenotype(g, b), None, seed=None)
+        return self.inner[key]
+
+    def evaluate(self, phenotypes: Sequence[BodyPhenotype]) -> tuple[np.ndarray, int]:
+        bodies = {p.body.tobytes(): p.body for p in phenotypes}
+        searches = [self._inner_for(b) for b in bodies.values()]
+        episodes = 0
+        for _ in range(self.cfg["inner_generations"]):
+            asks = [s.ask() for s in searches]
+            flat = [p for a in asks for _, p in a]
+            fit = self._simulate(flat, searches, asks)
+            episodes += len(flat)
+            start = 0
+            for s, a in zip(searches, asks, strict=True):
+                s.tell(fit[start:start + len(a)])
+                start += len(a)
+        best = {key: s.best["fitness"] for key, s in zip(bodies, searches, strict=True)}
+        return np.array([best[p.body.tobytes()] for p in phenotypes]), episodes
+
+    def _simulate(self, flat: list[ControllerPhenotype], searches, asks) -> np.ndarray:
+        configs = [s.config.genome_config for s, a in zip(searches, asks, strict=True) for _ in a]
+
+        def make_policy(env):
+            nets = NetworkBatch([p.genome for p in flat], configs)
+            return GraphPolicy(nets, [b.actuator_flat for b in env.sim.bodies], env.sim.max_actuators)
+        return rollout_policy(self.cfg["task"], [p.body for p in flat], make_policy,
+                              self.cfg["episode_steps"])
+
+    def champion(self, p: BodyPhenotype) -> dict:
+        s = self._inner_for(p.body)
+        b = build_body(p.body)
+        ctrl = GraphController.from_genome(s.best["genome"], s.config.genome_config,
+                                           obs_dim(self.cfg["task"], b.n_points), 0, 0, b.actuator_flat)
+        return {"body": p.body.tolist(), "controller": ctrl.to_json()}
+
+    # checkpoint hooks: the inner populations are part of the run's state
+    def state(self) -> dict:
+        return {"inner": {key: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
+                          for key, s in self.inner.items()}}
+
+    def restore(self, state: dict) -> None:
+        self.inner = {}
+        for key, (st, k) in state["inner"].items():
+            body = np.frombuffer(key, dtype=np.int64).reshape(self.shape).copy()
+            self.inner[key] = NeatSearch(self._controller_config(k),
+                                         lambda g, b=body: ControllerPhenotype(g, b), None, seed=None,
+                                         state=st)
