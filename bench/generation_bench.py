@@ -1,0 +1,55 @@
+"""Seconds per generation of an evolution method at full size (not run by CI).
+
+    python bench/generation_bench.py --config configs/sgr/Walker-v0.yaml --generations 4
+
+Prints build / sim / neat / total seconds per generation (median over the generations after the
+first, which also pays the one-off Taichi compile) and simulated robot-steps per second.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import tempfile
+import time
+
+from evolve.experiment import Experiment
+from tasks.specs import task_spec
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--config", default="configs/sgr/Walker-v0.yaml")
+    ap.add_argument("--generations", type=int, default=4)
+    ap.add_argument("--pop", type=int)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        exp = Experiment.create(args.config, f"{tmp}/run", {"generations": args.generations,
+                                                           "pop_size": args.pop}, quiet=True)
+        rows = []
+        t0 = time.perf_counter()
+        for _ in range(args.generations):
+            rows.append(exp.search.step())
+        wall = time.perf_counter() - t0
+    cfg = exp.cfg
+    steps = cfg["episode_steps"] or task_spec(cfg["task"]).paper_steps
+    timed = rows[1:] or rows
+    med = {k: statistics.median(r[k] for r in timed) for k in ("build_s", "sim_s", "neat_s", "total_s")}
+    robot_steps = sum(r["episodes"] for r in timed) * steps  # upper bound: early terminations stop sooner
+    out = {"config": args.config, "method": cfg["method"], "task": cfg["task"], "pop": cfg["pop_size"],
+           "steps": steps, "generations": args.generations, "first_generation_s": rows[0]["total_s"],
+           **{f"median_{k}": v for k, v in med.items()},
+           "robot_steps_per_s": robot_steps / sum(r["sim_s"] for r in timed), "wall_s": wall}
+    if args.json:
+        print(json.dumps(out))
+    else:
+        print(f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} x {steps} steps: median "
+              f"{med['total_s']:.2f} s/generation (build {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
+              f"neat {med['neat_s']:.2f}); first generation {rows[0]['total_s']:.1f} s; "
+              f"{out['robot_steps_per_s']:.0f} robot-steps/s")
+
+
+if __name__ == "__main__":
+    main()
