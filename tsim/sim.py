@@ -136,6 +136,8 @@ class BatchSim:
         self.qf = np.zeros((B, 2, 4, 4))
         self.qi = np.zeros((B, 2, 4, 2), dtype=np.int32)
         self.actions = np.ones((B, A))
+        # worlds small enough for the kernel that keeps per-point state in local arrays
+        self._small = P <= K.PC
 
     # ------------------------------------------------------------------ control
     @property
@@ -184,9 +186,16 @@ class BatchSim:
         """Advance every running world by n env steps (30 substeps each)."""
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
-            K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f, self.vox_i,
-                          self.lists, self.box, self.qf, self.qi, self.actions, self.ter_f, self.ter_i,
-                          self.ter_grid, C.SUBSTEPS)
+            if self._small:
+                K.step_kernel_small(self.counts, self.state.reshape(-1), self.work,
+                                    self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i,
+                                    self.lists, self.box, self.actions, self.ter_f, self.ter_i,
+                                    self.ter_grid, C.SUBSTEPS, self.state.shape[1],
+                                    self.edge_i.shape[1])
+            else:
+                K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f,
+                              self.vox_i, self.lists, self.box, self.qf, self.qi, self.actions,
+                              self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS)
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:
