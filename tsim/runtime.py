@@ -21,7 +21,10 @@ def init(arch: str | None = None) -> str:
         return _ARCH
     threads = os.environ.get("SGR_THREADS")
     kwargs = {"cpu_max_num_threads": int(threads)} if threads else {}
-    ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32,
+    # fast_math off: IEEE semantics like evogym's C++ build (no reassociation), so results do not
+    # depend on how a kernel is written or optimised (the small-world and generic kernels agree
+    # bit for bit) and the parity with evogym's traces is as good or better
+    ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
             log_level=ti.WARN, **kwargs)
     _ARCH = arch
     return _ARCH
