@@ -506,6 +506,8 @@ def step_kernel(counts: I32_2, state: F64_3, work: F64_3, edge_i: I32_3, edge_f:
 # ------------------------------------------------------------------------------------------------
 
 PC = 64  # point capacity of the fast kernel
+EC = 160  # edge capacity
+SC = 32  # surface voxel capacity
 NS = 8  # state columns
 F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
@@ -594,7 +596,7 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
 
 
 @ti.func
-def _load_dyn_l(pos: ti.template(), state: ti.template(), so, vox_i: ti.template(), b,
+def _load_dyn_l(pos: ti.template(), vt: ti.template(), vox_i: ti.template(), b,
                 qf: ti.template(), qi: ti.template(), q, v):
     for k in range(4):
         p = vox_i[b, v, V_PTS + k]
@@ -602,14 +604,14 @@ def _load_dyn_l(pos: ti.template(), state: ti.template(), so, vox_i: ti.template
         qi[4 * q + k, 1] = vox_i[b, v, V_OPEN + k]
         qf[4 * q + k, 0] = pos[2 * p]
         qf[4 * q + k, 1] = pos[2 * p + 1]
-        qf[4 * q + k, 2] = state[so + NS * p + 6]
-        qf[4 * q + k, 3] = state[so + NS * p + 7]
+        qf[4 * q + k, 2] = vt[2 * p]
+        qf[4 * q + k, 3] = vt[2 * p + 1]
 
 
 @ti.func
-def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: ti.template(),
-                state: ti.template(), vox_i: ti.template(), lists: ti.template(),
-                box: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
+def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
+                fcol: ti.template(), box: ti.template(), vox_i: ti.template(),
+                lists: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
                 ter_grid: ti.template()):
     """`_contacts` on the local positions/contact forces of the fast kernel."""
     n_surf = counts[b, N_SURF]
@@ -632,10 +634,10 @@ def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: t
             x1 = ti.max(x1, x)
             y0 = ti.min(y0, y)
             y1 = ti.max(y1, y)
-        box[b, i, 0] = x0
-        box[b, i, 1] = x1
-        box[b, i, 2] = y0
-        box[b, i, 3] = y1
+        box[4 * i] = x0
+        box[4 * i + 1] = x1
+        box[4 * i + 2] = y0
+        box[4 * i + 3] = y1
         if not (ti.abs(x0) < 1e30 and ti.abs(x1) < 1e30 and ti.abs(y0) < 1e30
                 and ti.abs(y1) < 1e30):
             finite = False
@@ -648,13 +650,13 @@ def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: t
         for i in range(n_surf):
             va = lists[b, i, 0]
             loaded = False
-            bx0 = box[b, i, 0]
-            bx1 = box[b, i, 1]
-            by0 = box[b, i, 2]
-            by1 = box[b, i, 3]
+            bx0 = box[4 * i]
+            bx1 = box[4 * i + 1]
+            by0 = box[4 * i + 2]
+            by1 = box[4 * i + 3]
             for j in range(i + 1, n_surf):
-                if not (bx0 > box[b, j, 1] or bx1 < box[b, j, 0]
-                        or by0 > box[b, j, 3] or by1 < box[b, j, 2]):
+                if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
+                        or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
                     vb = lists[b, j, 0]
                     same = vox_i[b, va, V_OBJ] == vox_i[b, vb, V_OBJ]
                     scale = 2.0 if same else 1.0
@@ -664,9 +666,9 @@ def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: t
                         if dr > 1 or dc > 1:
                             count += 2
                     if not loaded:
-                        _load_dyn_l(pos, state, so, vox_i, b, qf, qi, 0, va)
+                        _load_dyn_l(pos, vt, vox_i, b, qf, qi, 0, va)
                         loaded = True
-                    _load_dyn_l(pos, state, so, vox_i, b, qf, qi, 1, vb)
+                    _load_dyn_l(pos, vt, vox_i, b, qf, qi, 1, vb)
                     for d in range(2):
                         _resolve_l(fcol, qf, qi, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -680,7 +682,7 @@ def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: t
                         if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
                                 or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
                             if not loaded:
-                                _load_dyn_l(pos, state, so, vox_i, b, qf, qi, 0, va)
+                                _load_dyn_l(pos, vt, vox_i, b, qf, qi, 0, va)
                                 loaded = True
                             for k in range(4):
                                 qf[4 + k, 0] = ter_f[t, 2 * k]
@@ -699,9 +701,11 @@ def _contacts_l(b, so, n_pts, counts: ti.template(), pos: ti.template(), fcol: t
 @ti.func
 def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
            pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
-           vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template()):
-    """`_rk4` on local arrays (x, y interleaved); the 4 stages are unrolled, each stage's point
-    loop also prepares the next stage's state."""
+           vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
+           leq: ti.template()):
+    """Rest-length update and `_rk4` on local arrays (x, y interleaved). The 4 stages are
+    unrolled; stage 0 (stage state = substep state) also sets the current rest lengths, and each
+    stage's point loop prepares the next stage's state."""
     for i in range(2 * n_pts):
         xs[i] = pos[i]
         vs[i] = vel[i]
@@ -715,7 +719,9 @@ def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(
             dx = xs[2 * a] - xs[2 * q]
             dy = xs[2 * a + 1] - xs[2 * q + 1]
             dist = ti.sqrt(dx * dx + dy * dy)
-            mag = (dist - edge_f[ef + E_LEQ]) * edge_f[ef + E_K] / dist
+            if ti.static(stage == 0):
+                leq[e] = dist + (edge_f[ef + E_GOAL] - dist) * C.REST_CONVERGENCE
+            mag = (dist - leq[e]) * edge_f[ef + E_K] / dist
             dx *= mag
             dy *= mag
             frc[2 * a] -= dx
@@ -761,7 +767,7 @@ def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(
 @ti.func
 def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
                    edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
-                   pos: ti.template()):
+                   pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
     """`_edge_constraints` on the local positions."""
     for e in range(n_edges):
         a = edge_i[eio + 4 * e]
@@ -782,12 +788,11 @@ def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templ
             m = (dist - rest * _LO) / (dist * 2)
             cx += dx * m
             cy += dy * m
-        edge_f[ef + E_CX] = cx * 0.8
-        edge_f[ef + E_CY] = cy * 0.8
+        ccx[e] = cx * 0.8
+        ccy[e] = cy * 0.8
     for e in range(n_edges):
-        ef = efo + N_EDGE_F * e
-        cx = edge_f[ef + E_CX]
-        cy = edge_f[ef + E_CY]
+        cx = ccx[e]
+        cy = ccy[e]
         if cx != 0.0 or cy != 0.0:
             a = edge_i[eio + 4 * e]
             q = edge_i[eio + 4 * e + 1]
@@ -821,11 +826,12 @@ def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templ
 
 
 @ti.kernel
-def step_kernel_small(counts: I32_2, state: F64_1, work: F64_3, edge_i: I32_1, edge_f: F64_1,
-                      vox_i: I32_3, lists: I32_3, box: F64_3, actions: F64_2, ter_f: F64_2,
-                      ter_i: I32_2, ter_grid: I32_2, n_sub: ti.i32, P: ti.i32, E: ti.i32):
-    """`step_kernel` for worlds of at most PC points; state, edge_i and edge_f are flat views of
-    the (B, P, 8), (B, E, 4) and (B, E, 6) arrays."""
+def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
+                      lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
+                      n_sub: ti.i32, P: ti.i32, E: ti.i32):
+    """`step_kernel` for worlds of at most PC points, EC edges and SC surface voxels; state,
+    edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays. The current
+    rest lengths live in a local array (edge_f's column E_LEQ is not updated)."""
     ti.loop_config(block_dim=1)
     for b in range(counts.shape[0]):
         if counts[b, STATUS] == RUNNING:
@@ -843,62 +849,60 @@ def step_kernel_small(counts: I32_2, state: F64_1, work: F64_3, edge_i: I32_1, e
                     if d1 >= 0:
                         total += actions[b, d1]
                         cnt = 2.0
-                    edge_f[efo + N_EDGE_F * e + E_GOAL] = total * (edge_f[efo + N_EDGE_F * e + E_REST] / cnt)
+                    ef = efo + N_EDGE_F * e
+                    edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
             pos = ti.Vector.zero(ti.f64, 2 * PC)
             vel = ti.Vector.zero(ti.f64, 2 * PC)
+            pl = ti.Vector.zero(ti.f64, 2 * PC)  # pos_last
+            vt = ti.Vector.zero(ti.f64, 2 * PC)  # vel_true
             xs = ti.Vector.zero(ti.f64, 2 * PC)
             vs = ti.Vector.zero(ti.f64, 2 * PC)
             frc = ti.Vector.zero(ti.f64, 2 * PC)
             fcol = ti.Vector.zero(ti.f64, 2 * PC)
             adx = ti.Vector.zero(ti.f64, 2 * PC)
             adv = ti.Vector.zero(ti.f64, 2 * PC)
+            leq = ti.Vector.zero(ti.f64, EC)
+            ccx = ti.Vector.zero(ti.f64, EC)
+            ccy = ti.Vector.zero(ti.f64, EC)
+            box = ti.Vector.zero(ti.f64, 4 * SC)
             for p in range(n_pts):
                 for d in ti.static(range(2)):
                     pos[2 * p + d] = state[so + NS * p + d]
                     vel[2 * p + d] = state[so + NS * p + 2 + d]
+                    pl[2 * p + d] = state[so + NS * p + 4 + d]
+                    vt[2 * p + d] = state[so + NS * p + 6 + d]
             status = RUNNING
             for _ in range(n_sub):
                 if status == RUNNING:
-                    count = _contacts_l(b, so, n_pts, counts, pos, fcol, state, vox_i, lists,
-                                        box, ter_f, ter_i, ter_grid)
+                    count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, vox_i, lists, ter_f,
+                                        ter_i, ter_grid)
                     if count < 0:
                         status = NONFINITE
                     else:
-                        for e in range(n_edges):
-                            a = edge_i[eio + 4 * e]
-                            q = edge_i[eio + 4 * e + 1]
-                            dx = pos[2 * a] - pos[2 * q]
-                            dy = pos[2 * a + 1] - pos[2 * q + 1]
-                            dist = ti.sqrt(dx * dx + dy * dy)
-                            ef = efo + N_EDGE_F * e
-                            edge_f[ef + E_LEQ] = dist + (edge_f[ef + E_GOAL] - dist) * C.REST_CONVERGENCE
                         _rk4_l(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
-                               frc, adx, adv)
+                               frc, adx, adv, leq)
                         _constraints_l(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
-                                       pos)
-                        for p in range(n_pts):
-                            for d in ti.static(range(2)):
-                                s = so + NS * p
-                                state[s + 6 + d] = (pos[2 * p + d] - state[s + 4 + d]) / C.DT
-                                state[s + 4 + d] = pos[2 * p + d]
+                                       pos, ccx, ccy)
+                        for i in range(2 * n_pts):
+                            vt[i] = (pos[i] - pl[i]) / C.DT
+                            pl[i] = pos[i]
                         if count > counts[b, N_SURF_ROBOT]:
                             status = UNSTABLE
             if status == RUNNING:
-                for p in range(n_pts):
-                    for d in ti.static(range(2)):
-                        if not (ti.abs(pos[2 * p + d]) < 1e30 and ti.abs(vel[2 * p + d]) < 1e30):
-                            status = NONFINITE
+                for i in range(2 * n_pts):
+                    if not (ti.abs(pos[i]) < 1e30 and ti.abs(vel[i]) < 1e30):
+                        status = NONFINITE
             if status == RUNNING:
                 for p in range(n_pts):
                     for d in ti.static(range(2)):
                         state[so + NS * p + d] = pos[2 * p + d]
                         state[so + NS * p + 2 + d] = vel[2 * p + d]
+                        state[so + NS * p + 4 + d] = pl[2 * p + d]
+                        state[so + NS * p + 6 + d] = vt[2 * p + d]
             else:
-                # evogym keeps the last snapshot: the step never happened for observers; the
-                # snapshot is still in state[:, :, 0:4] (only pos_last/vel_true were advanced)
+                # evogym keeps the last snapshot: the step never happened for observers
                 for p in range(n_pts):
                     for d in ti.static(range(2)):
-                        s = so + NS * p
-                        state[s + 4 + d] = state[s + d]
-                        state[s + 6 + d] = 0.0
+                        state[so + NS * p + 4 + d] = state[so + NS * p + d]
+                        state[so + NS * p + 6 + d] = 0.0
                 counts[b, STATUS] = status

@@ -137,7 +137,7 @@ class BatchSim:
         self.qi = np.zeros((B, 2, 4, 2), dtype=np.int32)
         self.actions = np.ones((B, A))
         # worlds small enough for the kernel that keeps per-point state in local arrays
-        self._small = P <= K.PC
+        self._small = P <= K.PC and E <= K.EC and int(counts[:, K.N_SURF].max()) <= K.SC
 
     # ------------------------------------------------------------------ control
     @property
@@ -187,11 +187,10 @@ class BatchSim:
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             if self._small:
-                K.step_kernel_small(self.counts, self.state.reshape(-1), self.work,
-                                    self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i,
-                                    self.lists, self.box, self.actions, self.ter_f, self.ter_i,
-                                    self.ter_grid, C.SUBSTEPS, self.state.shape[1],
-                                    self.edge_i.shape[1])
+                K.step_kernel_small(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
+                                    self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions,
+                                    self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS,
+                                    self.state.shape[1], self.edge_i.shape[1])
             else:
                 K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f,
                               self.vox_i, self.lists, self.box, self.qf, self.qi, self.actions,
