@@ -534,8 +534,11 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
                 if qi[4 * r + j, 0] == pid:
                     shared = True
         p = _lpt(qf, m, i)
-        if not shared and _point_in_quad(p, _lpt(qf, r, 0), _lpt(qf, r, 1), _lpt(qf, r, 2),
-                                         _lpt(qf, r, 3)):
+        inside = False
+        if not shared:  # (Taichi's `and` does not short-circuit)
+            inside = _point_in_quad(p, _lpt(qf, r, 0), _lpt(qf, r, 1), _lpt(qf, r, 2),
+                                    _lpt(qf, r, 3))
+        if inside:
             s1 = 0 if i < 2 else 2
             s2 = 3 if (i == 0 or i == 3) else 1
             m1a = _lpt(qf, m, s1)
