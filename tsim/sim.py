@@ -166,7 +166,17 @@ class BatchSim:
             if a.shape != (B, self.max_actuators):
                 raise ValueError(f"wrong action shape: expected ({B}, {self.max_actuators}), "
                                  f"got {a.shape}")
-            rows = [a[w, :self.n_actuators[w]] for w in range(B)]
+            # vectorised: one finiteness test and one clip for the whole batch
+            M = self.max_actuators
+            mask = np.arange(M)[None, :] < self.n_actuators[:, None]
+            ok = np.isfinite(a) | ~mask
+            if not ok.all():
+                w = int(np.nonzero(~ok.all(axis=1))[0][0])
+                r = a[w, :self.n_actuators[w]]
+                raise ValueError(f"non-finite actions for robot {w}: {r[~np.isfinite(r)][:3]}")
+            self.actions[:, :M] = np.where(mask, np.clip(a, C.ACTION_MIN, C.ACTION_MAX),
+                                           self.actions[:, :M])
+            return
         else:
             if len(actions) != B:
                 raise ValueError(f"wrong action shape: expected {B} rows, got {len(actions)}")
