@@ -599,12 +599,13 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
 
 
 @ti.func
-def _load_dyn_l(pos: ti.template(), vt: ti.template(), vox_i: ti.template(), b,
-                qf: ti.template(), qi: ti.template(), q, v):
+def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
+                qi: ti.template(), q, i):
+    """Copy surface voxel list entry i (corners and open sides in sv) into scratch quad q."""
     for k in range(4):
-        p = vox_i[b, v, V_PTS + k]
+        p = sv[8 * i + k]
         qi[4 * q + k, 0] = p
-        qi[4 * q + k, 1] = vox_i[b, v, V_OPEN + k]
+        qi[4 * q + k, 1] = sv[8 * i + 4 + k]
         qf[4 * q + k, 0] = pos[2 * p]
         qf[4 * q + k, 1] = pos[2 * p + 1]
         qf[4 * q + k, 2] = vt[2 * p]
@@ -613,24 +614,23 @@ def _load_dyn_l(pos: ti.template(), vt: ti.template(), vox_i: ti.template(), b,
 
 @ti.func
 def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
-                fcol: ti.template(), box: ti.template(), vox_i: ti.template(),
-                lists: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
-                ter_grid: ti.template()):
-    """`_contacts` on the local positions/contact forces of the fast kernel."""
+                fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
+                ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
+    """`_contacts` on the local positions/contact forces of the fast kernel; surface voxel i has
+    corners sv[8i:8i+4], open sides sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]."""
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
     for i in range(2 * n_pts):
         fcol[i] = 0.0
     finite = True
     for i in range(n_surf):
-        v = lists[b, i, 0]
-        p0 = vox_i[b, v, V_PTS]
+        p0 = sv[8 * i]
         x0 = pos[2 * p0]
         y0 = pos[2 * p0 + 1]
         x1 = x0
         y1 = y0
         for k in range(1, 4):
-            p = vox_i[b, v, V_PTS + k]
+            p = sv[8 * i + k]
             x = pos[2 * p]
             y = pos[2 * p + 1]
             x0 = ti.min(x0, x)
@@ -651,7 +651,6 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
         gw = ter_grid.shape[0]
         gh = ter_grid.shape[1]
         for i in range(n_surf):
-            va = lists[b, i, 0]
             loaded = False
             bx0 = box[4 * i]
             bx1 = box[4 * i + 1]
@@ -660,18 +659,17 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
             for j in range(i + 1, n_surf):
                 if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
                         or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
-                    vb = lists[b, j, 0]
-                    same = vox_i[b, va, V_OBJ] == vox_i[b, vb, V_OBJ]
+                    same = sm[4 * i] == sm[4 * j]
                     scale = 2.0 if same else 1.0
                     if same and i < n_surf_robot and j < n_surf_robot:
-                        dr = ti.abs(vox_i[b, va, V_ROW] - vox_i[b, vb, V_ROW])
-                        dc = ti.abs(vox_i[b, va, V_COL] - vox_i[b, vb, V_COL])
+                        dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
+                        dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
                         if dr > 1 or dc > 1:
                             count += 2
                     if not loaded:
-                        _load_dyn_l(pos, vt, vox_i, b, qf, qi, 0, va)
+                        _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
                         loaded = True
-                    _load_dyn_l(pos, vt, vox_i, b, qf, qi, 1, vb)
+                    _load_dyn_l(pos, vt, sv, qf, qi, 1, j)
                     for d in range(2):
                         _resolve_l(fcol, qf, qi, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -685,7 +683,7 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                         if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
                                 or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
                             if not loaded:
-                                _load_dyn_l(pos, vt, vox_i, b, qf, qi, 0, va)
+                                _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
                                 loaded = True
                             for k in range(4):
                                 qf[4 + k, 0] = ter_f[t, 2 * k]
@@ -868,6 +866,16 @@ def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1,
             ccx = ti.Vector.zero(ti.f64, EC)
             ccy = ti.Vector.zero(ti.f64, EC)
             box = ti.Vector.zero(ti.f64, 4 * SC)
+            sv = ti.Vector.zero(ti.i32, 8 * SC)
+            sm = ti.Vector.zero(ti.i32, 4 * SC)
+            for i in range(counts[b, N_SURF]):
+                v = lists[b, i, 0]
+                for k in ti.static(range(4)):
+                    sv[8 * i + k] = vox_i[b, v, V_PTS + k]
+                    sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
+                sm[4 * i] = vox_i[b, v, V_OBJ]
+                sm[4 * i + 1] = vox_i[b, v, V_ROW]
+                sm[4 * i + 2] = vox_i[b, v, V_COL]
             for p in range(n_pts):
                 for d in ti.static(range(2)):
                     pos[2 * p + d] = state[so + NS * p + d]
@@ -877,7 +885,7 @@ def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1,
             status = RUNNING
             for _ in range(n_sub):
                 if status == RUNNING:
-                    count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, vox_i, lists, ter_f,
+                    count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
                                         ter_i, ter_grid)
                     if count < 0:
                         status = NONFINITE
