@@ -494,3 +494,426 @@ def step_kernel(counts: I32_2, state: F64_3, work: F64_3, edge_i: I32_3, edge_f:
                         state[b, p, d] = work[b, p, W_BPOS + d]
                         state[b, p, 4 + d] = work[b, p, W_BPOS + d] if d < 2 else 0.0
                 counts[b, STATUS] = status
+
+
+# ------------------------------------------------------------------------------------------------
+# Fast path for small worlds (n_pts <= PC): the per-point state of a world lives in local arrays
+# (LLVM allocas) for the whole env step. Stores to ndarrays force LLVM to reload every ndarray's
+# data pointer and shape after each store (they might alias), which made the spring loop ~3x
+# slower than with local accumulators. Hot loops here store only to locals; ndarrays are
+# addressed through flat 1-D views with compile-time strides. Arithmetic is kept expression for
+# expression identical to the generic kernel above.
+# ------------------------------------------------------------------------------------------------
+
+PC = 64  # point capacity of the fast kernel
+EC = 160  # edge capacity
+SC = 32  # surface voxel capacity
+NS = 8  # state columns
+F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
+
+
+@ti.func
+def _lpt(qf: ti.template(), q, k):
+    return vec2(qf[4 * q + k, 0], qf[4 * q + k, 1])
+
+
+@ti.func
+def _lvel(qf: ti.template(), q, k):
+    return vec2(qf[4 * q + k, 2], qf[4 * q + k, 3])
+
+
+@ti.func
+def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, scale):
+    """`_resolve` on local scratch quads: qf[4q + k] = (x, y, vx, vy), qi[4q + k] = (id, open)."""
+    for i in range(4):
+        pid = qi[4 * m + i, 0]
+        shared = False
+        if pid >= 0:
+            for j in range(4):
+                if qi[4 * r + j, 0] == pid:
+                    shared = True
+        p = _lpt(qf, m, i)
+        inside = False
+        if not shared:  # (Taichi's `and` does not short-circuit)
+            inside = _point_in_quad(p, _lpt(qf, r, 0), _lpt(qf, r, 1), _lpt(qf, r, 2),
+                                    _lpt(qf, r, 3))
+        if inside:
+            s1 = 0 if i < 2 else 2
+            s2 = 3 if (i == 0 or i == 3) else 1
+            m1a = _lpt(qf, m, s1)
+            m1b = _lpt(qf, m, (s1 + 1) % 4)
+            if s1 >= 2 and qi[4 * m + s1, 1] == 0:
+                m1a, m1b = m1b, m1a
+            m2a = _lpt(qf, m, s2)
+            m2b = _lpt(qf, m, (s2 + 1) % 4)
+            if s2 >= 2 and qi[4 * m + s2, 1] == 0:
+                m2a, m2b = m2b, m2a
+            best = -1
+            best_d = 0.0
+            for s in range(4):
+                if qi[4 * r + s, 1] != 0:
+                    ra = _lpt(qf, r, s)
+                    rb = _lpt(qf, r, (s + 1) % 4)
+                    if _intersects(m1a, m1b, ra, rb) or _intersects(m2a, m2b, ra, rb):
+                        d = _dist_point_edge(p, ra, rb)
+                        if best < 0 or d < best_d:
+                            best = s
+                            best_d = d
+            if best >= 0:
+                ka = best
+                kb = (best + 1) % 4
+                slope = _lpt(qf, r, kb) - _lpt(qf, r, ka)
+                normal = _normalized(vec2(-slope[1], slope[0]))
+                nf = normal * C.CONTACT_K * (C.CONTACT_OFFSET + best_d)
+                un = _normalized(normal)
+                vp = _lvel(qf, m, i)
+                va = _lvel(qf, r, ka)
+                vb = _lvel(qf, r, kb)
+                damp_p = un * (-1.0) * (un[0] * vp[0] + un[1] * vp[1]) * C.CONTACT_VEL_DAMPING
+                damp_a = un * (un[0] * va[0] + un[1] * va[1]) * C.CONTACT_VEL_DAMPING
+                damp_b = un * (un[0] * vb[0] + un[1] * vb[1]) * C.CONTACT_VEL_DAMPING
+                ut = _normalized(normal)
+                ut = vec2(-ut[1], ut[0])
+                proj = ut[0] * vp[0] + ut[1] * vp[1]
+                mag = ti.sqrt(nf[0] * nf[0] + nf[1] * nf[1])
+                if proj < 0:
+                    proj = -proj
+                    ut = -ut
+                fric = (C.CONTACT_FRICTION * ut * (-1.0) * C.FRICTION_DYN * mag
+                        * ti.tanh(proj / (C.FRICTION_DYN * mag)))
+                if pid >= 0:
+                    fp = scale * (nf + damp_p + fric)
+                    fcol[2 * pid] += fp[0]
+                    fcol[2 * pid + 1] += fp[1]
+                ia = qi[4 * r + ka, 0]
+                if ia >= 0:
+                    fa = scale * (nf / 2 + damp_a / 2 + fric / 2)
+                    fcol[2 * ia] -= fa[0]
+                    fcol[2 * ia + 1] -= fa[1]
+                ib = qi[4 * r + kb, 0]
+                if ib >= 0:
+                    fb = scale * (nf / 2 + damp_b / 2 + fric / 2)
+                    fcol[2 * ib] -= fb[0]
+                    fcol[2 * ib + 1] -= fb[1]
+
+
+@ti.func
+def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
+                qi: ti.template(), q, i):
+    """Copy surface voxel list entry i (corners and open sides in sv) into scratch quad q."""
+    for k in range(4):
+        p = sv[8 * i + k]
+        qi[4 * q + k, 0] = p
+        qi[4 * q + k, 1] = sv[8 * i + 4 + k]
+        qf[4 * q + k, 0] = pos[2 * p]
+        qf[4 * q + k, 1] = pos[2 * p + 1]
+        qf[4 * q + k, 2] = vt[2 * p]
+        qf[4 * q + k, 3] = vt[2 * p + 1]
+
+
+@ti.func
+def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
+                fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
+                ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
+    """`_contacts` on the local positions/contact forces of the fast kernel; surface voxel i has
+    corners sv[8i:8i+4], open sides sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]."""
+    n_surf = counts[b, N_SURF]
+    n_surf_robot = counts[b, N_SURF_ROBOT]
+    for i in range(2 * n_pts):
+        fcol[i] = 0.0
+    finite = True
+    for i in range(n_surf):
+        p0 = sv[8 * i]
+        x0 = pos[2 * p0]
+        y0 = pos[2 * p0 + 1]
+        x1 = x0
+        y1 = y0
+        for k in range(1, 4):
+            p = sv[8 * i + k]
+            x = pos[2 * p]
+            y = pos[2 * p + 1]
+            x0 = ti.min(x0, x)
+            x1 = ti.max(x1, x)
+            y0 = ti.min(y0, y)
+            y1 = ti.max(y1, y)
+        box[4 * i] = x0
+        box[4 * i + 1] = x1
+        box[4 * i + 2] = y0
+        box[4 * i + 3] = y1
+        if not (ti.abs(x0) < 1e30 and ti.abs(x1) < 1e30 and ti.abs(y0) < 1e30
+                and ti.abs(y1) < 1e30):
+            finite = False
+    count = 0
+    if finite:
+        qf = ti.Matrix.zero(ti.f64, 8, 4)
+        qi = ti.Matrix.zero(ti.i32, 8, 2)
+        gw = ter_grid.shape[0]
+        gh = ter_grid.shape[1]
+        for i in range(n_surf):
+            loaded = False
+            bx0 = box[4 * i]
+            bx1 = box[4 * i + 1]
+            by0 = box[4 * i + 2]
+            by1 = box[4 * i + 3]
+            for j in range(i + 1, n_surf):
+                if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
+                        or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
+                    same = sm[4 * i] == sm[4 * j]
+                    scale = 2.0 if same else 1.0
+                    if same and i < n_surf_robot and j < n_surf_robot:
+                        dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
+                        dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
+                        if dr > 1 or dc > 1:
+                            count += 2
+                    if not loaded:
+                        _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
+                        loaded = True
+                    _load_dyn_l(pos, vt, sv, qf, qi, 1, j)
+                    for d in range(2):
+                        _resolve_l(fcol, qf, qi, d, 1 - d, scale)
+            gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
+            gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
+            gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
+            gy1 = ti.min(gh - 1, ti.cast(ti.floor(by1 / C.CELL + 1e-6), ti.i32))
+            for gx in range(gx0, gx1 + 1):
+                for gy in range(gy0, gy1 + 1):
+                    t = ter_grid[gx, gy]
+                    if t >= 0:
+                        if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
+                                or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
+                            if not loaded:
+                                _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
+                                loaded = True
+                            for k in range(4):
+                                qf[4 + k, 0] = ter_f[t, 2 * k]
+                                qf[4 + k, 1] = ter_f[t, 2 * k + 1]
+                                qf[4 + k, 2] = 0.0
+                                qf[4 + k, 3] = 0.0
+                                qi[4 + k, 0] = -1
+                                qi[4 + k, 1] = ter_i[t, k]
+                            for d in range(2):
+                                _resolve_l(fcol, qf, qi, d, 1 - d, 1.0)
+    if not finite:
+        count = -1
+    return count
+
+
+@ti.func
+def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
+           pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
+           vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
+           leq: ti.template()):
+    """Rest-length update and `_rk4` on local arrays (x, y interleaved). The 4 stages are
+    unrolled; stage 0 (stage state = substep state) also sets the current rest lengths, and each
+    stage's point loop prepares the next stage's state."""
+    for i in range(2 * n_pts):
+        xs[i] = pos[i]
+        vs[i] = vel[i]
+    for stage in ti.static(range(4)):
+        for i in range(2 * n_pts):
+            frc[i] = 0.0
+        for e in range(n_edges):
+            a = edge_i[eio + 4 * e]
+            q = edge_i[eio + 4 * e + 1]
+            ef = efo + N_EDGE_F * e
+            dx = xs[2 * a] - xs[2 * q]
+            dy = xs[2 * a + 1] - xs[2 * q + 1]
+            dist = ti.sqrt(dx * dx + dy * dy)
+            if ti.static(stage == 0):
+                leq[e] = dist + (edge_f[ef + E_GOAL] - dist) * C.REST_CONVERGENCE
+            mag = (dist - leq[e]) * edge_f[ef + E_K] / dist
+            dx *= mag
+            dy *= mag
+            frc[2 * a] -= dx
+            frc[2 * a + 1] -= dy
+            frc[2 * q] += dx
+            frc[2 * q + 1] += dy
+        for p in range(n_pts):
+            vx = vs[2 * p]
+            vy = vs[2 * p + 1]
+            fx = frc[2 * p] + vx * (-C.VISCOUS_DRAG)
+            fy = frc[2 * p + 1] + vy * (-C.VISCOUS_DRAG)
+            fy += C.POINT_MASS * (-C.GRAVITY)
+            fx += fcol[2 * p]
+            fy += fcol[2 * p + 1]
+            y = xs[2 * p + 1]
+            if y < 0:
+                normal = y * (-C.GROUND_K)
+                fy += normal
+                fx += (-10.0 * C.FRICTION_DYN) * normal * ti.tanh(vx * normal * C.FRICTION_DYN)
+            acc = vec2(fx / C.POINT_MASS, fy / C.POINT_MASS)
+            for d in ti.static(range(2)):
+                i = 2 * p + d
+                kx = vs[i] * C.DT
+                kv = acc[d] * C.DT
+                if ti.static(stage == 0):
+                    adx[i] = kx
+                    adv[i] = kv
+                elif ti.static(stage < 3):
+                    adx[i] += 2 * kx
+                    adv[i] += 2 * kv
+                else:
+                    adx[i] += kx
+                    adv[i] += kv
+                if ti.static(stage < 3):
+                    h = 0.5 if ti.static(stage < 2) else 1.0
+                    xs[i] = pos[i] + kx * h
+                    vs[i] = vel[i] + kv * h
+    for i in range(2 * n_pts):
+        pos[i] += adx[i] / 6
+        vel[i] += adv[i] / 6
+
+
+@ti.func
+def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
+                   edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
+                   pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
+    """`_edge_constraints` on the local positions."""
+    for e in range(n_edges):
+        a = edge_i[eio + 4 * e]
+        q = edge_i[eio + 4 * e + 1]
+        ef = efo + N_EDGE_F * e
+        dx = pos[2 * a] - pos[2 * q]
+        dy = pos[2 * a + 1] - pos[2 * q + 1]
+        dist = ti.sqrt(dx * dx + dy * dy)
+        rest = edge_f[ef + E_REST]
+        stress = dist / rest
+        cx = 0.0
+        cy = 0.0
+        if stress > _HI:
+            m = (dist - rest * _HI) / (dist * 2)
+            cx += dx * m
+            cy += dy * m
+        if stress < _LO:
+            m = (dist - rest * _LO) / (dist * 2)
+            cx += dx * m
+            cy += dy * m
+        ccx[e] = cx * 0.8
+        ccy[e] = cy * 0.8
+    for e in range(n_edges):
+        cx = ccx[e]
+        cy = ccy[e]
+        if cx != 0.0 or cy != 0.0:
+            a = edge_i[eio + 4 * e]
+            q = edge_i[eio + 4 * e + 1]
+            pos[2 * a] -= cx
+            pos[2 * a + 1] -= cy
+            pos[2 * q] += cx
+            pos[2 * q + 1] += cy
+    for i in range(counts[b, N_RIGID]):
+        v = lists[b, i, 1]
+        for k in ti.static(range(4)):
+            a = vox_i[b, v, V_PTS + k]
+            q = vox_i[b, v, V_PTS + (k + 1) % 4]
+            dx = pos[2 * a] - pos[2 * q]
+            dy = pos[2 * a + 1] - pos[2 * q + 1]
+            dist = ti.sqrt(dx * dx + dy * dy)
+            stress = dist / C.MAIN_REST
+            ox = 0.0
+            oy = 0.0
+            if stress >= _HI_R:
+                m = (dist - C.MAIN_REST * _HI_R) / (dist * 2)
+                ox += dx * m
+                oy += dy * m
+            if stress <= _LO_R:
+                m = (dist - C.MAIN_REST * _LO_R) / (dist * 2)
+                ox += dx * m
+                oy += dy * m
+            pos[2 * a] -= ox * 0.5
+            pos[2 * a + 1] -= oy * 0.5
+            pos[2 * q] += ox * 0.5
+            pos[2 * q + 1] += oy * 0.5
+
+
+@ti.kernel
+def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
+                      lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
+                      n_sub: ti.i32, P: ti.i32, E: ti.i32):
+    """`step_kernel` for worlds of at most PC points, EC edges and SC surface voxels; state,
+    edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays. The current
+    rest lengths live in a local array (edge_f's column E_LEQ is not updated)."""
+    ti.loop_config(block_dim=1)
+    for b in range(counts.shape[0]):
+        if counts[b, STATUS] == RUNNING:
+            n_pts = counts[b, N_PTS]
+            n_edges = counts[b, N_EDGES]
+            so = b * P * NS
+            eio = b * E * 4
+            efo = b * E * N_EDGE_F
+            for e in range(n_edges):
+                d0 = edge_i[eio + 4 * e + 2]
+                if d0 >= 0:
+                    d1 = edge_i[eio + 4 * e + 3]
+                    total = actions[b, d0]
+                    cnt = 1.0
+                    if d1 >= 0:
+                        total += actions[b, d1]
+                        cnt = 2.0
+                    ef = efo + N_EDGE_F * e
+                    edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
+            pos = ti.Vector.zero(ti.f64, 2 * PC)
+            vel = ti.Vector.zero(ti.f64, 2 * PC)
+            pl = ti.Vector.zero(ti.f64, 2 * PC)  # pos_last
+            vt = ti.Vector.zero(ti.f64, 2 * PC)  # vel_true
+            xs = ti.Vector.zero(ti.f64, 2 * PC)
+            vs = ti.Vector.zero(ti.f64, 2 * PC)
+            frc = ti.Vector.zero(ti.f64, 2 * PC)
+            fcol = ti.Vector.zero(ti.f64, 2 * PC)
+            adx = ti.Vector.zero(ti.f64, 2 * PC)
+            adv = ti.Vector.zero(ti.f64, 2 * PC)
+            leq = ti.Vector.zero(ti.f64, EC)
+            ccx = ti.Vector.zero(ti.f64, EC)
+            ccy = ti.Vector.zero(ti.f64, EC)
+            box = ti.Vector.zero(ti.f64, 4 * SC)
+            sv = ti.Vector.zero(ti.i32, 8 * SC)
+            sm = ti.Vector.zero(ti.i32, 4 * SC)
+            for i in range(counts[b, N_SURF]):
+                v = lists[b, i, 0]
+                for k in ti.static(range(4)):
+                    sv[8 * i + k] = vox_i[b, v, V_PTS + k]
+                    sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
+                sm[4 * i] = vox_i[b, v, V_OBJ]
+                sm[4 * i + 1] = vox_i[b, v, V_ROW]
+                sm[4 * i + 2] = vox_i[b, v, V_COL]
+            for p in range(n_pts):
+                for d in ti.static(range(2)):
+                    pos[2 * p + d] = state[so + NS * p + d]
+                    vel[2 * p + d] = state[so + NS * p + 2 + d]
+                    pl[2 * p + d] = state[so + NS * p + 4 + d]
+                    vt[2 * p + d] = state[so + NS * p + 6 + d]
+            status = RUNNING
+            for _ in range(n_sub):
+                if status == RUNNING:
+                    count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
+                                        ter_i, ter_grid)
+                    if count < 0:
+                        status = NONFINITE
+                    else:
+                        _rk4_l(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
+                               frc, adx, adv, leq)
+                        _constraints_l(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
+                                       pos, ccx, ccy)
+                        for i in range(2 * n_pts):
+                            vt[i] = (pos[i] - pl[i]) / C.DT
+                            pl[i] = pos[i]
+                        if count > counts[b, N_SURF_ROBOT]:
+                            status = UNSTABLE
+            if status == RUNNING:
+                for i in range(2 * n_pts):
+                    if not (ti.abs(pos[i]) < 1e30 and ti.abs(vel[i]) < 1e30):
+                        status = NONFINITE
+            if status == RUNNING:
+                for p in range(n_pts):
+                    for d in ti.static(range(2)):
+                        state[so + NS * p + d] = pos[2 * p + d]
+                        state[so + NS * p + 2 + d] = vel[2 * p + d]
+                        state[so + NS * p + 4 + d] = pl[2 * p + d]
+                        state[so + NS * p + 6 + d] = vt[2 * p + d]
+            else:
+                # evogym keeps the last snapshot: the step never happened for observers
+                for p in range(n_pts):
+                    for d in ti.static(range(2)):
+                        state[so + NS * p + 4 + d] = state[so + NS * p + d]
+                        state[so + NS * p + 6 + d] = 0.0
+                counts[b, STATUS] = status

@@ -136,6 +136,8 @@ class BatchSim:
         self.qf = np.zeros((B, 2, 4, 4))
         self.qi = np.zeros((B, 2, 4, 2), dtype=np.int32)
         self.actions = np.ones((B, A))
+        # worlds small enough for the kernel that keeps per-point state in local arrays
+        self._small = P <= K.PC and E <= K.EC and int(counts[:, K.N_SURF].max()) <= K.SC
 
     # ------------------------------------------------------------------ control
     @property
@@ -172,7 +174,17 @@ class BatchSim:
             if a.shape != (B, self.max_actuators):
                 raise ValueError(f"wrong action shape: expected ({B}, {self.max_actuators}), "
                                  f"got {a.shape}")
-            rows = [a[w, :self.n_actuators[w]] for w in range(B)]
+            # vectorised: one finiteness test and one clip for the whole batch
+            M = self.max_actuators
+            mask = np.arange(M)[None, :] < self.n_actuators[:, None]
+            ok = np.isfinite(a) | ~mask
+            if not ok.all():
+                w = int(np.nonzero(~ok.all(axis=1))[0][0])
+                r = a[w, :self.n_actuators[w]]
+                raise ValueError(f"non-finite actions for robot {w}: {r[~np.isfinite(r)][:3]}")
+            self.actions[:, :M] = np.where(mask, np.clip(a, C.ACTION_MIN, C.ACTION_MAX),
+                                           self.actions[:, :M])
+            return
         else:
             if len(actions) != B:
                 raise ValueError(f"wrong action shape: expected {B} rows, got {len(actions)}")
@@ -192,9 +204,15 @@ class BatchSim:
         """Advance every running world by n env steps (30 substeps each)."""
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
-            K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f, self.vox_i,
-                          self.lists, self.box, self.qf, self.qi, self.actions, self.ter_f, self.ter_i,
-                          self.ter_grid, C.SUBSTEPS)
+            if self._small:
+                K.step_kernel_small(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
+                                    self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions,
+                                    self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS,
+                                    self.state.shape[1], self.edge_i.shape[1])
+            else:
+                K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f,
+                              self.vox_i, self.lists, self.box, self.qf, self.qi, self.actions,
+                              self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS)
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:
