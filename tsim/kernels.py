@@ -18,9 +18,8 @@ voxels (cache-friendly, no atomics). Each world does all 30 substeps in one kern
 """
 
 
-import taichi as ti
-
 from tsim import constants as C
+from tsim.runtime import ti  # imported there with its banner sent to stderr
 
 # counts columns
 N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS = range(8)

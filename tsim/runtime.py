@@ -2,9 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import sys
 
-import taichi as ti
+with contextlib.redirect_stdout(sys.stderr):  # Taichi's banners would corrupt `sgr ... --json` output
+    import taichi as ti
 
 _ARCH: str | None = None
 
@@ -26,8 +29,9 @@ def init(arch: str | None = None) -> str:
     # bit for bit) and the parity with evogym's traces is as good or better
     # advanced_optimization off: Taichi's own IR optimisations took ~25 s to compile the kernels
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
-    ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
-            advanced_optimization=False, log_level=ti.WARN, **kwargs)
+    with contextlib.redirect_stdout(sys.stderr):
+        ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
+                advanced_optimization=False, log_level=ti.WARN, **kwargs)
     _ARCH = arch
     return _ARCH
 
