@@ -6,7 +6,10 @@ import contextlib
 import os
 import sys
 
-with contextlib.redirect_stdout(sys.stderr):  # Taichi's banners would corrupt `sgr ... --json` output
+# Taichi's banners go to stderr (they would corrupt `sgr ... --json` output); TI_ENABLE_PYBUF=0
+# keeps Taichi from wrapping every kernel call because stdout is redirected meanwhile (no kernel prints)
+os.environ.setdefault("TI_ENABLE_PYBUF", "0")
+with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
 _ARCH: str | None = None
