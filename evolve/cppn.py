@@ -49,11 +49,14 @@ class CompiledCPPN:
         conns = [c.key for c in genome.connections.values() if c.enabled]
         layers, required = feed_forward_layers(self.input_keys, self.output_keys, conns)
         known = required | set(self.input_keys)
+        incoming: dict[int, list] = {}
+        for i, o in conns:
+            if i in known:
+                incoming.setdefault(o, []).append((i, genome.connections[(i, o)].weight))
         self.steps = []
         for layer in layers:
             for node in sorted(layer):
-                links = [(i, genome.connections[(i, o)].weight) for (i, o) in conns
-                         if o == node and i in known]
+                links = incoming.get(node, [])
                 ng = genome.nodes[node]
                 if ng.activation not in ACTIVATIONS:
                     raise ValueError(f"activation {ng.activation!r} is not supported by the "
