@@ -127,13 +127,7 @@ def plot_runs(run_dirs: Sequence[str | Path], out: str | Path) -> Path:
     ax = fig.add_subplot()
     draw_curves(ax, curves)
     tasks = sorted({t for _, t in curves})
-    ax.set_title(f"Best fitness per generation: {', '.join(tasks)}")
-    ax.set_xlabel("generation")
-    ax.set_ylabel("best fitness")
-    ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
-    fig.tight_layout()
-    return _save(fig, out)
+    return _finish(fig, ax, f"Best fitness per generation: {', '.join(tasks)}", "best fitness", out)
 
 
 def plot_run(run_dir: str | Path, out: str | Path) -> Path:
@@ -147,9 +141,13 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
     for name in ("best", "mean", "median"):
         if name in cols:
             ax.plot(cols["generation"], cols[name], label=name)
-    ax.set_title(f"{method} / {task}: {Path(run_dir).name}")
+    return _finish(fig, ax, f"{method} / {task}: {Path(run_dir).name}", "fitness", out)
+
+
+def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
+    ax.set_title(title)
     ax.set_xlabel("generation")
-    ax.set_ylabel("fitness")
+    ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
