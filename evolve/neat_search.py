@@ -66,8 +66,7 @@ class NeatSearch:
         fit, episodes = result if isinstance(result, tuple) else (result, len(todo))
         sim_s = time.perf_counter() - t1
         row = self.tell(fit, episodes)
-        row.update(build_s=self._build_s, sim_s=sim_s, neat_s=row["neat_s"],
-                   total_s=time.perf_counter() - t0)
+        row.update(build_s=self._build_s, sim_s=sim_s, total_s=time.perf_counter() - t0)
         return row
 
     def ask(self) -> list[tuple[int, Any]]:
