@@ -62,6 +62,14 @@ def load_neat_config(ini_path: Path) -> neat.Config:
         raise ValueError(f"{ini_path}: bad neat-python config: {exc}") from None
 
 
+def neat_config_from_text(ini: str) -> neat.Config:
+    """neat-python reads configs only from files: load INI text through a temporary one."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "neat.ini"
+        path.write_text(ini)
+        return load_neat_config(path)
+
+
 def genome_json(genome) -> dict:
     return {"key": genome.key,
             "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
@@ -85,9 +93,7 @@ class Experiment:
     def create(cls, config_path: str, out: str, overrides: dict, quiet: bool = False) -> Experiment:
         cfg = load_config(config_path, overrides)
         ini = neat_ini_text(cfg["neat_config"], cfg, problem_class(cfg["method"]).neat_overrides(cfg))
-        with tempfile.TemporaryDirectory() as tmp:  # a bad INI must fail before the run exists
-            (Path(tmp) / "neat.ini").write_text(ini)
-            load_neat_config(Path(tmp) / "neat.ini")
+        neat_config_from_text(ini)  # a bad INI must fail before the run exists
         run = RunDir(out)
         run.create(cfg, ini)
         exp = cls(run, cfg, quiet=quiet)

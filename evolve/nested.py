@@ -12,12 +12,12 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from pathlib import Path
 
 import numpy as np
 
 from evolve.cppn import CompiledCPPN
 from evolve.evaluate import rollout_policy
+from evolve.experiment import neat_config_from_text, neat_ini_text
 from evolve.graph_controller import GraphController
 from evolve.neat_batch import GraphPolicy, NetworkBatch
 from evolve.neat_search import NeatSearch
@@ -41,9 +41,7 @@ class ControllerPhenotype:
 
 
 class NestedProblem:
-    def __init__(self, cfg: dict, neat_config, run_path: Path | None = None):
-        from evolve.experiment import load_neat_config, neat_ini_text
-
+    def __init__(self, cfg: dict, neat_config):
         self.cfg = cfg
         self.gc = neat_config.genome_config
         self.shape = tuple(cfg["robot_shape"])
@@ -52,10 +50,8 @@ class NestedProblem:
         self._ini = lambda k: neat_ini_text(
             cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
             {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": n_cells}})
-        self._load = load_neat_config
         self._configs: dict[int, object] = {}
         self.inner: dict[bytes, NeatSearch] = {}
-        self.run_path = run_path
 
     @staticmethod
     def neat_overrides(cfg: dict) -> dict:
@@ -63,12 +59,7 @@ class NestedProblem:
 
     def _controller_config(self, k: int):
         if k not in self._configs:
-            import tempfile
-
-            with tempfile.TemporaryDirectory() as tmp:
-                p = Path(tmp) / f"controller-k{k}.ini"
-                p.write_text(self._ini(k))
-                self._configs[k] = self._load(p)
+            self._configs[k] = neat_config_from_text(self._ini(k))
         return self._configs[k]
 
     def decode(self, genome) -> BodyPhenotype:

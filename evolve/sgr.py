@@ -13,8 +13,6 @@ from evolve.sgr_decoder import DecoderSettings, Phenotype, decode
 class SgrProblem:
     """Decode and evaluate callables for `NeatSearch`, from a resolved config."""
 
-    ini_overrides = ("num_outputs",)
-
     def __init__(self, cfg: dict, neat_config):
         self.cfg = cfg
         self.genome_config = neat_config.genome_config

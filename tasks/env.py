@@ -102,8 +102,7 @@ class BatchEnv:
         else:
             self.elapsed[mask] = 0
             self.terminated[mask] = False
-        self._obs = self._observe()
-        return self._obs.copy()
+        return self.observe()
 
     @property
     def t(self) -> int:
