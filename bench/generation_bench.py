@@ -23,29 +23,35 @@ def main() -> None:
     ap.add_argument("--config", default="configs/sgr/Walker-v0.yaml")
     ap.add_argument("--generations", type=int, default=4)
     ap.add_argument("--pop", type=int)
+    ap.add_argument("--workers", help="rollout processes (default: the config's, auto = all CPUs)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
+        workers = int(args.workers) if args.workers and args.workers != "auto" else args.workers
         exp = Experiment.create(args.config, f"{tmp}/run", {"generations": args.generations,
-                                                           "pop_size": args.pop}, quiet=True)
+                                                           "pop_size": args.pop, "workers": workers},
+                                quiet=True)
         rows = []
         t0 = time.perf_counter()
         for _ in range(args.generations):
             rows.append(exp.search.step())
         wall = time.perf_counter() - t0
+        exp.close()
     cfg = exp.cfg
     steps = cfg["episode_steps"] or task_spec(cfg["task"]).paper_steps
     timed = rows[1:] or rows
     med = {k: statistics.median(r[k] for r in timed) for k in ("build_s", "sim_s", "neat_s", "total_s")}
     robot_steps = sum(r["episodes"] for r in timed) * steps  # upper bound: early terminations stop sooner
     out = {"config": args.config, "method": cfg["method"], "task": cfg["task"], "pop": cfg["pop_size"],
+           "workers": exp.pool.workers,
            "steps": steps, "generations": args.generations, "first_generation_s": rows[0]["total_s"],
            **{f"median_{k}": v for k, v in med.items()},
            "robot_steps_per_s": robot_steps / sum(r["sim_s"] for r in timed), "wall_s": wall}
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} x {steps} steps: median "
+        print(f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} x {steps} steps, "
+              f"{exp.pool.workers} workers: median "
               f"{med['total_s']:.2f} s/generation (build {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
               f"neat {med['neat_s']:.2f}); first generation {rows[0]['total_s']:.1f} s; "
               f"{out['robot_steps_per_s']:.0f} robot-steps/s")

@@ -62,23 +62,39 @@ REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 DEFAULT_CONFIG = REPO_CONFIGS / "sgr" / "quick.yaml"
 
 
+def _workers_arg(text: str) -> int | str:
+    if text == "auto":
+        return text
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise argparse.ArgumentTypeError(f"must be a positive int or 'auto', got {text!r}")
+    return n
+
+
 def _evolve(args: argparse.Namespace) -> int:
     from evolve.experiment import Experiment
 
     if args.resume:
         if args.config or args.generations or args.pop or args.seed is not None:
             raise ValueError("--resume continues a run with its own config; drop the other options")
-        exp = Experiment.resume(args.resume, quiet=args.quiet)
+        exp = Experiment.resume(args.resume, quiet=args.quiet, workers=args.workers)
         print(f"resuming {args.resume} at generation {exp.search.generation}")
     else:
         config = args.config or str(DEFAULT_CONFIG)
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{Path(config).stem}-seed{args.seed or 0}-{stamp}")
         exp = Experiment.create(config, out, {"generations": args.generations, "pop_size": args.pop,
-                                              "seed": args.seed}, quiet=args.quiet)
+                                              "seed": args.seed, "workers": args.workers},
+                                quiet=args.quiet)
         print(f"run directory: {out}")
-    exp.run_all()
-    exp.finish()
+    try:
+        exp.run_all()
+        exp.finish()
+    finally:
+        exp.close()
     return 0
 
 
@@ -157,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--pop", type=int)
     e.add_argument("--seed", type=int)
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
+    e.add_argument("--workers", type=_workers_arg,
+                   help="rollout processes: a number or 'auto' (default: the config's, auto = all CPUs)")
     e.add_argument("--resume", metavar="DIR", help="continue an interrupted run from its last checkpoint")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)

@@ -27,6 +27,7 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "neat_config": (str, None),
     "checkpoint_every": (int, 5),
     "render_champion": (bool, True),
+    "workers": ((int, str), "auto"),
 }
 PER_METHOD: dict[str, dict[str, tuple[Any, Any]]] = {
     "sgr": {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
@@ -83,6 +84,9 @@ def check_config(raw: dict, source: str = "config") -> dict:
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                          f"got {steps!r}")
+    w = cfg["workers"]
+    if isinstance(w, str) and w != "auto" or isinstance(w, int) and w < 1:
+        raise ValueError(f"{source}: key 'workers' must be a positive int or 'auto', got {w!r}")
     if method == "sgr" and cfg["cppn_outputs"] not in (1, 2):
         raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
     return cfg

@@ -10,13 +10,14 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from evolve.cppn import CompiledCPPN
-from evolve.evaluate import rollout_policy
 from evolve.graph_controller import GraphController
 from evolve.neat_batch import GraphPolicy, NetworkBatch
+from evolve.rollout_pool import RolloutPool
 from evolve.sgr_decoder import is_valid_robot
 from evolve.substrate import N_TYPES, cell_coordinates
 from tasks.env import obs_dim
@@ -36,9 +37,17 @@ class DirectPhenotype:
     genome: object = None
 
 
+def direct_policy(env, genomes: Sequence, genome_config) -> GraphPolicy:
+    """Batched direct-encoding networks driving the robots of env (picklable for `RolloutPool`)."""
+    cells = [b.actuator_flat for b in env.sim.bodies]
+    return GraphPolicy(NetworkBatch(list(genomes), genome_config), cells, env.sim.max_actuators,
+                       N_COORDS, N_TYPES)
+
+
 class DirectProblem:
-    def __init__(self, cfg: dict, neat_config):
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         self.cfg = cfg
+        self.pool = pool or RolloutPool(1)
         self.gc = neat_config.genome_config
         self.shape = tuple(cfg["robot_shape"])
         self.cells = cell_coordinates(self.shape)
@@ -57,12 +66,9 @@ class DirectProblem:
         return DirectPhenotype(body, is_valid_robot(body), genome)
 
     def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> np.ndarray:
-        def make_policy(env):
-            nets = NetworkBatch([p.genome for p in phenotypes], self.gc)
-            cells = [b.actuator_flat for b in env.sim.bodies]
-            return GraphPolicy(nets, cells, env.sim.max_actuators, N_COORDS, N_TYPES)
-        return rollout_policy(self.cfg["task"], [p.body for p in phenotypes], make_policy,
-                              self.cfg["episode_steps"])
+        return self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
+                             [p.genome for p in phenotypes], partial(direct_policy, genome_config=self.gc),
+                             self.cfg["episode_steps"])
 
     def champion(self, p: DirectPhenotype) -> dict:
         b = build_body(p.body)

@@ -15,6 +15,7 @@ import neat
 from evolve.config import load_config
 from evolve.genome import BodyAwareGenome, FlexibleReproduction
 from evolve.neat_search import NeatSearch
+from evolve.rollout_pool import RolloutPool
 from evolve.rundir import RunDir
 
 SECTIONS = {"DefaultGenome": BodyAwareGenome.__name__,
@@ -79,10 +80,13 @@ def genome_json(genome) -> dict:
 
 
 class Experiment:
-    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False):
+    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
+                 workers: int | str | None = None):
+        """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self.neat_config = load_neat_config(run.path / "neat.ini")
-        self.problem = problem_class(cfg["method"])(cfg, self.neat_config)
+        self.pool = RolloutPool(cfg.get("workers", "auto") if workers is None else workers)
+        self.problem = problem_class(cfg["method"])(cfg, self.neat_config, self.pool)
         if state is not None and hasattr(self.problem, "restore"):
             self.problem.restore(state["problem"])
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
@@ -101,14 +105,14 @@ class Experiment:
         return exp
 
     @classmethod
-    def resume(cls, out: str, quiet: bool = False) -> Experiment:
+    def resume(cls, out: str, quiet: bool = False, workers: int | str | None = None) -> Experiment:
         run = RunDir(out)
         cfg = run.config()
         state = run.latest_checkpoint()
         if state is None:
             raise ValueError(f"{out} has no checkpoint to resume from")
         run.truncate_rows(state["generation"])
-        return cls(run, cfg, state=state, quiet=quiet)
+        return cls(run, cfg, state=state, quiet=quiet, workers=workers)
 
     def state(self) -> dict:
         state = self.search.state()
@@ -147,11 +151,16 @@ class Experiment:
               f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
+    def close(self) -> None:
+        """Stop the rollout worker processes (a later generation would start them again)."""
+        self.pool.close()
+
     def finish(self) -> None:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
         from evolve.champion import champion_gif
         from evolve.plots import plot_run
 
+        self.close()
         plot_run(self.run.path, self.run.path / "fitness.png")
         best = self.search.best
         if best is None:

@@ -16,11 +16,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from evolve.cppn import CompiledCPPN
-from evolve.evaluate import rollout_policy
 from evolve.experiment import neat_config_from_text, neat_ini_text
 from evolve.graph_controller import GraphController
 from evolve.neat_batch import GraphPolicy, NetworkBatch
 from evolve.neat_search import NeatSearch
+from evolve.rollout_pool import RolloutPool
 from evolve.sgr_decoder import is_valid_robot
 from evolve.substrate import N_TYPES, cell_coordinates, controller_side
 from tasks.env import obs_dim
@@ -40,9 +40,16 @@ class ControllerPhenotype:
     valid: bool = True
 
 
+def nested_policy(env, items: Sequence) -> GraphPolicy:
+    """Inner controller networks, items = (genome, genome config), driving the robots of env."""
+    nets = NetworkBatch([g for g, _ in items], [c for _, c in items])
+    return GraphPolicy(nets, [b.actuator_flat for b in env.sim.bodies], env.sim.max_actuators)
+
+
 class NestedProblem:
-    def __init__(self, cfg: dict, neat_config):
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         self.cfg = cfg
+        self.pool = pool or RolloutPool(1)
         self.gc = neat_config.genome_config
         self.shape = tuple(cfg["robot_shape"])
         self.cells = cell_coordinates(self.shape)
@@ -93,12 +100,9 @@ class NestedProblem:
 
     def _simulate(self, flat: list[ControllerPhenotype], searches, asks) -> np.ndarray:
         configs = [s.config.genome_config for s, a in zip(searches, asks, strict=True) for _ in a]
-
-        def make_policy(env):
-            nets = NetworkBatch([p.genome for p in flat], configs)
-            return GraphPolicy(nets, [b.actuator_flat for b in env.sim.bodies], env.sim.max_actuators)
-        return rollout_policy(self.cfg["task"], [p.body for p in flat], make_policy,
-                              self.cfg["episode_steps"])
+        items = [(p.genome, c) for p, c in zip(flat, configs, strict=True)]
+        return self.pool.run(self.cfg["task"], [p.body for p in flat], items, nested_policy,
+                             self.cfg["episode_steps"])
 
     def champion(self, p: BodyPhenotype) -> dict:
         s = self._inner_for(p.body)

@@ -45,6 +45,9 @@ CONTACT_VEL_DAMPING = 140.0
 CONTACT_FRICTION = 150.0 * 8
 PARALLEL_EPS = 1e-4
 DEGENERATE_EDGE = 1e-6
+# ours, not evogym's: a corner farther than this outside a voxel's bounding box skips the exact
+# point-in-voxel test, which cannot pass there (rounding errors are ~1e-15 at these coordinates)
+BOX_MARGIN = 1e-9
 REST_CONVERGENCE = 0.006
 EDGE_BAND = 0.25
 EDGE_BAND_RIGID = 0.03

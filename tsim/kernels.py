@@ -128,16 +128,20 @@ def _resolve(work: ti.template(), qf: ti.template(), qi: ti.template(), b, m, r,
     dynamic points (id >= 0); terrain points (id < 0) are fixed and their share is dropped, as
     evogym discards the update of fixed points.
     """
+    lo = ti.min(ti.min(_qpt(qf, b, r, 0), _qpt(qf, b, r, 1)),
+                ti.min(_qpt(qf, b, r, 2), _qpt(qf, b, r, 3))) - C.BOX_MARGIN
+    hi = ti.max(ti.max(_qpt(qf, b, r, 0), _qpt(qf, b, r, 1)),
+                ti.max(_qpt(qf, b, r, 2), _qpt(qf, b, r, 3))) + C.BOX_MARGIN
     for i in range(4):
         pid = qi[b, m, i, 0]
-        shared = False
-        if pid >= 0:
+        p = _qpt(qf, b, m, i)
+        candidate = lo[0] <= p[0] and p[0] <= hi[0] and lo[1] <= p[1] and p[1] <= hi[1]
+        if candidate and pid >= 0:
             for j in range(4):
                 if qi[b, r, j, 0] == pid:
-                    shared = True
-        p = _qpt(qf, b, m, i)
-        if not shared and _point_in_quad(p, _qpt(qf, b, r, 0), _qpt(qf, b, r, 1),
-                                         _qpt(qf, b, r, 2), _qpt(qf, b, r, 3)):
+                    candidate = False
+        if candidate and _point_in_quad(p, _qpt(qf, b, r, 0), _qpt(qf, b, r, 1),
+                                        _qpt(qf, b, r, 2), _qpt(qf, b, r, 3)):
             # the two sides of m incident to corner i (TL: top, left; TR: top, right; ...)
             s1 = 0 if i < 2 else 2
             s2 = 3 if (i == 0 or i == 3) else 1
@@ -525,16 +529,21 @@ def _lvel(qf: ti.template(), q, k):
 @ti.func
 def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, scale):
     """`_resolve` on local scratch quads: qf[4q + k] = (x, y, vx, vy), qi[4q + k] = (id, open)."""
+    lo = ti.min(ti.min(_lpt(qf, r, 0), _lpt(qf, r, 1)), ti.min(_lpt(qf, r, 2), _lpt(qf, r, 3))) \
+        - C.BOX_MARGIN
+    hi = ti.max(ti.max(_lpt(qf, r, 0), _lpt(qf, r, 1)), ti.max(_lpt(qf, r, 2), _lpt(qf, r, 3))) \
+        + C.BOX_MARGIN
     for i in range(4):
         pid = qi[4 * m + i, 0]
-        shared = False
-        if pid >= 0:
+        p = _lpt(qf, m, i)
+        # corners outside r's box cannot be inside r; then corners shared with r
+        candidate = lo[0] <= p[0] and p[0] <= hi[0] and lo[1] <= p[1] and p[1] <= hi[1]
+        if candidate and pid >= 0:
             for j in range(4):
                 if qi[4 * r + j, 0] == pid:
-                    shared = True
-        p = _lpt(qf, m, i)
+                    candidate = False
         inside = False
-        if not shared:  # (Taichi's `and` does not short-circuit)
+        if candidate:  # (Taichi's `and` does not short-circuit)
             inside = _point_in_quad(p, _lpt(qf, r, 0), _lpt(qf, r, 1), _lpt(qf, r, 2),
                                     _lpt(qf, r, 3))
         if inside:

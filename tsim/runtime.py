@@ -30,11 +30,15 @@ def init(arch: str | None = None) -> str:
     # fast_math off: IEEE semantics like evogym's C++ build (no reassociation), so results do not
     # depend on how a kernel is written or optimised (the small-world and generic kernels agree
     # bit for bit) and the parity with evogym's traces is as good or better
+    # make_cpu_multithreading_loop off: Taichi 1.7 otherwise hands each CPU thread a block of at
+    # least 512 iterations, so a batch of fewer than 1,024 worlds ran on one thread only; without
+    # it the worlds are dealt to the threads in blocks of `block_dim` (1 for the step kernels)
     # advanced_optimization off: Taichi's own IR optimisations took ~25 s to compile the kernels
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
     with contextlib.redirect_stdout(sys.stderr):
         ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
-                advanced_optimization=False, log_level=ti.WARN, **kwargs)
+                advanced_optimization=False, make_cpu_multithreading_loop=False,
+                log_level=ti.WARN, **kwargs)
     _ARCH = arch
     return _ARCH
 

@@ -1,0 +1,74 @@
+"""Rollouts split over worker processes give the same returns as one in-process batch."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from evolve.controller import DenseController
+from evolve.evaluate import dense_policy
+from evolve.rollout_pool import RolloutPool, balanced_chunks, resolve_workers
+from tasks.env import obs_dim
+from tsim.body import build_body
+from tsim.sampling import sample_robot
+
+
+def _random_dense(body: np.ndarray, rng: np.random.Generator) -> DenseController:
+    b = build_body(body)
+    n_in = obs_dim("Walker-v0", b.n_points)
+    k = int(np.ceil(np.sqrt(n_in)))
+    return DenseController([rng.normal(0, 1, (k * k, 25)), rng.normal(0, 1, (25, 25))],
+                           [rng.normal(0, 0.5, 25), rng.normal(0, 0.5, 25)], ["tanh", "tanh"],
+                           n_in, np.asarray(b.actuator_flat, dtype=np.int64))
+
+
+def _local_policy(env, items):  # defined in a test module: workers cannot import it
+    return dense_policy(env, items)
+
+
+def test_chunks_cover_every_robot_once_and_balance_the_voxel_load():
+    rng = np.random.default_rng(3)
+    costs = list(rng.integers(3, 26, size=37).astype(float))
+    for n in (1, 2, 3, 8, 50):
+        chunks = balanced_chunks(costs, n)
+        assert len(chunks) == min(n, len(costs))
+        assert sorted(i for c in chunks for i in c) == list(range(len(costs)))
+        assert all(c == sorted(c) for c in chunks)
+        loads = [sum(costs[i] for i in c) for c in chunks]
+        assert max(loads) - min(loads) <= max(costs)
+        assert balanced_chunks(costs, n) == chunks  # depends on the costs only
+
+
+def test_two_worker_processes_return_exactly_the_in_process_returns():
+    rng = np.random.default_rng(0)
+    bodies = [sample_robot((5, 5), rng) for _ in range(7)]
+    ctrls = [_random_dense(b, rng) for b in bodies]
+    local = RolloutPool(1).run("Walker-v0", bodies, ctrls, dense_policy, 40)
+    with RolloutPool(2) as pool:
+        split = pool.run("Walker-v0", bodies, ctrls, dense_policy, 40)
+        again = pool.run("Walker-v0", bodies[:3], ctrls[:3], dense_policy, 40)  # workers persist
+    assert np.array_equal(split, local)
+    assert np.array_equal(again, local[:3])
+    assert np.any(local != 0.0)
+
+
+def test_errors_in_a_worker_are_raised_in_the_caller_and_the_pool_survives():
+    rng = np.random.default_rng(1)
+    bodies = [sample_robot((5, 5), rng) for _ in range(4)]
+    ctrls = [_random_dense(b, rng) for b in bodies]
+    broken = [b.copy() for b in bodies]
+    broken[3][:] = 0  # no voxels: the worker's BatchEnv refuses it
+    with RolloutPool(2) as pool:
+        with pytest.raises(ValueError, match="bad body matrix: all voxels are empty"):
+            pool.run("Walker-v0", broken, ctrls, dense_policy, 5)
+        with pytest.raises(RuntimeError, match="could not load its job"):
+            pool.run("Walker-v0", bodies, ctrls, _local_policy, 5)
+        assert pool.run("Walker-v0", bodies, ctrls, dense_policy, 5).shape == (4,)
+
+
+def test_worker_counts_are_checked():
+    assert resolve_workers("auto") >= 1
+    assert resolve_workers(3) == 3
+    for bad in (0, -2, "many", 1.5, True):
+        with pytest.raises(ValueError, match="workers must be a positive int or 'auto'"):
+            resolve_workers(bad)
