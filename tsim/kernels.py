@@ -834,6 +834,96 @@ def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templ
             pos[2 * q + 1] += oy * 0.5
 
 
+@ti.func
+def _step_world_small(b, counts: ti.template(), state: ti.template(), edge_i: ti.template(),
+                      edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
+                      actions: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
+                      ter_grid: ti.template(), n_sub, P, E):
+    """One env step of world b in the fast kernel (see `step_kernel_small`)."""
+    if counts[b, STATUS] == RUNNING:
+        n_pts = counts[b, N_PTS]
+        n_edges = counts[b, N_EDGES]
+        so = b * P * NS
+        eio = b * E * 4
+        efo = b * E * N_EDGE_F
+        for e in range(n_edges):
+            d0 = edge_i[eio + 4 * e + 2]
+            if d0 >= 0:
+                d1 = edge_i[eio + 4 * e + 3]
+                total = actions[b, d0]
+                cnt = 1.0
+                if d1 >= 0:
+                    total += actions[b, d1]
+                    cnt = 2.0
+                ef = efo + N_EDGE_F * e
+                edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
+        pos = ti.Vector.zero(ti.f64, 2 * PC)
+        vel = ti.Vector.zero(ti.f64, 2 * PC)
+        pl = ti.Vector.zero(ti.f64, 2 * PC)  # pos_last
+        vt = ti.Vector.zero(ti.f64, 2 * PC)  # vel_true
+        xs = ti.Vector.zero(ti.f64, 2 * PC)
+        vs = ti.Vector.zero(ti.f64, 2 * PC)
+        frc = ti.Vector.zero(ti.f64, 2 * PC)
+        fcol = ti.Vector.zero(ti.f64, 2 * PC)
+        adx = ti.Vector.zero(ti.f64, 2 * PC)
+        adv = ti.Vector.zero(ti.f64, 2 * PC)
+        leq = ti.Vector.zero(ti.f64, EC)
+        ccx = ti.Vector.zero(ti.f64, EC)
+        ccy = ti.Vector.zero(ti.f64, EC)
+        box = ti.Vector.zero(ti.f64, 4 * SC)
+        sv = ti.Vector.zero(ti.i32, 8 * SC)
+        sm = ti.Vector.zero(ti.i32, 4 * SC)
+        for i in range(counts[b, N_SURF]):
+            v = lists[b, i, 0]
+            for k in ti.static(range(4)):
+                sv[8 * i + k] = vox_i[b, v, V_PTS + k]
+                sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
+            sm[4 * i] = vox_i[b, v, V_OBJ]
+            sm[4 * i + 1] = vox_i[b, v, V_ROW]
+            sm[4 * i + 2] = vox_i[b, v, V_COL]
+        for p in range(n_pts):
+            for d in ti.static(range(2)):
+                pos[2 * p + d] = state[so + NS * p + d]
+                vel[2 * p + d] = state[so + NS * p + 2 + d]
+                pl[2 * p + d] = state[so + NS * p + 4 + d]
+                vt[2 * p + d] = state[so + NS * p + 6 + d]
+        status = RUNNING
+        for _ in range(n_sub):
+            if status == RUNNING:
+                count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
+                                    ter_i, ter_grid)
+                if count < 0:
+                    status = NONFINITE
+                else:
+                    _rk4_l(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
+                           frc, adx, adv, leq)
+                    _constraints_l(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
+                                   pos, ccx, ccy)
+                    for i in range(2 * n_pts):
+                        vt[i] = (pos[i] - pl[i]) / C.DT
+                        pl[i] = pos[i]
+                    if count > counts[b, N_SURF_ROBOT]:
+                        status = UNSTABLE
+        if status == RUNNING:
+            for i in range(2 * n_pts):
+                if not (ti.abs(pos[i]) < 1e30 and ti.abs(vel[i]) < 1e30):
+                    status = NONFINITE
+        if status == RUNNING:
+            for p in range(n_pts):
+                for d in ti.static(range(2)):
+                    state[so + NS * p + d] = pos[2 * p + d]
+                    state[so + NS * p + 2 + d] = vel[2 * p + d]
+                    state[so + NS * p + 4 + d] = pl[2 * p + d]
+                    state[so + NS * p + 6 + d] = vt[2 * p + d]
+        else:
+            # evogym keeps the last snapshot: the step never happened for observers
+            for p in range(n_pts):
+                for d in ti.static(range(2)):
+                    state[so + NS * p + 4 + d] = state[so + NS * p + d]
+                    state[so + NS * p + 6 + d] = 0.0
+            counts[b, STATUS] = status
+
+
 @ti.kernel
 def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                       lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
@@ -843,85 +933,18 @@ def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1,
     rest lengths live in a local array (edge_f's column E_LEQ is not updated)."""
     ti.loop_config(block_dim=1)
     for b in range(counts.shape[0]):
-        if counts[b, STATUS] == RUNNING:
-            n_pts = counts[b, N_PTS]
-            n_edges = counts[b, N_EDGES]
-            so = b * P * NS
-            eio = b * E * 4
-            efo = b * E * N_EDGE_F
-            for e in range(n_edges):
-                d0 = edge_i[eio + 4 * e + 2]
-                if d0 >= 0:
-                    d1 = edge_i[eio + 4 * e + 3]
-                    total = actions[b, d0]
-                    cnt = 1.0
-                    if d1 >= 0:
-                        total += actions[b, d1]
-                        cnt = 2.0
-                    ef = efo + N_EDGE_F * e
-                    edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
-            pos = ti.Vector.zero(ti.f64, 2 * PC)
-            vel = ti.Vector.zero(ti.f64, 2 * PC)
-            pl = ti.Vector.zero(ti.f64, 2 * PC)  # pos_last
-            vt = ti.Vector.zero(ti.f64, 2 * PC)  # vel_true
-            xs = ti.Vector.zero(ti.f64, 2 * PC)
-            vs = ti.Vector.zero(ti.f64, 2 * PC)
-            frc = ti.Vector.zero(ti.f64, 2 * PC)
-            fcol = ti.Vector.zero(ti.f64, 2 * PC)
-            adx = ti.Vector.zero(ti.f64, 2 * PC)
-            adv = ti.Vector.zero(ti.f64, 2 * PC)
-            leq = ti.Vector.zero(ti.f64, EC)
-            ccx = ti.Vector.zero(ti.f64, EC)
-            ccy = ti.Vector.zero(ti.f64, EC)
-            box = ti.Vector.zero(ti.f64, 4 * SC)
-            sv = ti.Vector.zero(ti.i32, 8 * SC)
-            sm = ti.Vector.zero(ti.i32, 4 * SC)
-            for i in range(counts[b, N_SURF]):
-                v = lists[b, i, 0]
-                for k in ti.static(range(4)):
-                    sv[8 * i + k] = vox_i[b, v, V_PTS + k]
-                    sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
-                sm[4 * i] = vox_i[b, v, V_OBJ]
-                sm[4 * i + 1] = vox_i[b, v, V_ROW]
-                sm[4 * i + 2] = vox_i[b, v, V_COL]
-            for p in range(n_pts):
-                for d in ti.static(range(2)):
-                    pos[2 * p + d] = state[so + NS * p + d]
-                    vel[2 * p + d] = state[so + NS * p + 2 + d]
-                    pl[2 * p + d] = state[so + NS * p + 4 + d]
-                    vt[2 * p + d] = state[so + NS * p + 6 + d]
-            status = RUNNING
-            for _ in range(n_sub):
-                if status == RUNNING:
-                    count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
-                                        ter_i, ter_grid)
-                    if count < 0:
-                        status = NONFINITE
-                    else:
-                        _rk4_l(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
-                               frc, adx, adv, leq)
-                        _constraints_l(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
-                                       pos, ccx, ccy)
-                        for i in range(2 * n_pts):
-                            vt[i] = (pos[i] - pl[i]) / C.DT
-                            pl[i] = pos[i]
-                        if count > counts[b, N_SURF_ROBOT]:
-                            status = UNSTABLE
-            if status == RUNNING:
-                for i in range(2 * n_pts):
-                    if not (ti.abs(pos[i]) < 1e30 and ti.abs(vel[i]) < 1e30):
-                        status = NONFINITE
-            if status == RUNNING:
-                for p in range(n_pts):
-                    for d in ti.static(range(2)):
-                        state[so + NS * p + d] = pos[2 * p + d]
-                        state[so + NS * p + 2 + d] = vel[2 * p + d]
-                        state[so + NS * p + 4 + d] = pl[2 * p + d]
-                        state[so + NS * p + 6 + d] = vt[2 * p + d]
-            else:
-                # evogym keeps the last snapshot: the step never happened for observers
-                for p in range(n_pts):
-                    for d in ti.static(range(2)):
-                        state[so + NS * p + 4 + d] = state[so + NS * p + d]
-                        state[so + NS * p + 6 + d] = 0.0
-                counts[b, STATUS] = status
+        _step_world_small(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
+                          ter_grid, n_sub, P, E)
+
+
+@ti.kernel
+def step_kernel_small_serial(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1,
+                             vox_i: I32_3, lists: I32_3, actions: F64_2, ter_f: F64_2,
+                             ter_i: I32_2, ter_grid: I32_2, n_sub: ti.i32, P: ti.i32, E: ti.i32):
+    """`step_kernel_small` on the calling thread: for single-threaded processes, where handing the
+    loop to Taichi's thread pool costs ~0.15 ms per launch (measured on the 2-vCPU VM)."""
+    ti.loop_config(serialize=True)
+    for b in range(counts.shape[0]):
+        _step_world_small(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
+                          ter_grid, n_sub, P, E)
+

@@ -38,7 +38,7 @@ class BatchSim:
                  *, arch: str | None = None, passive_ok: bool = False):
         if len(bodies) == 0:
             raise ValueError("BatchSim needs at least one body")
-        runtime.init(arch)
+        self._arch = runtime.init(arch)
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
         self.bodies = [_as_body(b, passive_ok) for b in bodies]
@@ -138,6 +138,8 @@ class BatchSim:
         self.actions = np.ones((B, A))
         # worlds small enough for the kernel that keeps per-point state in local arrays
         self._small = P <= K.PC and E <= K.EC and int(counts[:, K.N_SURF].max()) <= K.SC
+        # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
+        self._serial = self._arch == "cpu" and (runtime.threads() == 1 or self.n_worlds == 1)
 
     # ------------------------------------------------------------------ control
     @property
@@ -205,10 +207,11 @@ class BatchSim:
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             if self._small:
-                K.step_kernel_small(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
-                                    self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions,
-                                    self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS,
-                                    self.state.shape[1], self.edge_i.shape[1])
+                kernel = K.step_kernel_small_serial if self._serial else K.step_kernel_small
+                kernel(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
+                       self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
+                       self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
+                       self.edge_i.shape[1])
             else:
                 K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f,
                               self.vox_i, self.lists, self.box, self.qf, self.qi, self.actions,
