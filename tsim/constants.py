@@ -46,7 +46,9 @@ CONTACT_FRICTION = 150.0 * 8
 PARALLEL_EPS = 1e-4
 DEGENERATE_EDGE = 1e-6
 # ours, not evogym's: a corner farther than this outside a voxel's bounding box skips the exact
-# point-in-voxel test, which cannot pass there (rounding errors are ~1e-15 at these coordinates)
+# point-in-voxel test. That test fails there (rounding errors are ~1e-15 at these coordinates)
+# except for a corner exactly on the line through the voxel's TL-BR diagonal, which evogym's test
+# calls inside however far away; see docs/VALIDATION.md
 BOX_MARGIN = 1e-9
 REST_CONVERGENCE = 0.006
 EDGE_BAND = 0.25
