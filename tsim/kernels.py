@@ -621,6 +621,49 @@ def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti
 
 
 @ti.func
+def _in_box(x, y, x0, x1, y0, y1):
+    """In the box widened by BOX_MARGIN: the same test as `_resolve_l`'s candidate corners."""
+    return (x0 - C.BOX_MARGIN <= x and x <= x1 + C.BOX_MARGIN and y0 - C.BOX_MARGIN <= y
+            and y <= y1 + C.BOX_MARGIN)
+
+
+@ti.func
+def _robot_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template(), i, j):
+    """Whether `_resolve_l` can act between surface voxels i and j: some corner of one, not shared
+    with the other, lies in the other's widened box (elsewhere both resolves do nothing)."""
+    hit = False
+    for d in range(2):
+        m = i if d == 0 else j
+        r = j if d == 0 else i
+        for k in range(4):
+            p = sv[8 * m + k]
+            if _in_box(pos[2 * p], pos[2 * p + 1], box[4 * r], box[4 * r + 1], box[4 * r + 2],
+                       box[4 * r + 3]):
+                shared = False
+                for q in range(4):
+                    if sv[8 * r + q] == p:
+                        shared = True
+                if not shared:
+                    hit = True
+    return hit
+
+
+@ti.func
+def _terrain_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template(),
+                       ter_f: ti.template(), i, t):
+    """`_robot_pair_acts` for surface voxel i and terrain voxel t (no shared corners)."""
+    hit = False
+    for k in range(4):
+        p = sv[8 * i + k]
+        if _in_box(pos[2 * p], pos[2 * p + 1], ter_f[t, 8], ter_f[t, 9], ter_f[t, 10], ter_f[t, 11]):
+            hit = True
+        if _in_box(ter_f[t, 2 * k], ter_f[t, 2 * k + 1], box[4 * i], box[4 * i + 1], box[4 * i + 2],
+                   box[4 * i + 3]):
+            hit = True
+    return hit
+
+
+@ti.func
 def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
                 fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
                 ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
@@ -674,12 +717,13 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                         dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
                         if dr > 1 or dc > 1:
                             count += 2
-                    if not loaded:
-                        _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
-                        loaded = True
-                    _load_dyn_l(pos, vt, sv, qf, qi, 1, j)
-                    for d in range(2):
-                        _resolve_l(fcol, qf, qi, d, 1 - d, scale)
+                    if _robot_pair_acts(pos, sv, box, i, j):
+                        if not loaded:
+                            _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
+                            loaded = True
+                        _load_dyn_l(pos, vt, sv, qf, qi, 1, j)
+                        for d in range(2):
+                            _resolve_l(fcol, qf, qi, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
             gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
             gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -688,8 +732,11 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                 for gy in range(gy0, gy1 + 1):
                     t = ter_grid[gx, gy]
                     if t >= 0:
+                        acts = False
                         if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
                                 or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
+                            acts = _terrain_pair_acts(pos, sv, box, ter_f, i, t)
+                        if acts:
                             if not loaded:
                                 _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
                                 loaded = True
