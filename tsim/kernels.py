@@ -217,6 +217,53 @@ def _load_dyn(state: ti.template(), vox_i: ti.template(), qf: ti.template(), qi:
 
 
 @ti.func
+def _in_box(x, y, x0, x1, y0, y1):
+    """In the box widened by BOX_MARGIN: the same test as `_resolve`'s candidate corners."""
+    return (x0 - C.BOX_MARGIN <= x and x <= x1 + C.BOX_MARGIN and y0 - C.BOX_MARGIN <= y
+            and y <= y1 + C.BOX_MARGIN)
+
+
+@ti.func
+def _dyn_pair_acts(state: ti.template(), vox_i: ti.template(), box: ti.template(), b, va, vb, i,
+                   j):
+    """Whether `_resolve` can act between surface voxels i (voxel va) and j (vb): some corner of
+    one, not shared with the other, lies in the other's widened box (elsewhere both resolves do
+    nothing, so skipping them is exact)."""
+    hit = False
+    for d in range(2):
+        vm = va if d == 0 else vb
+        vr = vb if d == 0 else va
+        r = j if d == 0 else i
+        for k in range(4):
+            p = vox_i[b, vm, V_PTS + k]
+            if _in_box(state[b, p, 0], state[b, p, 1], box[b, r, 0], box[b, r, 1], box[b, r, 2],
+                       box[b, r, 3]):
+                shared = False
+                for q in range(4):
+                    if vox_i[b, vr, V_PTS + q] == p:
+                        shared = True
+                if not shared:
+                    hit = True
+    return hit
+
+
+@ti.func
+def _dyn_terrain_acts(state: ti.template(), vox_i: ti.template(), box: ti.template(),
+                      ter_f: ti.template(), b, va, i, t):
+    """`_dyn_pair_acts` for surface voxel i (voxel va) and terrain voxel t (no shared corners)."""
+    hit = False
+    for k in range(4):
+        p = vox_i[b, va, V_PTS + k]
+        if _in_box(state[b, p, 0], state[b, p, 1], ter_f[t, 8], ter_f[t, 9], ter_f[t, 10],
+                   ter_f[t, 11]):
+            hit = True
+        if _in_box(ter_f[t, 2 * k], ter_f[t, 2 * k + 1], box[b, i, 0], box[b, i, 1], box[b, i, 2],
+                   box[b, i, 3]):
+            hit = True
+    return hit
+
+
+@ti.func
 def _contacts(b, counts: ti.template(), state: ti.template(), work: ti.template(),
               vox_i: ti.template(), lists: ti.template(), box: ti.template(), qf: ti.template(),
               qi: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
@@ -272,12 +319,13 @@ def _contacts(b, counts: ti.template(), state: ti.template(), work: ti.template(
                         dc = ti.abs(vox_i[b, va, V_COL] - vox_i[b, vb, V_COL])
                         if dr > 1 or dc > 1:
                             count += 2
-                    if not loaded:
-                        _load_dyn(state, vox_i, qf, qi, b, 0, va)
-                        loaded = True
-                    _load_dyn(state, vox_i, qf, qi, b, 1, vb)
-                    for d in range(2):
-                        _resolve(work, qf, qi, b, d, 1 - d, scale)
+                    if _dyn_pair_acts(state, vox_i, box, b, va, vb, i, j):
+                        if not loaded:
+                            _load_dyn(state, vox_i, qf, qi, b, 0, va)
+                            loaded = True
+                        _load_dyn(state, vox_i, qf, qi, b, 1, vb)
+                        for d in range(2):
+                            _resolve(work, qf, qi, b, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(box[b, i, 0] / C.CELL - 1.0 - 1e-6), ti.i32))
             gx1 = ti.min(gw - 1, ti.cast(ti.floor(box[b, i, 1] / C.CELL + 1e-6), ti.i32))
             gy0 = ti.max(0, ti.cast(ti.ceil(box[b, i, 2] / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -286,8 +334,11 @@ def _contacts(b, counts: ti.template(), state: ti.template(), work: ti.template(
                 for gy in range(gy0, gy1 + 1):
                     t = ter_grid[gx, gy]
                     if t >= 0:
+                        acts = False
                         if not (box[b, i, 0] > ter_f[t, 9] or box[b, i, 1] < ter_f[t, 8]
                                 or box[b, i, 2] > ter_f[t, 11] or box[b, i, 3] < ter_f[t, 10]):
+                            acts = _dyn_terrain_acts(state, vox_i, box, ter_f, b, va, i, t)
+                        if acts:
                             if not loaded:
                                 _load_dyn(state, vox_i, qf, qi, b, 0, va)
                                 loaded = True
@@ -618,13 +669,6 @@ def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti
         qf[4 * q + k, 1] = pos[2 * p + 1]
         qf[4 * q + k, 2] = vt[2 * p]
         qf[4 * q + k, 3] = vt[2 * p + 1]
-
-
-@ti.func
-def _in_box(x, y, x0, x1, y0, y1):
-    """In the box widened by BOX_MARGIN: the same test as `_resolve_l`'s candidate corners."""
-    return (x0 - C.BOX_MARGIN <= x and x <= x1 + C.BOX_MARGIN and y0 - C.BOX_MARGIN <= y
-            and y <= y1 + C.BOX_MARGIN)
 
 
 @ti.func
