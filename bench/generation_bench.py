@@ -14,6 +14,7 @@ import statistics
 import tempfile
 import time
 
+from evolve.cli import workers_arg
 from evolve.experiment import Experiment
 from tasks.specs import task_spec
 
@@ -23,13 +24,13 @@ def main() -> None:
     ap.add_argument("--config", default="configs/sgr/Walker-v0.yaml")
     ap.add_argument("--generations", type=int, default=4)
     ap.add_argument("--pop", type=int)
-    ap.add_argument("--workers", help="rollout processes (default: the config's, auto = all CPUs)")
+    ap.add_argument("--workers", type=workers_arg,
+                    help="rollout processes (default: the config's, auto = all CPUs)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        workers = int(args.workers) if args.workers and args.workers != "auto" else args.workers
         exp = Experiment.create(args.config, f"{tmp}/run", {"generations": args.generations,
-                                                           "pop_size": args.pop, "workers": workers},
+                                                           "pop_size": args.pop, "workers": args.workers},
                                 quiet=True)
         rows = []
         t0 = time.perf_counter()

@@ -62,7 +62,8 @@ REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 DEFAULT_CONFIG = REPO_CONFIGS / "sgr" / "quick.yaml"
 
 
-def _workers_arg(text: str) -> int | str:
+def workers_arg(text: str) -> int | str:
+    """argparse type of --workers: a positive int or 'auto'."""
     if text == "auto":
         return text
     try:
@@ -173,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--pop", type=int)
     e.add_argument("--seed", type=int)
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
-    e.add_argument("--workers", type=_workers_arg,
+    e.add_argument("--workers", type=workers_arg,
                    help="rollout processes: a number or 'auto' (default: the config's, auto = all CPUs)")
     e.add_argument("--resume", metavar="DIR", help="continue an interrupted run from its last checkpoint")
     e.add_argument("--quiet", action="store_true")
