@@ -94,6 +94,10 @@ def _evolve(args: argparse.Namespace) -> int:
     try:
         exp.run_all()
         exp.finish()
+    except KeyboardInterrupt:
+        print(f"\ninterrupted at generation {exp.search.generation}; continue with: "
+              f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        return 130
     finally:
         exp.close()
     return 0

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import os
 import pickle
+import signal
 import struct
 import sys
 from collections.abc import Sequence
@@ -42,6 +43,8 @@ def read_frame(stream: BinaryIO) -> bytes:
 
 
 def main() -> None:
+    # Ctrl-C reaches the whole process group: the pool's owner handles it and closes our input
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
     # the protocol owns the real stdout; anything printed (e.g. by a library) goes to stderr
     replies = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
@@ -63,6 +66,8 @@ def main() -> None:
                 reply = (False, exc)
         try:
             write_frame(replies, reply)
+        except BrokenPipeError:  # the pool's owner is gone
+            return
         except Exception:  # an exception that does not pickle
             write_frame(replies, (False, RuntimeError(f"{type(reply[1]).__name__}: {reply[1]}")))
 

@@ -85,3 +85,16 @@ def test_a_run_directory_is_not_overwritten(tmp_path, repo_root, capsys):
     assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 0
     assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 2
     assert "already holds a run" in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_the_run_with_a_resume_hint(tmp_path, repo_root, capsys, monkeypatch):
+    p = _write(tmp_path, repo_root)
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Experiment, "run_all", interrupted)
+    out = tmp_path / "run"
+    assert main(["evolve", "--config", str(p), "--out", str(out), "--quiet"]) == 130
+    err = capsys.readouterr().err
+    assert f"sgr evolve --resume {out}" in err
+    assert RunDir(out).latest_checkpoint() is not None  # generation 0's state is there to resume
