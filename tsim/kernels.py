@@ -4,17 +4,18 @@ Layout (all arrays are Taichi ndarrays, so the kernels compile once per process 
 - `counts[b, :]`   int: see the COUNT_* column names below.
 - `state[b, p, :]` f64: pos(0:2) vel(2:4) pos_last(4:6) vel_true(6:8) of dynamic point p
   (robot points first, then free objects such as Thrower's package).
-- `work[b, p, :]`  f64: scratch for the RK4 stages, contact forces and the step-start backup.
 - `edge_i[b, e, :]` int: a, b, driver0, driver1 (actuator indices or -1).
-- `edge_f[b, e, :]` f64: rest length, k, goal, current rest length, constraint dx, dy.
+- `edge_f[b, e, :]` f64: rest length, k, goal (set from the actions each step), initial current
+  rest length (the kernel keeps the current one in a local array).
 - `vox_i[b, v, :]` int: corner points (TL, TR, BR, BL), open sides (top, right, bottom, left),
   material, object id, row, col; `lists[b, i, 0]` surface voxels (robot first),
-  `lists[b, i, 1]` rigid voxels; `box[b, v, :]` the AABB of surface voxel list entry i.
+  `lists[b, i, 1]` rigid voxels.
 - terrain (shared by the batch, static): `ter_f[t, :]` corners TL, TR, BR, BL as x, y pairs then
   the AABB; `ter_i[t, :]` open sides; `ter_grid[gx, gy]` the surface voxel in that cell or -1.
 
 Design: one parallel loop over worlds with serial inner loops over that world's points, springs and
-voxels (cache-friendly, no atomics). Each world does all 30 substeps in one kernel launch.
+voxels (cache-friendly, no atomics). Each world does all 30 substeps in one kernel launch, with its
+state copied into local arrays (see the note above `capacity`).
 """
 
 
@@ -27,24 +28,17 @@ N_COUNTS = 8
 # STATUS values: a world is simulated only while its status is RUNNING
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = 0, 1, 2, 3
 
-# work columns
-W_XS, W_VS, W_F, W_FCOL, W_ADX, W_ADV, W_KX, W_KV, W_BPOS, W_BVEL = (2 * i for i in range(10))
-N_WORK = 20
-
 # vox_i columns
 V_PTS, V_OPEN, V_TYPE, V_OBJ, V_ROW, V_COL = 0, 4, 8, 9, 10, 11
 N_VOX_I = 12
 
 # edge_f columns
-E_REST, E_K, E_GOAL, E_LEQ, E_CX, E_CY = range(6)
-N_EDGE_F = 6
+E_REST, E_K, E_GOAL, E_LEQ = range(4)
+N_EDGE_F = 4
 
-F64_3 = ti.types.ndarray(dtype=ti.f64, ndim=3)
 F64_2 = ti.types.ndarray(dtype=ti.f64, ndim=2)
 I32_3 = ti.types.ndarray(dtype=ti.i32, ndim=3)
 I32_2 = ti.types.ndarray(dtype=ti.i32, ndim=2)
-F64_4 = ti.types.ndarray(dtype=ti.f64, ndim=4)
-I32_4 = ti.types.ndarray(dtype=ti.i32, ndim=4)
 
 _HI = 1.0 + C.EDGE_BAND
 _LO = 1.0 - C.EDGE_BAND
@@ -110,483 +104,53 @@ def _normalized(v):
 
 
 @ti.func
-def _qpt(qf: ti.template(), b, q, k):
-    return vec2(qf[b, q, k, 0], qf[b, q, k, 1])
-
-
-@ti.func
-def _qvel(qf: ti.template(), b, q, k):
-    return vec2(qf[b, q, k, 2], qf[b, q, k, 3])
-
-
-@ti.func
-def _resolve(work: ti.template(), qf: ti.template(), qi: ti.template(), b, m, r, scale):
-    """Contacts of quad m's corner points inside quad r (evogym `resolve_boxel_collisions`).
-
-    Quads live in the per-world scratch `qf[b, q, corner]` = (x, y, vx_true, vy_true) and
-    `qi[b, q, corner]` = (point id, side `corner` is open). Forces go to `work[b, id, W_FCOL]` for
-    dynamic points (id >= 0); terrain points (id < 0) are fixed and their share is dropped, as
-    evogym discards the update of fixed points.
-    """
-    lo = ti.min(ti.min(_qpt(qf, b, r, 0), _qpt(qf, b, r, 1)),
-                ti.min(_qpt(qf, b, r, 2), _qpt(qf, b, r, 3))) - C.BOX_MARGIN
-    hi = ti.max(ti.max(_qpt(qf, b, r, 0), _qpt(qf, b, r, 1)),
-                ti.max(_qpt(qf, b, r, 2), _qpt(qf, b, r, 3))) + C.BOX_MARGIN
-    for i in range(4):
-        pid = qi[b, m, i, 0]
-        p = _qpt(qf, b, m, i)
-        candidate = lo[0] <= p[0] and p[0] <= hi[0] and lo[1] <= p[1] and p[1] <= hi[1]
-        if candidate and pid >= 0:
-            for j in range(4):
-                if qi[b, r, j, 0] == pid:
-                    candidate = False
-        if candidate and _point_in_quad(p, _qpt(qf, b, r, 0), _qpt(qf, b, r, 1),
-                                        _qpt(qf, b, r, 2), _qpt(qf, b, r, 3)):
-            # the two sides of m incident to corner i (TL: top, left; TR: top, right; ...)
-            s1 = 0 if i < 2 else 2
-            s2 = 3 if (i == 0 or i == 3) else 1
-            m1a = _qpt(qf, b, m, s1)
-            m1b = _qpt(qf, b, m, (s1 + 1) % 4)
-            if s1 >= 2 and qi[b, m, s1, 1] == 0:  # inner bottom side runs BL -> BR
-                m1a, m1b = m1b, m1a
-            m2a = _qpt(qf, b, m, s2)
-            m2b = _qpt(qf, b, m, (s2 + 1) % 4)
-            if s2 >= 2 and qi[b, m, s2, 1] == 0:  # inner left side runs TL -> BL
-                m2a, m2b = m2b, m2a
-            best = -1
-            best_d = 0.0
-            for s in range(4):
-                if qi[b, r, s, 1] != 0:
-                    ra = _qpt(qf, b, r, s)
-                    rb = _qpt(qf, b, r, (s + 1) % 4)
-                    if _intersects(m1a, m1b, ra, rb) or _intersects(m2a, m2b, ra, rb):
-                        d = _dist_point_edge(p, ra, rb)
-                        if best < 0 or d < best_d:
-                            best = s
-                            best_d = d
-            if best >= 0:
-                ka = best
-                kb = (best + 1) % 4
-                slope = _qpt(qf, b, r, kb) - _qpt(qf, b, r, ka)
-                normal = _normalized(vec2(-slope[1], slope[0]))
-                nf = normal * C.CONTACT_K * (C.CONTACT_OFFSET + best_d)
-                un = _normalized(normal)
-                vp = _qvel(qf, b, m, i)
-                va = _qvel(qf, b, r, ka)
-                vb = _qvel(qf, b, r, kb)
-                damp_p = un * (-1.0) * (un[0] * vp[0] + un[1] * vp[1]) * C.CONTACT_VEL_DAMPING
-                damp_a = un * (un[0] * va[0] + un[1] * va[1]) * C.CONTACT_VEL_DAMPING
-                damp_b = un * (un[0] * vb[0] + un[1] * vb[1]) * C.CONTACT_VEL_DAMPING
-                ut = _normalized(normal)
-                ut = vec2(-ut[1], ut[0])
-                proj = ut[0] * vp[0] + ut[1] * vp[1]
-                mag = ti.sqrt(nf[0] * nf[0] + nf[1] * nf[1])
-                if proj < 0:
-                    proj = -proj
-                    ut = -ut
-                fric = (C.CONTACT_FRICTION * ut * (-1.0) * C.FRICTION_DYN * mag
-                        * ti.tanh(proj / (C.FRICTION_DYN * mag)))
-                if pid >= 0:
-                    fp = scale * (nf + damp_p + fric)
-                    work[b, pid, W_FCOL] += fp[0]
-                    work[b, pid, W_FCOL + 1] += fp[1]
-                ia = qi[b, r, ka, 0]
-                if ia >= 0:
-                    fa = scale * (nf / 2 + damp_a / 2 + fric / 2)
-                    work[b, ia, W_FCOL] -= fa[0]
-                    work[b, ia, W_FCOL + 1] -= fa[1]
-                ib = qi[b, r, kb, 0]
-                if ib >= 0:
-                    fb = scale * (nf / 2 + damp_b / 2 + fric / 2)
-                    work[b, ib, W_FCOL] -= fb[0]
-                    work[b, ib, W_FCOL + 1] -= fb[1]
-
-
-@ti.func
-def _load_dyn(state: ti.template(), vox_i: ti.template(), qf: ti.template(), qi: ti.template(),
-              b, q, v):
-    """Copy dynamic voxel v into scratch quad q."""
-    for k in range(4):
-        p = vox_i[b, v, V_PTS + k]
-        qi[b, q, k, 0] = p
-        qi[b, q, k, 1] = vox_i[b, v, V_OPEN + k]
-        qf[b, q, k, 0] = state[b, p, 0]
-        qf[b, q, k, 1] = state[b, p, 1]
-        qf[b, q, k, 2] = state[b, p, 6]
-        qf[b, q, k, 3] = state[b, p, 7]
-
-
-@ti.func
 def _in_box(x, y, x0, x1, y0, y1):
     """In the box widened by BOX_MARGIN: the same test as `_resolve`'s candidate corners."""
     return (x0 - C.BOX_MARGIN <= x and x <= x1 + C.BOX_MARGIN and y0 - C.BOX_MARGIN <= y
             and y <= y1 + C.BOX_MARGIN)
 
 
-@ti.func
-def _dyn_pair_acts(state: ti.template(), vox_i: ti.template(), box: ti.template(), b, va, vb, i,
-                   j):
-    """Whether `_resolve` can act between surface voxels i (voxel va) and j (vb): some corner of
-    one, not shared with the other, lies in the other's widened box (elsewhere both resolves do
-    nothing, so skipping them is exact)."""
-    hit = False
-    for d in range(2):
-        vm = va if d == 0 else vb
-        vr = vb if d == 0 else va
-        r = j if d == 0 else i
-        for k in range(4):
-            p = vox_i[b, vm, V_PTS + k]
-            if _in_box(state[b, p, 0], state[b, p, 1], box[b, r, 0], box[b, r, 1], box[b, r, 2],
-                       box[b, r, 3]):
-                shared = False
-                for q in range(4):
-                    if vox_i[b, vr, V_PTS + q] == p:
-                        shared = True
-                if not shared:
-                    hit = True
-    return hit
-
-
-@ti.func
-def _dyn_terrain_acts(state: ti.template(), vox_i: ti.template(), box: ti.template(),
-                      ter_f: ti.template(), b, va, i, t):
-    """`_dyn_pair_acts` for surface voxel i (voxel va) and terrain voxel t (no shared corners)."""
-    hit = False
-    for k in range(4):
-        p = vox_i[b, va, V_PTS + k]
-        if _in_box(state[b, p, 0], state[b, p, 1], ter_f[t, 8], ter_f[t, 9], ter_f[t, 10],
-                   ter_f[t, 11]):
-            hit = True
-        if _in_box(ter_f[t, 2 * k], ter_f[t, 2 * k + 1], box[b, i, 0], box[b, i, 1], box[b, i, 2],
-                   box[b, i, 3]):
-            hit = True
-    return hit
-
-
-@ti.func
-def _contacts(b, counts: ti.template(), state: ti.template(), work: ti.template(),
-              vox_i: ti.template(), lists: ti.template(), box: ti.template(), qf: ti.template(),
-              qi: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
-              ter_grid: ti.template()):
-    """Recompute AABBs and contact forces; return evogym's robot self-collision count (-1 when a
-    coordinate is not finite)."""
-    n_pts = counts[b, N_PTS]
-    n_surf = counts[b, N_SURF]
-    n_surf_robot = counts[b, N_SURF_ROBOT]
-    for p in range(n_pts):
-        work[b, p, W_FCOL] = 0.0
-        work[b, p, W_FCOL + 1] = 0.0
-    finite = True
-    for i in range(n_surf):
-        v = lists[b, i, 0]
-        x0 = state[b, vox_i[b, v, V_PTS], 0]
-        y0 = state[b, vox_i[b, v, V_PTS], 1]
-        x1 = x0
-        y1 = y0
-        for k in range(1, 4):
-            p = vox_i[b, v, V_PTS + k]
-            x = state[b, p, 0]
-            y = state[b, p, 1]
-            x0 = ti.min(x0, x)
-            x1 = ti.max(x1, x)
-            y0 = ti.min(y0, y)
-            y1 = ti.max(y1, y)
-        box[b, i, 0] = x0
-        box[b, i, 1] = x1
-        box[b, i, 2] = y0
-        box[b, i, 3] = y1
-        if not (ti.abs(x0) < 1e30 and ti.abs(x1) < 1e30 and ti.abs(y0) < 1e30
-                and ti.abs(y1) < 1e30):
-            finite = False
-    count = 0
-    if finite:
-        # candidate pairs: (A) dynamic voxel pairs i < j (robot self contact, robot-box, box self
-        # contact); (B) dynamic voxel i against static terrain cells near its box
-        gw = ter_grid.shape[0]
-        gh = ter_grid.shape[1]
-        for i in range(n_surf):
-            va = lists[b, i, 0]
-            loaded = False
-            for j in range(i + 1, n_surf):
-                if not (box[b, i, 0] > box[b, j, 1] or box[b, i, 1] < box[b, j, 0]
-                        or box[b, i, 2] > box[b, j, 3] or box[b, i, 3] < box[b, j, 2]):
-                    vb = lists[b, j, 0]
-                    same = vox_i[b, va, V_OBJ] == vox_i[b, vb, V_OBJ]
-                    # ordered-pair traversal of one object's tree applies self contact twice
-                    scale = 2.0 if same else 1.0
-                    if same and i < n_surf_robot and j < n_surf_robot:
-                        dr = ti.abs(vox_i[b, va, V_ROW] - vox_i[b, vb, V_ROW])
-                        dc = ti.abs(vox_i[b, va, V_COL] - vox_i[b, vb, V_COL])
-                        if dr > 1 or dc > 1:
-                            count += 2
-                    if _dyn_pair_acts(state, vox_i, box, b, va, vb, i, j):
-                        if not loaded:
-                            _load_dyn(state, vox_i, qf, qi, b, 0, va)
-                            loaded = True
-                        _load_dyn(state, vox_i, qf, qi, b, 1, vb)
-                        for d in range(2):
-                            _resolve(work, qf, qi, b, d, 1 - d, scale)
-            gx0 = ti.max(0, ti.cast(ti.ceil(box[b, i, 0] / C.CELL - 1.0 - 1e-6), ti.i32))
-            gx1 = ti.min(gw - 1, ti.cast(ti.floor(box[b, i, 1] / C.CELL + 1e-6), ti.i32))
-            gy0 = ti.max(0, ti.cast(ti.ceil(box[b, i, 2] / C.CELL - 1.0 - 1e-6), ti.i32))
-            gy1 = ti.min(gh - 1, ti.cast(ti.floor(box[b, i, 3] / C.CELL + 1e-6), ti.i32))
-            for gx in range(gx0, gx1 + 1):
-                for gy in range(gy0, gy1 + 1):
-                    t = ter_grid[gx, gy]
-                    if t >= 0:
-                        acts = False
-                        if not (box[b, i, 0] > ter_f[t, 9] or box[b, i, 1] < ter_f[t, 8]
-                                or box[b, i, 2] > ter_f[t, 11] or box[b, i, 3] < ter_f[t, 10]):
-                            acts = _dyn_terrain_acts(state, vox_i, box, ter_f, b, va, i, t)
-                        if acts:
-                            if not loaded:
-                                _load_dyn(state, vox_i, qf, qi, b, 0, va)
-                                loaded = True
-                            for k in range(4):
-                                qf[b, 1, k, 0] = ter_f[t, 2 * k]
-                                qf[b, 1, k, 1] = ter_f[t, 2 * k + 1]
-                                qf[b, 1, k, 2] = 0.0
-                                qf[b, 1, k, 3] = 0.0
-                                qi[b, 1, k, 0] = -1
-                                qi[b, 1, k, 1] = ter_i[t, k]
-                            for d in range(2):
-                                _resolve(work, qf, qi, b, d, 1 - d, 1.0)
-    if not finite:
-        count = -1
-    return count
-
-
-@ti.func
-def _forces(b, n_pts, n_edges, state: ti.template(), work: ti.template(), edge_i: ti.template(),
-            edge_f: ti.template()):
-    """Force at the stage state work[W_XS], work[W_VS] -> work[W_F] (springs, drag, gravity,
-    frozen contact forces, ground plane)."""
-    for p in range(n_pts):
-        work[b, p, W_F] = 0.0
-        work[b, p, W_F + 1] = 0.0
-    for e in range(n_edges):
-        a = edge_i[b, e, 0]
-        q = edge_i[b, e, 1]
-        dx = work[b, a, W_XS] - work[b, q, W_XS]
-        dy = work[b, a, W_XS + 1] - work[b, q, W_XS + 1]
-        dist = ti.sqrt(dx * dx + dy * dy)
-        mag = (dist - edge_f[b, e, E_LEQ]) * edge_f[b, e, E_K] / dist
-        dx *= mag
-        dy *= mag
-        work[b, a, W_F] -= dx
-        work[b, a, W_F + 1] -= dy
-        work[b, q, W_F] += dx
-        work[b, q, W_F + 1] += dy
-    for p in range(n_pts):
-        vx = work[b, p, W_VS]
-        vy = work[b, p, W_VS + 1]
-        fx = work[b, p, W_F] + vx * (-C.VISCOUS_DRAG)
-        fy = work[b, p, W_F + 1] + vy * (-C.VISCOUS_DRAG)
-        fy += C.POINT_MASS * (-C.GRAVITY)
-        fx += work[b, p, W_FCOL]
-        fy += work[b, p, W_FCOL + 1]
-        y = work[b, p, W_XS + 1]
-        if y < 0:
-            normal = y * (-C.GROUND_K)
-            fy += normal
-            fx += (-10.0 * C.FRICTION_DYN) * normal * ti.tanh(vx * normal * C.FRICTION_DYN)
-        work[b, p, W_F] = fx / C.POINT_MASS
-        work[b, p, W_F + 1] = fy / C.POINT_MASS
-
-
-@ti.func
-def _rk4(b, n_pts, n_edges, state: ti.template(), work: ti.template(), edge_i: ti.template(),
-         edge_f: ti.template()):
-    """Classical RK4 on (pos, vel) with dt = 1e-4, contact forces frozen across the stages."""
-    for stage in range(4):
-        h = 0.5 if stage < 3 else 1.0
-        for p in range(n_pts):
-            for d in ti.static(range(2)):
-                if stage == 0:
-                    work[b, p, W_XS + d] = state[b, p, d]
-                    work[b, p, W_VS + d] = state[b, p, 2 + d]
-                else:
-                    work[b, p, W_XS + d] = state[b, p, d] + work[b, p, W_KX + d] * h
-                    work[b, p, W_VS + d] = state[b, p, 2 + d] + work[b, p, W_KV + d] * h
-        _forces(b, n_pts, n_edges, state, work, edge_i, edge_f)
-        for p in range(n_pts):
-            for d in ti.static(range(2)):
-                kx = work[b, p, W_VS + d] * C.DT
-                kv = work[b, p, W_F + d] * C.DT
-                work[b, p, W_KX + d] = kx
-                work[b, p, W_KV + d] = kv
-                if stage == 0:
-                    work[b, p, W_ADX + d] = kx
-                    work[b, p, W_ADV + d] = kv
-                elif stage < 3:
-                    work[b, p, W_ADX + d] += 2 * kx
-                    work[b, p, W_ADV + d] += 2 * kv
-                else:
-                    work[b, p, W_ADX + d] += kx
-                    work[b, p, W_ADV + d] += kv
-    for p in range(n_pts):
-        for d in ti.static(range(2)):
-            state[b, p, d] += work[b, p, W_ADX + d] / 6
-            state[b, p, 2 + d] += work[b, p, W_ADV + d] / 6
-
-
-@ti.func
-def _edge_constraints(b, n_edges, counts: ti.template(), state: ti.template(),
-                      edge_i: ti.template(), edge_f: ti.template(), vox_i: ti.template(),
-                      lists: ti.template()):
-    """Pass 1: Jacobi projection of every edge into +-25 %; pass 2: rigid voxels into +-3 %."""
-    for e in range(n_edges):
-        a = edge_i[b, e, 0]
-        q = edge_i[b, e, 1]
-        dx = state[b, a, 0] - state[b, q, 0]
-        dy = state[b, a, 1] - state[b, q, 1]
-        dist = ti.sqrt(dx * dx + dy * dy)
-        rest = edge_f[b, e, E_REST]
-        stress = dist / rest
-        cx = 0.0
-        cy = 0.0
-        if stress > _HI:
-            m = (dist - rest * _HI) / (dist * 2)
-            cx += dx * m
-            cy += dy * m
-        if stress < _LO:
-            m = (dist - rest * _LO) / (dist * 2)
-            cx += dx * m
-            cy += dy * m
-        edge_f[b, e, E_CX] = cx * 0.8
-        edge_f[b, e, E_CY] = cy * 0.8
-    for e in range(n_edges):
-        cx = edge_f[b, e, E_CX]
-        cy = edge_f[b, e, E_CY]
-        if cx != 0.0 or cy != 0.0:
-            a = edge_i[b, e, 0]
-            q = edge_i[b, e, 1]
-            state[b, a, 0] -= cx
-            state[b, a, 1] -= cy
-            state[b, q, 0] += cx
-            state[b, q, 1] += cy
-    for i in range(counts[b, N_RIGID]):
-        v = lists[b, i, 1]
-        for k in ti.static(range(4)):  # top, right, bottom, left
-            a = vox_i[b, v, V_PTS + k]
-            q = vox_i[b, v, V_PTS + (k + 1) % 4]
-            dx = state[b, a, 0] - state[b, q, 0]
-            dy = state[b, a, 1] - state[b, q, 1]
-            dist = ti.sqrt(dx * dx + dy * dy)
-            stress = dist / C.MAIN_REST
-            ox = 0.0
-            oy = 0.0
-            if stress >= _HI_R:
-                m = (dist - C.MAIN_REST * _HI_R) / (dist * 2)
-                ox += dx * m
-                oy += dy * m
-            if stress <= _LO_R:
-                m = (dist - C.MAIN_REST * _LO_R) / (dist * 2)
-                ox += dx * m
-                oy += dy * m
-            state[b, a, 0] -= ox * 0.5
-            state[b, a, 1] -= oy * 0.5
-            state[b, q, 0] += ox * 0.5
-            state[b, q, 1] += oy * 0.5
-
-
-@ti.kernel
-def step_kernel(counts: I32_2, state: F64_3, work: F64_3, edge_i: I32_3, edge_f: F64_3,
-                vox_i: I32_3, lists: I32_3, box: F64_3, qf: F64_4, qi: I32_4, actions: F64_2,
-                ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2, n_sub: ti.i32):
-    """Advance every RUNNING world by one env step (set goals once, then n_sub substeps)."""
-    ti.loop_config(block_dim=1)
-    for b in range(counts.shape[0]):
-        if counts[b, STATUS] == RUNNING:
-            n_pts = counts[b, N_PTS]
-            n_edges = counts[b, N_EDGES]
-            for e in range(n_edges):
-                d0 = edge_i[b, e, 2]
-                if d0 >= 0:
-                    d1 = edge_i[b, e, 3]
-                    total = actions[b, d0]
-                    cnt = 1.0
-                    if d1 >= 0:
-                        total += actions[b, d1]
-                        cnt = 2.0
-                    edge_f[b, e, E_GOAL] = total * (edge_f[b, e, E_REST] / cnt)
-            for p in range(n_pts):
-                for d in ti.static(range(4)):
-                    work[b, p, W_BPOS + d] = state[b, p, d]
-            status = RUNNING
-            for _ in range(n_sub):
-                if status == RUNNING:
-                    count = _contacts(b, counts, state, work, vox_i, lists, box, qf, qi, ter_f,
-                                      ter_i, ter_grid)
-                    if count < 0:
-                        status = NONFINITE
-                    else:
-                        for e in range(n_edges):
-                            a = edge_i[b, e, 0]
-                            q = edge_i[b, e, 1]
-                            dx = state[b, a, 0] - state[b, q, 0]
-                            dy = state[b, a, 1] - state[b, q, 1]
-                            dist = ti.sqrt(dx * dx + dy * dy)
-                            edge_f[b, e, E_LEQ] = dist + (edge_f[b, e, E_GOAL] - dist) * C.REST_CONVERGENCE
-                        _rk4(b, n_pts, n_edges, state, work, edge_i, edge_f)
-                        _edge_constraints(b, n_edges, counts, state, edge_i, edge_f, vox_i, lists)
-                        for p in range(n_pts):
-                            for d in ti.static(range(2)):
-                                state[b, p, 6 + d] = (state[b, p, d] - state[b, p, 4 + d]) / C.DT
-                                state[b, p, 4 + d] = state[b, p, d]
-                        if count > counts[b, N_SURF_ROBOT]:
-                            status = UNSTABLE
-            if status == RUNNING:
-                for p in range(n_pts):
-                    for d in ti.static(range(4)):
-                        if not ti.abs(state[b, p, d]) < 1e30:
-                            status = NONFINITE
-            if status != RUNNING:
-                # evogym keeps the last snapshot: the step never happened for observers
-                for p in range(n_pts):
-                    for d in ti.static(range(4)):
-                        state[b, p, d] = work[b, p, W_BPOS + d]
-                        state[b, p, 4 + d] = work[b, p, W_BPOS + d] if d < 2 else 0.0
-                counts[b, STATUS] = status
-
-
 # ------------------------------------------------------------------------------------------------
-# Fast path for small worlds (n_pts <= PC): the per-point state of a world lives in local arrays
-# (LLVM allocas) for the whole env step. Stores to ndarrays force LLVM to reload every ndarray's
-# data pointer and shape after each store (they might alias), which made the spring loop ~3x
-# slower than with local accumulators. Hot loops here store only to locals; ndarrays are
-# addressed through flat 1-D views with compile-time strides. Arithmetic is kept expression for
-# expression identical to the generic kernel above.
+# The per-point state of a world lives in local arrays (LLVM allocas) for the whole env step.
+# Stores to ndarrays force LLVM to reload every ndarray's data pointer and shape after each store
+# (they might alias), which made the spring loop ~3x slower than with local accumulators. Hot
+# loops here store only to locals; ndarrays are addressed through flat 1-D views with
+# compile-time strides. The local arrays have a static capacity (points, edges, surface voxels):
+# a batch uses the smallest tier `capacity(k)` that holds its largest world; each tier is its own
+# compiled kernel, and results do not depend on the tier (tests/tsim/test_kernels.py).
 # ------------------------------------------------------------------------------------------------
 
-PC = 64  # point capacity of the fast kernel
-EC = 160  # edge capacity
-SC = 32  # surface voxel capacity
+PC, EC, SC = 64, 160, 32  # tier 0: points, edges, surface voxels (a 5x5 robot and Thrower's box)
 NS = 8  # state columns
+
+
+def capacity(k: int) -> tuple[int, int, int]:
+    """Local-array capacity (points, edges, surface voxels) of tier k: tier 0 doubled k times."""
+    return PC << k, EC << k, SC << k
 F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
 
 
 @ti.func
-def _lpt(qf: ti.template(), q, k):
+def _qpt(qf: ti.template(), q, k):
     return vec2(qf[4 * q + k, 0], qf[4 * q + k, 1])
 
 
 @ti.func
-def _lvel(qf: ti.template(), q, k):
+def _qvel(qf: ti.template(), q, k):
     return vec2(qf[4 * q + k, 2], qf[4 * q + k, 3])
 
 
 @ti.func
-def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, scale):
+def _resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, scale):
     """`_resolve` on local scratch quads: qf[4q + k] = (x, y, vx, vy), qi[4q + k] = (id, open)."""
-    lo = ti.min(ti.min(_lpt(qf, r, 0), _lpt(qf, r, 1)), ti.min(_lpt(qf, r, 2), _lpt(qf, r, 3))) \
+    lo = ti.min(ti.min(_qpt(qf, r, 0), _qpt(qf, r, 1)), ti.min(_qpt(qf, r, 2), _qpt(qf, r, 3))) \
         - C.BOX_MARGIN
-    hi = ti.max(ti.max(_lpt(qf, r, 0), _lpt(qf, r, 1)), ti.max(_lpt(qf, r, 2), _lpt(qf, r, 3))) \
+    hi = ti.max(ti.max(_qpt(qf, r, 0), _qpt(qf, r, 1)), ti.max(_qpt(qf, r, 2), _qpt(qf, r, 3))) \
         + C.BOX_MARGIN
     for i in range(4):
         pid = qi[4 * m + i, 0]
-        p = _lpt(qf, m, i)
+        p = _qpt(qf, m, i)
         # corners outside r's box cannot be inside r; then corners shared with r
         candidate = lo[0] <= p[0] and p[0] <= hi[0] and lo[1] <= p[1] and p[1] <= hi[1]
         if candidate and pid >= 0:
@@ -595,25 +159,25 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
                     candidate = False
         inside = False
         if candidate:  # (Taichi's `and` does not short-circuit)
-            inside = _point_in_quad(p, _lpt(qf, r, 0), _lpt(qf, r, 1), _lpt(qf, r, 2),
-                                    _lpt(qf, r, 3))
+            inside = _point_in_quad(p, _qpt(qf, r, 0), _qpt(qf, r, 1), _qpt(qf, r, 2),
+                                    _qpt(qf, r, 3))
         if inside:
             s1 = 0 if i < 2 else 2
             s2 = 3 if (i == 0 or i == 3) else 1
-            m1a = _lpt(qf, m, s1)
-            m1b = _lpt(qf, m, (s1 + 1) % 4)
+            m1a = _qpt(qf, m, s1)
+            m1b = _qpt(qf, m, (s1 + 1) % 4)
             if s1 >= 2 and qi[4 * m + s1, 1] == 0:
                 m1a, m1b = m1b, m1a
-            m2a = _lpt(qf, m, s2)
-            m2b = _lpt(qf, m, (s2 + 1) % 4)
+            m2a = _qpt(qf, m, s2)
+            m2b = _qpt(qf, m, (s2 + 1) % 4)
             if s2 >= 2 and qi[4 * m + s2, 1] == 0:
                 m2a, m2b = m2b, m2a
             best = -1
             best_d = 0.0
             for s in range(4):
                 if qi[4 * r + s, 1] != 0:
-                    ra = _lpt(qf, r, s)
-                    rb = _lpt(qf, r, (s + 1) % 4)
+                    ra = _qpt(qf, r, s)
+                    rb = _qpt(qf, r, (s + 1) % 4)
                     if _intersects(m1a, m1b, ra, rb) or _intersects(m2a, m2b, ra, rb):
                         d = _dist_point_edge(p, ra, rb)
                         if best < 0 or d < best_d:
@@ -622,13 +186,13 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
             if best >= 0:
                 ka = best
                 kb = (best + 1) % 4
-                slope = _lpt(qf, r, kb) - _lpt(qf, r, ka)
+                slope = _qpt(qf, r, kb) - _qpt(qf, r, ka)
                 normal = _normalized(vec2(-slope[1], slope[0]))
                 nf = normal * C.CONTACT_K * (C.CONTACT_OFFSET + best_d)
                 un = _normalized(normal)
-                vp = _lvel(qf, m, i)
-                va = _lvel(qf, r, ka)
-                vb = _lvel(qf, r, kb)
+                vp = _qvel(qf, m, i)
+                va = _qvel(qf, r, ka)
+                vb = _qvel(qf, r, kb)
                 damp_p = un * (-1.0) * (un[0] * vp[0] + un[1] * vp[1]) * C.CONTACT_VEL_DAMPING
                 damp_a = un * (un[0] * va[0] + un[1] * va[1]) * C.CONTACT_VEL_DAMPING
                 damp_b = un * (un[0] * vb[0] + un[1] * vb[1]) * C.CONTACT_VEL_DAMPING
@@ -658,7 +222,7 @@ def _resolve_l(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, 
 
 
 @ti.func
-def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
+def _load_quad(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
                 qi: ti.template(), q, i):
     """Copy surface voxel list entry i (corners and open sides in sv) into scratch quad q."""
     for k in range(4):
@@ -673,7 +237,7 @@ def _load_dyn_l(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti
 
 @ti.func
 def _robot_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template(), i, j):
-    """Whether `_resolve_l` can act between surface voxels i and j: some corner of one, not shared
+    """Whether `_resolve` can act between surface voxels i and j: some corner of one, not shared
     with the other, lies in the other's widened box (elsewhere both resolves do nothing)."""
     hit = False
     for d in range(2):
@@ -708,7 +272,7 @@ def _terrain_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template()
 
 
 @ti.func
-def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
+def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
                 fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
                 ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
     """`_contacts` on the local positions/contact forces of the fast kernel; surface voxel i has
@@ -763,11 +327,11 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                             count += 2
                     if _robot_pair_acts(pos, sv, box, i, j):
                         if not loaded:
-                            _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
+                            _load_quad(pos, vt, sv, qf, qi, 0, i)
                             loaded = True
-                        _load_dyn_l(pos, vt, sv, qf, qi, 1, j)
+                        _load_quad(pos, vt, sv, qf, qi, 1, j)
                         for d in range(2):
-                            _resolve_l(fcol, qf, qi, d, 1 - d, scale)
+                            _resolve(fcol, qf, qi, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
             gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
             gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -782,7 +346,7 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                             acts = _terrain_pair_acts(pos, sv, box, ter_f, i, t)
                         if acts:
                             if not loaded:
-                                _load_dyn_l(pos, vt, sv, qf, qi, 0, i)
+                                _load_quad(pos, vt, sv, qf, qi, 0, i)
                                 loaded = True
                             for k in range(4):
                                 qf[4 + k, 0] = ter_f[t, 2 * k]
@@ -792,14 +356,14 @@ def _contacts_l(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.temp
                                 qi[4 + k, 0] = -1
                                 qi[4 + k, 1] = ter_i[t, k]
                             for d in range(2):
-                                _resolve_l(fcol, qf, qi, d, 1 - d, 1.0)
+                                _resolve(fcol, qf, qi, d, 1 - d, 1.0)
     if not finite:
         count = -1
     return count
 
 
 @ti.func
-def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
+def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
            pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
            vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
            leq: ti.template()):
@@ -865,7 +429,7 @@ def _rk4_l(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(
 
 
 @ti.func
-def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
+def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
                    edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
                    pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
     """`_edge_constraints` on the local positions."""
@@ -926,11 +490,12 @@ def _constraints_l(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templ
 
 
 @ti.func
-def _step_world_small(b, counts: ti.template(), state: ti.template(), edge_i: ti.template(),
+def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.template(),
                       edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
                       actions: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
-                      ter_grid: ti.template(), n_sub, P, E):
-    """One env step of world b in the fast kernel (see `step_kernel_small`)."""
+                      ter_grid: ti.template(), n_sub, P, E, pc: ti.template(), ec: ti.template(),
+                      sc: ti.template()):
+    """One env step of world b (see `step_kernel`), with local arrays of capacity pc, ec, sc."""
     if counts[b, STATUS] == RUNNING:
         n_pts = counts[b, N_PTS]
         n_edges = counts[b, N_EDGES]
@@ -948,22 +513,22 @@ def _step_world_small(b, counts: ti.template(), state: ti.template(), edge_i: ti
                     cnt = 2.0
                 ef = efo + N_EDGE_F * e
                 edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
-        pos = ti.Vector.zero(ti.f64, 2 * PC)
-        vel = ti.Vector.zero(ti.f64, 2 * PC)
-        pl = ti.Vector.zero(ti.f64, 2 * PC)  # pos_last
-        vt = ti.Vector.zero(ti.f64, 2 * PC)  # vel_true
-        xs = ti.Vector.zero(ti.f64, 2 * PC)
-        vs = ti.Vector.zero(ti.f64, 2 * PC)
-        frc = ti.Vector.zero(ti.f64, 2 * PC)
-        fcol = ti.Vector.zero(ti.f64, 2 * PC)
-        adx = ti.Vector.zero(ti.f64, 2 * PC)
-        adv = ti.Vector.zero(ti.f64, 2 * PC)
-        leq = ti.Vector.zero(ti.f64, EC)
-        ccx = ti.Vector.zero(ti.f64, EC)
-        ccy = ti.Vector.zero(ti.f64, EC)
-        box = ti.Vector.zero(ti.f64, 4 * SC)
-        sv = ti.Vector.zero(ti.i32, 8 * SC)
-        sm = ti.Vector.zero(ti.i32, 4 * SC)
+        pos = ti.Vector.zero(ti.f64, 2 * pc)
+        vel = ti.Vector.zero(ti.f64, 2 * pc)
+        pl = ti.Vector.zero(ti.f64, 2 * pc)  # pos_last
+        vt = ti.Vector.zero(ti.f64, 2 * pc)  # vel_true
+        xs = ti.Vector.zero(ti.f64, 2 * pc)
+        vs = ti.Vector.zero(ti.f64, 2 * pc)
+        frc = ti.Vector.zero(ti.f64, 2 * pc)
+        fcol = ti.Vector.zero(ti.f64, 2 * pc)
+        adx = ti.Vector.zero(ti.f64, 2 * pc)
+        adv = ti.Vector.zero(ti.f64, 2 * pc)
+        leq = ti.Vector.zero(ti.f64, ec)
+        ccx = ti.Vector.zero(ti.f64, ec)
+        ccy = ti.Vector.zero(ti.f64, ec)
+        box = ti.Vector.zero(ti.f64, 4 * sc)
+        sv = ti.Vector.zero(ti.i32, 8 * sc)
+        sm = ti.Vector.zero(ti.i32, 4 * sc)
         for i in range(counts[b, N_SURF]):
             v = lists[b, i, 0]
             for k in ti.static(range(4)):
@@ -981,14 +546,14 @@ def _step_world_small(b, counts: ti.template(), state: ti.template(), edge_i: ti
         status = RUNNING
         for _ in range(n_sub):
             if status == RUNNING:
-                count = _contacts_l(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
+                count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
                                     ter_i, ter_grid)
                 if count < 0:
                     status = NONFINITE
                 else:
-                    _rk4_l(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
+                    _rk4(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
                            frc, adx, adv, leq)
-                    _constraints_l(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
+                    _constraints(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
                                    pos, ccx, ccy)
                     for i in range(2 * n_pts):
                         vt[i] = (pos[i] - pl[i]) / C.DT
@@ -1016,26 +581,28 @@ def _step_world_small(b, counts: ti.template(), state: ti.template(), edge_i: ti
 
 
 @ti.kernel
-def step_kernel_small(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
-                      lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
-                      n_sub: ti.i32, P: ti.i32, E: ti.i32):
-    """`step_kernel` for worlds of at most PC points, EC edges and SC surface voxels; state,
-    edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays. The current
-    rest lengths live in a local array (edge_f's column E_LEQ is not updated)."""
+def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
+                lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
+                n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
+                sc: ti.template()):
+    """One env step (n_sub substeps) of every running world, worlds in parallel. state, edge_i
+    and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays; every world fits
+    the capacity (pc points, ec edges, sc surface voxels). The current rest lengths live in a
+    local array (edge_f's column E_LEQ keeps its initial value)."""
     ti.loop_config(block_dim=1)
     for b in range(counts.shape[0]):
-        _step_world_small(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E)
+        _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
+                          ter_grid, n_sub, P, E, pc, ec, sc)
 
 
 @ti.kernel
-def step_kernel_small_serial(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1,
-                             vox_i: I32_3, lists: I32_3, actions: F64_2, ter_f: F64_2,
-                             ter_i: I32_2, ter_grid: I32_2, n_sub: ti.i32, P: ti.i32, E: ti.i32):
-    """`step_kernel_small` on the calling thread: for single-threaded processes, where handing the
-    loop to Taichi's thread pool costs ~0.15 ms per launch (measured on the 2-vCPU VM)."""
+def step_kernel_serial(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
+                       lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
+                       n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
+                       sc: ti.template()):
+    """`step_kernel` on the calling thread: for single-threaded processes, where handing the loop
+    to Taichi's thread pool costs ~0.15 ms per launch (measured on the 2-vCPU VM)."""
     ti.loop_config(serialize=True)
     for b in range(counts.shape[0]):
-        _step_world_small(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E)
-
+        _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
+                          ter_grid, n_sub, P, E, pc, ec, sc)

@@ -130,14 +130,13 @@ class BatchSim:
         self.ter_f = ter_f
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
-        self.state = np.zeros((B, P, 8))
-        self.work = np.zeros((B, P, K.N_WORK))
-        self.box = np.zeros((B, V, 4))
-        self.qf = np.zeros((B, 2, 4, 4))
-        self.qi = np.zeros((B, 2, 4, 2), dtype=np.int32)
+        self.state = np.zeros((B, P, K.NS))
         self.actions = np.ones((B, A))
-        # worlds small enough for the kernel that keeps per-point state in local arrays
-        self._small = P <= K.PC and E <= K.EC and int(counts[:, K.N_SURF].max()) <= K.SC
+        # the smallest local-array capacity tier that holds every world (a compiled kernel each)
+        n_surf = int(counts[:, K.N_SURF].max())
+        self.capacity_tier = 0
+        while any(n > c for n, c in zip((P, E, n_surf), K.capacity(self.capacity_tier), strict=True)):
+            self.capacity_tier += 1
         # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
         self._serial = self._arch == "cpu" and (runtime.threads() == 1 or self.n_worlds == 1)
 
@@ -206,16 +205,11 @@ class BatchSim:
         """Advance every running world by n env steps (30 substeps each)."""
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
-            if self._small:
-                kernel = K.step_kernel_small_serial if self._serial else K.step_kernel_small
-                kernel(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
-                       self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
-                       self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
-                       self.edge_i.shape[1])
-            else:
-                K.step_kernel(self.counts, self.state, self.work, self.edge_i, self.edge_f,
-                              self.vox_i, self.lists, self.box, self.qf, self.qi, self.actions,
-                              self.ter_f, self.ter_i, self.ter_grid, C.SUBSTEPS)
+            kernel = K.step_kernel_serial if self._serial else K.step_kernel
+            kernel(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
+                   self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
+                   self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
+                   self.edge_i.shape[1], *K.capacity(self.capacity_tier))
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:

@@ -1,6 +1,6 @@
-"""The step kernels are interchangeable: the fast local-array kernel (worlds <= 64 points), its
-serial twin and the generic kernel (any size) give bit-identical states, so large robots follow
-the same physics as the validated small ones."""
+"""The step kernel's variants are interchangeable: the parallel and serial kernels and every
+local-array capacity tier give bit-identical states, so large robots (which need a bigger tier)
+follow the same physics as the validated 5x5 ones."""
 
 import numpy as np
 import pytest
@@ -11,12 +11,10 @@ from tsim.sim import BatchSim
 from tsim.world import task_world
 
 
-def _run(task: str, bodies, steps: int, kernel: str) -> BatchSim:
+def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0) -> BatchSim:
     sim = BatchSim(task_world(task), bodies, task_spec(task).origin)
-    if kernel == "generic":
-        sim._small = False
-    else:
-        sim._serial = kernel == "serial"
+    sim._serial = serial
+    sim.capacity_tier += extra_tiers
     for t in range(steps):
         phase = np.arange(sim.max_actuators)[None, :] * 0.7 + np.arange(len(bodies))[:, None]
         sim.set_actions(1.1 + 0.45 * np.sin(t / 6.0 + phase))
@@ -24,15 +22,26 @@ def _run(task: str, bodies, steps: int, kernel: str) -> BatchSim:
     return sim
 
 
+def _same(a: BatchSim, b: BatchSim) -> bool:
+    return np.array_equal(a.state[..., 0:4], b.state[..., 0:4]) and np.array_equal(a.counts, b.counts)
+
+
 @pytest.mark.parametrize("task", ["Walker-v0", "ObstacleTraverser-v1", "Thrower-v0"])
-def test_fast_serial_and_generic_kernels_agree_bit_for_bit(task):
+def test_parallel_serial_and_bigger_capacity_kernels_agree_bit_for_bit(task):
     rng = np.random.default_rng(11)
     bodies = [sample_robot((5, 5), rng) for _ in range(4)]
-    sims = {k: _run(task, bodies, 60, k) for k in ("parallel", "serial", "generic")}
-    ref = sims["parallel"]
-    assert ref._small  # these bodies take the fast kernel unless forced
-    for k in ("serial", "generic"):
-        assert np.array_equal(sims[k].state[..., 0:4], ref.state[..., 0:4]), k
-        assert np.array_equal(sims[k].counts, ref.counts), k
+    ref = _run(task, bodies, 60, serial=False)
+    assert ref.capacity_tier == 0  # 5x5 robots (and Thrower's box) fit the smallest tier
+    assert _same(_run(task, bodies, 60, serial=True), ref)
+    assert _same(_run(task, bodies, 60, serial=False, extra_tiers=1), ref)
     moved = ref.state[:, :, 0:2] - ref._pos0
     assert np.abs(moved).max() > 0.05  # the robots did move (and touched ground or the box)
+
+
+def test_large_robots_take_a_bigger_tier_with_the_same_results():
+    rng = np.random.default_rng(5)
+    bodies = [sample_robot((8, 8), rng) for _ in range(3)]
+    sim = _run("Walker-v0", bodies, 40, serial=False)
+    assert sim.capacity_tier == 1 and sim.state.shape[1] > 64
+    assert _same(_run("Walker-v0", bodies, 40, serial=False, extra_tiers=1), sim)
+    assert np.all(np.isfinite(sim.state)) and not sim.unstable.any()
