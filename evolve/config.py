@@ -32,7 +32,7 @@ COMMON: dict[str, tuple[Any, Any]] = {
 PER_METHOD: dict[str, dict[str, tuple[Any, Any]]] = {
     "sgr": {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
             "body_distance_weight": (float, 0.1)},
-    "direct": {"body_distance_weight": (float, 0.0)},
+    "direct": {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")},
     "nested": {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
                "controller_neat_config": (str, None)},
 }
@@ -87,6 +87,8 @@ def check_config(raw: dict, source: str = "config") -> dict:
     w = cfg["workers"]
     if isinstance(w, str) and w != "auto" or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int or 'auto', got {w!r}")
+    if method == "direct" and cfg["layout"] not in ("per_output", "per_cell"):
+        raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', got {cfg['layout']!r}")
     if method == "sgr" and cfg["cppn_outputs"] not in (1, 2):
         raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
     return cfg

@@ -1,9 +1,13 @@
 """Direct-encoding NEAT baseline: one NEAT network per genome is both body generator and controller.
 
-Inputs: 2 body coordinates + the observation (zero-padded to the largest robot of the grid);
-outputs: 5 material outputs + one per body cell. Body: each cell's (x, y) with the observation
-inputs at 0, argmax of the 5 material outputs. Control: coordinates 0, the observation in the
-rest; actions are the cell outputs at actuator cells (evogym's order), 1.1 + 0.5 * y.
+Inputs: 2 body coordinates + the observation (zero-padded to the largest robot of the grid).
+Body: each cell's (x, y) with the observation inputs at 0, argmax of the 5 material outputs.
+Control, config key `layout`:
+- "per_output" (default; the paper's description): outputs 5 materials + one per body cell;
+  coordinates 0, the observation in the rest; actions are the cell outputs at actuator cells
+  (evogym's order), 1.1 + 0.5 * y.
+- "per_cell" (ours): outputs 5 materials + 1 action; the network is queried once per actuator
+  with its cell's (x, y) and the observation, as SGR's CPPN is queried per substrate node.
 """
 
 from __future__ import annotations
@@ -37,11 +41,15 @@ class DirectPhenotype:
     genome: object = None
 
 
-def direct_policy(env, genomes: Sequence, genome_config) -> GraphPolicy:
-    """Batched direct-encoding networks driving the robots of env (picklable for `RolloutPool`)."""
+LAYOUTS = ("per_output", "per_cell")
+
+
+def direct_policy(env, genomes: Sequence, genome_config, cell_xy: np.ndarray | None = None) -> GraphPolicy:
+    """Batched direct-encoding networks driving the robots of env (picklable for `RolloutPool`);
+    `cell_xy` (the body cells' coordinates) selects the per_cell layout."""
     cells = [b.actuator_flat for b in env.sim.bodies]
     return GraphPolicy(NetworkBatch(list(genomes), genome_config), cells, env.sim.max_actuators,
-                       N_COORDS, N_TYPES)
+                       N_COORDS, N_TYPES, cell_xy=cell_xy)
 
 
 class DirectProblem:
@@ -51,12 +59,14 @@ class DirectProblem:
         self.gc = neat_config.genome_config
         self.shape = tuple(cfg["robot_shape"])
         self.cells = cell_coordinates(self.shape)
+        self.per_cell = cfg.get("layout", "per_output") == "per_cell"
 
     @staticmethod
     def neat_overrides(cfg: dict) -> dict:
         shape = tuple(cfg["robot_shape"])
+        n_control = 1 if cfg.get("layout", "per_output") == "per_cell" else shape[0] * shape[1]
         return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
-                                  "num_outputs": str(N_TYPES + shape[0] * shape[1])}}
+                                  "num_outputs": str(N_TYPES + n_control)}}
 
     def decode(self, genome) -> DirectPhenotype:
         x = np.zeros((len(self.cells), len(self.gc.input_keys)))
@@ -67,11 +77,14 @@ class DirectProblem:
 
     def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> np.ndarray:
         return self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
-                             [p.genome for p in phenotypes], partial(direct_policy, genome_config=self.gc),
+                             [p.genome for p in phenotypes],
+                             partial(direct_policy, genome_config=self.gc,
+                                     cell_xy=self.cells if self.per_cell else None),
                              self.cfg["episode_steps"])
 
     def champion(self, p: DirectPhenotype) -> dict:
         b = build_body(p.body)
+        cell_inputs = self.cells[np.asarray(b.actuator_flat, dtype=np.int64)] if self.per_cell else None
         ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),
-                                           N_COORDS, N_TYPES, b.actuator_flat)
+                                           N_COORDS, N_TYPES, b.actuator_flat, cell_inputs)
         return {"body": p.body.tolist(), "controller": ctrl.to_json()}

@@ -26,10 +26,14 @@ class GraphController:
     input_offset: int  # observation enters inputs [offset, offset + input_size)
     output_offset: int  # action of actuator i = output[output_offset + action_cells[i]]
     action_cells: np.ndarray
+    # "per_cell" layout: actuator i is its own query, its cell's (x, y) in inputs 0-1, and its
+    # action is output[output_offset]
+    cell_inputs: np.ndarray | None = None
 
     @classmethod
     def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
-                    output_offset: int, action_cells: np.ndarray) -> GraphController:
+                    output_offset: int, action_cells: np.ndarray,
+                    cell_inputs: np.ndarray | None = None) -> GraphController:
         conns = [c.key for c in genome.connections.values() if c.enabled]
         inputs, outputs = list(genome_config.input_keys), list(genome_config.output_keys)
         layers, required = feed_forward_layers(inputs, outputs, conns)
@@ -42,11 +46,14 @@ class GraphController:
                 nodes.append({"key": k, "bias": ng.bias, "response": ng.response,
                               "activation": ng.activation, "links": links})
         return cls(inputs, outputs, nodes, input_size, input_offset, output_offset,
-                   np.asarray(action_cells, dtype=np.int64))
+                   np.asarray(action_cells, dtype=np.int64),
+                   None if cell_inputs is None else np.asarray(cell_inputs, dtype=np.float64))
 
-    def outputs(self, obs: np.ndarray) -> np.ndarray:
+    def outputs(self, obs: np.ndarray, xy: np.ndarray | None = None) -> np.ndarray:
         x = np.zeros(len(self.input_keys))
         x[self.input_offset:self.input_offset + self.input_size] = obs[:self.input_size]
+        if xy is not None:
+            x[0:2] = xy
         v = dict(zip(self.input_keys, x, strict=True))
         for n in self.nodes:
             s = sum(w * v[i] for i, w in n["links"])
@@ -54,17 +61,26 @@ class GraphController:
         return np.array([v.get(k, 0.0) for k in self.output_keys])
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        return ACTION_CENTRE + ACTION_HALF_RANGE * self.outputs(obs)[self.output_offset + self.action_cells]
+        if self.cell_inputs is None:
+            y = self.outputs(obs)[self.output_offset + self.action_cells]
+        else:
+            y = np.array([self.outputs(obs, xy)[self.output_offset] for xy in self.cell_inputs])
+        return ACTION_CENTRE + ACTION_HALF_RANGE * y
 
     def to_json(self) -> dict:
         return {"format": FORMAT, "input_keys": self.input_keys, "output_keys": self.output_keys,
                 "nodes": self.nodes, "input_size": self.input_size, "input_offset": self.input_offset,
                 "output_offset": self.output_offset, "action_cells": self.action_cells.tolist(),
+                "cell_inputs": None if self.cell_inputs is None else self.cell_inputs.tolist(),
                 "doc": "inputs: zeros with the observation at [input_offset, +input_size); nodes in "
                        "order: value = activation(bias + response * sum(w * value[src])), neat-python "
-                       "activations; action = 1.1 + 0.5 * output[output_offset + action_cells]"}
+                       "activations; action = 1.1 + 0.5 * output[output_offset + action_cells]; when "
+                       "cell_inputs is given, actuator i is a query of its own with cell_inputs[i] "
+                       "in inputs 0-1 and action 1.1 + 0.5 * output[output_offset]"}
 
     @classmethod
     def from_json(cls, d: dict) -> GraphController:
+        cells = d.get("cell_inputs")
         return cls(list(d["input_keys"]), list(d["output_keys"]), list(d["nodes"]), int(d["input_size"]),
-                   int(d["input_offset"]), int(d["output_offset"]), np.asarray(d["action_cells"]))
+                   int(d["input_offset"]), int(d["output_offset"]), np.asarray(d["action_cells"]),
+                   None if cells is None else np.asarray(cells, dtype=np.float64))

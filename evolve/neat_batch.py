@@ -101,21 +101,35 @@ class NetworkBatch:
 class GraphPolicy:
     """Batched NEAT-network controllers: robot b's observation enters inputs
     [input_offset, input_offset + obs_len) (others 0); its actions are the outputs at
-    output_offset + action cell, mapped like the dense controllers: 1.1 + 0.5 * y."""
+    output_offset + action cell, mapped like the dense controllers: 1.1 + 0.5 * y.
+
+    With `cell_xy` ((cells, 2) body-cell coordinates) each network is instead queried once per
+    actuator, with the actuator cell's (x, y) in inputs 0-1, and output `output_offset` is that
+    actuator's action (the direct baseline's "per_cell" layout)."""
 
     def __init__(self, nets: NetworkBatch, action_cells: Sequence[np.ndarray], action_width: int,
-                 input_offset: int = 0, output_offset: int = 0):
-        self.nets, self.input_offset = nets, input_offset
+                 input_offset: int = 0, output_offset: int = 0, cell_xy: np.ndarray | None = None):
+        self.nets, self.input_offset, self.output_offset = nets, input_offset, output_offset
         B = len(action_cells)
         self.cols = np.full((B, action_width), output_offset, dtype=np.int64)
         for b, cells in enumerate(action_cells):
             self.cols[b, :len(cells)] = output_offset + np.asarray(cells)
         self._rows = np.arange(B)[:, None]
+        self.query_xy = None
+        if cell_xy is not None:
+            self.query_xy = np.zeros((B, action_width, 2))
+            for b, cells in enumerate(action_cells):
+                self.query_xy[b, :len(cells)] = np.asarray(cell_xy)[np.asarray(cells, dtype=np.int64)]
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         B, D = obs.shape
-        x = np.zeros((B, 1, self.nets.n_in))
         w = min(D, self.nets.n_in - self.input_offset)
-        x[:, 0, self.input_offset:self.input_offset + w] = obs[:, :w]
-        y = self.nets.forward(x)[:, 0, :]
-        return 1.1 + 0.5 * y[self._rows, self.cols]
+        if self.query_xy is None:
+            x = np.zeros((B, 1, self.nets.n_in))
+            x[:, 0, self.input_offset:self.input_offset + w] = obs[:, :w]
+            y = self.nets.forward(x)[:, 0, :]
+            return 1.1 + 0.5 * y[self._rows, self.cols]
+        x = np.zeros((B, self.query_xy.shape[1], self.nets.n_in))
+        x[:, :, 0:2] = self.query_xy
+        x[:, :, self.input_offset:self.input_offset + w] = obs[:, None, :w]
+        return 1.1 + 0.5 * self.nets.forward(x)[:, :, self.output_offset]

@@ -69,7 +69,10 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
         loaded = yaml.safe_load(f.read_text())
         cfg = loaded if isinstance(loaded, dict) else {}
     parent = run_dir.resolve().parent.name or UNKNOWN
-    return str(cfg.get("method") or parent), str(cfg.get("task") or UNKNOWN)
+    method = str(cfg.get("method") or parent)
+    if cfg.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own group
+        method = f"{method} ({cfg['layout']})"
+    return method, str(cfg.get("task") or UNKNOWN)
 
 
 def summarize_runs(run_dirs: Sequence[str | Path]) -> dict[tuple[str, str], Curve]:

@@ -33,9 +33,19 @@ def _tiny(tmp_path, repo_root, method, task, **extra):
 @pytest.mark.parametrize("method", ["direct", "nested"])
 @pytest.mark.parametrize("task", TASKS)
 def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, repo_root, method, task):
+    _run_and_replay(tmp_path, repo_root, method, task)
+
+
+def test_direct_per_cell_layout_runs_and_its_champion_replays(tmp_path, repo_root):
+    champ = _run_and_replay(tmp_path, repo_root, "direct", "ObstacleTraverser-v1", layout="per_cell")
+    cells = champ["controller"]["cell_inputs"]
+    assert cells is not None and len(cells) == len(champ["controller"]["action_cells"])
+
+
+def _run_and_replay(tmp_path, repo_root, method, task, **extra) -> dict:
     out = tmp_path / "run"
-    assert main(["evolve", "--config", str(_tiny(tmp_path, repo_root, method, task)), "--out", str(out),
-                 "--quiet"]) == 0
+    assert main(["evolve", "--config", str(_tiny(tmp_path, repo_root, method, task, **extra)),
+                 "--out", str(out), "--quiet"]) == 0
     rows = RunDir(out).rows()
     assert [int(r["generation"]) for r in rows] == [0, 1]
     assert all(int(r["n_valid"]) + int(r["n_invalid"]) >= 1 for r in rows)
@@ -53,6 +63,7 @@ def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, repo_root, 
     assert total == pytest.approx(champ["fitness"], abs=1e-9)
     if method == "nested":  # inner episodes: at most bodies x inner_pop_size x inner_generations
         assert all(0 < int(r["episodes"]) <= int(r["n_valid"]) * 4 * 2 for r in rows)
+    return champ
 
 
 def test_nested_run_resumes_with_identical_numbers(tmp_path, repo_root):

@@ -30,6 +30,7 @@ def _write(tmp_path, repo_root, **changes):
     ({"max_weight": True}, "key 'max_weight' must be float"),
     ({"method": "cmaes"}, "key 'method' must be one of"),
     ({"workers": "many"}, "key 'workers' must be a positive int or 'auto'"),
+    ({"layout": "per_cell"}, "unknown key 'layout' for method 'sgr'"),
     ({"workers": 0}, "key 'workers' must be a positive int or 'auto'"),
 ])
 def test_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):

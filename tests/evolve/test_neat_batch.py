@@ -16,3 +16,25 @@ def test_batched_networks_equal_neat_python_activate(neat_config, genomes):
         net = neat.nn.FeedForwardNetwork.create(g, cfg)
         ref = np.array([net.activate(row) for row in x[b]])
         assert np.max(np.abs(got[b] - ref)) <= 1e-12
+
+
+def test_per_cell_queries_match_the_json_controller(neat_config, genomes):
+    """The direct baseline's per_cell layout: each actuator is a query with its cell's (x, y) in
+    inputs 0-1; the batched policy and the champion's JSON controller give the same actions."""
+    from evolve.graph_controller import GraphController
+    from evolve.neat_batch import GraphPolicy
+    from evolve.substrate import cell_coordinates
+
+    cfg = neat_config(outputs=6)  # 7 inputs: (x, y) + a 5-long observation; 5 materials + 1 action
+    gs = genomes(cfg, 4, mutations=8, seed=3)
+    xy = cell_coordinates((5, 5))
+    cells = [np.array([0, 6, 12, 24]), np.array([3]), np.array([7, 8, 9]), np.array([1, 2])]
+    policy = GraphPolicy(NetworkBatch(gs, cfg.genome_config), cells, 4, 2, 5, cell_xy=xy)
+    obs = np.random.default_rng(4).uniform(-1, 1, (4, 5))
+    got = policy.act(obs)
+    for b, g in enumerate(gs):
+        ctrl = GraphController.from_json(GraphController.from_genome(
+            g, cfg.genome_config, 5, 2, 5, cells[b], xy[cells[b]]).to_json())
+        want = ctrl.act(obs[b])
+        assert np.max(np.abs(got[b, :len(cells[b])] - want)) <= 1e-12
+    assert np.ptp(got[0]) > 1e-6  # actuators at different cells get different actions
