@@ -143,7 +143,13 @@ def _qvel(qf: ti.template(), q, k):
 
 @ti.func
 def _resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, scale):
-    """`_resolve` on local scratch quads: qf[4q + k] = (x, y, vx, vy), qi[4q + k] = (id, open)."""
+    """Contacts of quad m's corner points inside quad r (evogym `resolve_boxel_collisions`).
+
+    Quads live in local scratch: qf[4q + k] = (x, y, vx_true, vy_true) and qi[4q + k] = (point
+    id, side k is open) of corner k. Forces go to fcol[2 id : 2 id + 2] for dynamic points
+    (id >= 0); terrain points (id < 0) are fixed and their share is dropped, as evogym discards
+    the update of fixed points.
+    """
     lo = ti.min(ti.min(_qpt(qf, r, 0), _qpt(qf, r, 1)), ti.min(_qpt(qf, r, 2), _qpt(qf, r, 3))) \
         - C.BOX_MARGIN
     hi = ti.max(ti.max(_qpt(qf, r, 0), _qpt(qf, r, 1)), ti.max(_qpt(qf, r, 2), _qpt(qf, r, 3))) \
@@ -223,7 +229,7 @@ def _resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, sc
 
 @ti.func
 def _load_quad(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
-                qi: ti.template(), q, i):
+               qi: ti.template(), q, i):
     """Copy surface voxel list entry i (corners and open sides in sv) into scratch quad q."""
     for k in range(4):
         p = sv[8 * i + k]
@@ -273,10 +279,11 @@ def _terrain_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template()
 
 @ti.func
 def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
-                fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
-                ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
-    """`_contacts` on the local positions/contact forces of the fast kernel; surface voxel i has
-    corners sv[8i:8i+4], open sides sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]."""
+              fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
+              ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
+    """Recompute AABBs and contact forces (into fcol); return evogym's robot self-collision count
+    (-1 when a coordinate is not finite). Surface voxel i has corners sv[8i:8i+4], open sides
+    sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]."""
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
     for i in range(2 * n_pts):
@@ -364,12 +371,13 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
 
 @ti.func
 def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
-           pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
-           vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
-           leq: ti.template()):
-    """Rest-length update and `_rk4` on local arrays (x, y interleaved). The 4 stages are
-    unrolled; stage 0 (stage state = substep state) also sets the current rest lengths, and each
-    stage's point loop prepares the next stage's state."""
+         pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
+         vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
+         leq: ti.template()):
+    """Rest-length update, then classical RK4 on (pos, vel) with dt = 1e-4 (springs, drag,
+    gravity, ground plane, contact forces frozen across the stages); x, y interleaved. The 4
+    stages are unrolled; stage 0 (stage state = substep state) also sets the current rest lengths,
+    and each stage's point loop prepares the next stage's state."""
     for i in range(2 * n_pts):
         xs[i] = pos[i]
         vs[i] = vel[i]
@@ -430,9 +438,9 @@ def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
 
 @ti.func
 def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
-                   edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
-                   pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
-    """`_edge_constraints` on the local positions."""
+                 edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
+                 pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
+    """Pass 1: Jacobi projection of every edge into +-25 %; pass 2: rigid voxels into +-3 %."""
     for e in range(n_edges):
         a = edge_i[eio + 4 * e]
         q = edge_i[eio + 4 * e + 1]

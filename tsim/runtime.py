@@ -28,8 +28,8 @@ def init(arch: str | None = None) -> str:
     threads = os.environ.get("SGR_THREADS")
     kwargs = {"cpu_max_num_threads": int(threads)} if threads else {}
     # fast_math off: IEEE semantics like evogym's C++ build (no reassociation), so results do not
-    # depend on how a kernel is written or optimised (the small-world and generic kernels agree
-    # bit for bit) and the parity with evogym's traces is as good or better
+    # depend on how a kernel is written or optimised (the parallel and serial kernels and every
+    # capacity tier agree bit for bit) and the parity with evogym's traces is as good or better
     # make_cpu_multithreading_loop off: Taichi 1.7 otherwise hands each CPU thread a block of at
     # least 512 iterations, so a batch of fewer than 1,024 worlds ran on one thread only; without
     # it the worlds are dealt to the threads in blocks of `block_dim` (1 for the step kernels)
