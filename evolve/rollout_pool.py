@@ -128,7 +128,7 @@ class RolloutPool:
                 pass
         for proc in self._procs:
             try:
-                proc.wait(timeout=30)
+                proc.wait(timeout=5)  # idle workers exit at once; a busy one is killed
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait()
