@@ -40,10 +40,3 @@ def dense_policy(env: BatchEnv, controllers: Sequence[DenseController]) -> Contr
     """The batched policy of dense controllers (a picklable factory for `RolloutPool`)."""
     return ControllerBatch(controllers, env.max_obs_dim, env.sim.max_actuators)
 
-
-def rollout(task: str, bodies: Sequence[np.ndarray], controllers: Sequence[DenseController],
-            episode_steps: int | str | None = None) -> np.ndarray:
-    """Episode return of each (body, dense controller) pair, simulated together."""
-    if len(bodies) != len(controllers):
-        raise ValueError(f"{len(bodies)} bodies but {len(controllers)} controllers")
-    return rollout_policy(task, bodies, lambda env: dense_policy(env, controllers), episode_steps)

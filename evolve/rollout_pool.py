@@ -90,9 +90,7 @@ class RolloutPool:
             try:
                 ok, value = pickle.loads(read_frame(proc.stdout))
             except (EOFError, OSError, pickle.UnpicklingError):
-                self.close()
-                raise RuntimeError(f"rollout worker process {proc.pid} died (exit code {proc.poll()}); "
-                                   "its error is above; set workers: 1 to run in this process") from None
+                raise self._died(proc) from None
             if ok:
                 out[c] = value
             elif failure is None:
@@ -115,9 +113,13 @@ class RolloutPool:
         try:
             write_frame(proc.stdin, job)
         except BrokenPipeError:
-            self.close()
-            raise RuntimeError(f"rollout worker process {proc.pid} died (exit code {proc.poll()}); "
-                               "its error is above; set workers: 1 to run in this process") from None
+            raise self._died(proc) from None
+
+    def _died(self, proc: subprocess.Popen) -> RuntimeError:
+        """Stop the pool and describe the worker that died (its traceback went to stderr)."""
+        self.close()
+        return RuntimeError(f"rollout worker process {proc.pid} died (exit code {proc.poll()}); "
+                            "its error is above; set workers: 1 to run in this process")
 
     def close(self) -> None:
         """Stop the workers: end of input makes each one exit."""
