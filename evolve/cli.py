@@ -79,9 +79,11 @@ def _evolve(args: argparse.Namespace) -> int:
     from evolve.experiment import Experiment
 
     if args.resume:
-        if args.config or args.generations or args.pop or args.seed is not None:
-            raise ValueError("--resume continues a run with its own config; drop the other options")
-        exp = Experiment.resume(args.resume, quiet=args.quiet, workers=args.workers)
+        if args.config or args.pop or args.seed is not None or args.out:
+            raise ValueError("--resume continues a run with its own config; only --generations "
+                             "(to extend it), --workers and --quiet go with it")
+        exp = Experiment.resume(args.resume, quiet=args.quiet, workers=args.workers,
+                                generations=args.generations)
         print(f"resuming {args.resume} at generation {exp.search.generation}")
     else:
         config = args.config or str(DEFAULT_CONFIG)
@@ -98,6 +100,11 @@ def _evolve(args: argparse.Namespace) -> int:
         print(f"\ninterrupted at generation {exp.search.generation}; continue with: "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 130
+    except OSError as exc:  # e.g. a full disk: every file of the run is still whole (atomic writes)
+        print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped at generation "
+              f"{exp.search.generation} and keeps its last checkpoint: make room, then "
+              f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        return 1
     finally:
         exp.close()
     return 0
@@ -180,7 +187,8 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
     e.add_argument("--workers", type=workers_arg,
                    help="rollout processes: a number or 'auto' (default: the config's, auto = all CPUs)")
-    e.add_argument("--resume", metavar="DIR", help="continue an interrupted run from its last checkpoint")
+    e.add_argument("--resume", metavar="DIR",
+                   help="continue a run from its last checkpoint (with --generations N: extend it to N)")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")

@@ -105,13 +105,27 @@ class Experiment:
         return exp
 
     @classmethod
-    def resume(cls, out: str, quiet: bool = False, workers: int | str | None = None) -> Experiment:
+    def resume(cls, out: str, quiet: bool = False, workers: int | str | None = None,
+               generations: int | None = None) -> Experiment:
+        """Continue a run from its newest usable checkpoint; `generations` extends a run (finished
+        or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
         cfg = run.config()
         state = run.latest_checkpoint()
         if state is None:
             raise ValueError(f"{out} has no checkpoint to resume from")
-        run.truncate_rows(state["generation"])
+        done = state["generation"]
+        if generations is not None:
+            if generations < done:
+                raise ValueError(f"{out} has already run {done} generations; --generations must be "
+                                 f">= {done}")
+            if generations != cfg["generations"]:
+                cfg = {**cfg, "generations": generations}
+                run.update_config(cfg)
+        if done >= cfg["generations"]:
+            raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                             "add --generations N to extend it")
+        run.truncate_rows(done)
         return cls(run, cfg, state=state, quiet=quiet, workers=workers)
 
     def state(self) -> dict:

@@ -1,5 +1,6 @@
 """neat-python classes we extend: a genome whose speciation distance adds the body distance
-(SGR paper eq. 1), and a reproduction that survives more species than the population can hold.
+(SGR paper eq. 1), a reproduction that survives more species than the population can hold, and
+a genome config that can be pickled without side effects.
 
 distance = NEAT genomic distance + v * body_distance(body, body'). The bodies come from a cache
 the search fills (by genome key) before every speciation, so no genome is decoded twice.
@@ -7,8 +8,12 @@ the search fills (by genome key) before every speciation, so no genome is decode
 
 from __future__ import annotations
 
+from itertools import count
+
 import neat.genome
 from neat import DefaultGenome, DefaultReproduction
+from neat.genes import DefaultConnectionGene, DefaultNodeGene
+from neat.genome import DefaultGenomeConfig
 from neat.graphs import creates_cycle
 
 from evolve.body_distance import body_distance
@@ -24,7 +29,38 @@ def _creates_cycle(connections, test) -> bool:
 neat.genome.creates_cycle = _creates_cycle  # used by DefaultGenome.configure_crossover
 
 
+def peek(counter: count | None) -> tuple[int | None, count | None]:
+    """The next value of an `itertools.count` without consuming it: (value, counter to keep)."""
+    if counter is None:
+        return None, None
+    nxt = next(counter)
+    return nxt, count(nxt)
+
+
+class GenomeConfig(DefaultGenomeConfig):
+    """neat-python 2 pickles a genome config by consuming one node key from its `node_indexer`, so
+    every pickle (a checkpoint, a batch of networks sent to a rollout worker) changed the keys of
+    later nodes. Here pickling leaves the counter as it was, and the speciation body cache (only
+    needed where speciation runs) stays behind."""
+
+    def __getstate__(self):
+        nxt, self.node_indexer = peek(self.node_indexer)
+        state = {k: v for k, v in self.__dict__.items() if k != "body_cache"}
+        state.update(node_indexer=None, _node_indexer_next_value=nxt)
+        return state
+
+    def __setstate__(self, state):
+        super().__setstate__(state)
+        self.body_cache = {}
+
+
 class BodyAwareGenome(DefaultGenome):
+    @classmethod
+    def parse_config(cls, param_dict):
+        param_dict["node_gene_type"] = DefaultNodeGene
+        param_dict["connection_gene_type"] = DefaultConnectionGene
+        return GenomeConfig(param_dict, cls.__name__)
+
     def distance(self, other, config) -> float:
         d = super().distance(other, config)
         v = getattr(config, "body_distance_weight", 0.0)

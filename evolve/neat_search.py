@@ -19,6 +19,8 @@ from typing import Any
 import numpy as np
 from neat.reporting import ReporterSet
 
+from evolve.genome import peek
+
 Decode = Callable[[Any], Any]  # genome -> phenotype with .valid and .body
 Evaluate = Callable[[Sequence[Any]], np.ndarray]  # valid phenotypes -> fitness
 
@@ -141,30 +143,54 @@ class NeatSearch:
 
     # ------------------------------------------------------------------ checkpoint state
     def state(self) -> dict:
-        nxt = next(self.reproduction.genome_indexer)
-        self.reproduction.genome_indexer = itertools.count(nxt)
-        repro = dict(self.reproduction.__dict__, genome_indexer=nxt, reporters=None)
+        """Everything that decides the rest of the run, picklable, taken without side effects.
+
+        Besides the population, species, reproduction and Python's `random`, neat-python 2 keeps
+        run state in counters (genome, species and node keys; the node counter lives on the
+        genome config, which a new process rebuilds from the INI) and in the innovation tracker
+        (held by the reproduction). Counters are stored as their next value: pickling neat-python's
+        own objects would consume one."""
+        gc = self.config.genome_config
+        node_key, gc.node_indexer = peek(gc.node_indexer)
+        species_key, self.species.indexer = peek(self.species.indexer)
+        genome_key, self.reproduction.genome_indexer = peek(self.reproduction.genome_indexer)
+        repro = dict(self.reproduction.__dict__, genome_indexer=genome_key, reporters=None)
+        species = dict(self.species.__dict__, indexer=species_key, reporters=None)
         best = None if self.best is None else {k: v for k, v in self.best.items() if k != "phenotype"}
-        return {"generation": self.generation, "population": self.population, "species": self.species,
-                "reproduction": repro, "random": random.getstate(), "best": best,
-                "pending_build_s": self.pending_build_s}
+        return {"format": STATE_FORMAT, "generation": self.generation, "population": self.population,
+                "species": species, "reproduction": repro, "node_indexer": node_key,
+                "random": random.getstate(), "best": best, "pending_build_s": self.pending_build_s}
 
     def _restore(self, state: dict) -> None:
         self.generation = state["generation"]
         self.population = state["population"]
-        self.species = state["species"]
-        self.species.reporters = self.reporters
+        self.species = self.config.species_set_type(self.config.species_set_config, self.reporters)
+        self.species.__dict__.update(_counted(state["species"], "indexer"), reporters=self.reporters)
         self.reproduction = self.config.reproduction_type(self.config.reproduction_config,
                                                           self.reporters, None)
-        repro = dict(state["reproduction"])
-        repro["genome_indexer"] = itertools.count(repro["genome_indexer"])
-        repro["reporters"] = self.reporters
-        self.reproduction.__dict__.update(repro)
+        self.reproduction.__dict__.update(_counted(state["reproduction"], "genome_indexer"),
+                                          reporters=self.reporters)
         self.stagnation = self.reproduction.stagnation
         self.stagnation.reporters = self.reporters
+        gc = self.config.genome_config
+        gc.innovation_tracker = self.reproduction.innovation_tracker
+        nxt = state.get("node_indexer")
+        gc.node_indexer = None if nxt is None else itertools.count(nxt)
         random.setstate(state["random"])
         self.pending_build_s = state["pending_build_s"]
         self._decode_all()
         self.best = state["best"]
         if self.best is not None:
             self.best["phenotype"] = self.decode(self.best["genome"])
+
+
+STATE_FORMAT = 2  # 1 (unversioned): species pickled whole, no node counter
+
+
+def _counted(saved, key: str) -> dict:
+    """A saved object's attributes with counter `key` (stored as its next value) made a counter
+    again; format-1 checkpoints hold the species set itself."""
+    attrs = dict(saved if isinstance(saved, dict) else vars(saved))
+    if isinstance(attrs.get(key), int):
+        attrs[key] = itertools.count(attrs[key])
+    return attrs

@@ -2,7 +2,10 @@
 
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
 checkpoints/gen-XXXXX.pkl (state at the start of generation XXXXX). Every file that a crash could
-leave half-written is written to a temporary file and renamed over the old one.
+leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
+a kill or a full disk leaves the previous version whole. The two newest checkpoints are kept: a
+damaged newest one (a disk that lied about fsync, a copy cut short) falls back to the one before.
+Files get the permissions the user's umask gives, as `open()` would create them.
 """
 
 from __future__ import annotations
@@ -12,6 +15,7 @@ import io
 import json
 import os
 import pickle
+import sys
 import tempfile
 from pathlib import Path
 
@@ -22,17 +26,28 @@ COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_in
 KEEP_CHECKPOINTS = 2
 
 
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
 def atomic_write(path: Path, data: bytes) -> None:
+    """Write all of `data` or nothing: temporary file, fsync, rename. The temporary file is made
+    0600 by `mkstemp`; it gets the umask's permissions before it takes the file's place."""
     path = Path(path)
     fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
     try:
+        os.fchmod(fd, 0o666 & ~_umask())
         with os.fdopen(fd, "wb") as f:
             f.write(data)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path)
-    except BaseException:
+    except BaseException as exc:
         Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename is None:  # name the file (a full disk)
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc
         raise
 
 
@@ -57,7 +72,16 @@ class RunDir:
         f = self.path / "config.yaml"
         if not f.is_file():
             raise ValueError(f"{self.path} is not a run directory (no config.yaml)")
-        return yaml.safe_load(f.read_text())
+        try:
+            cfg = yaml.safe_load(f.read_text())
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{f}: not valid YAML: {exc}".replace("\n", " ")) from None
+        if not isinstance(cfg, dict) or "method" not in cfg:
+            raise ValueError(f"{f}: not a run config (no 'method' key)")
+        return cfg
+
+    def update_config(self, cfg: dict) -> None:
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
@@ -103,7 +127,23 @@ class RunDir:
         return path
 
     def latest_checkpoint(self) -> dict | None:
-        ckpts = sorted(self.ckpt_dir.glob("gen-*.pkl"))
-        if not ckpts:
-            return None
-        return pickle.loads(ckpts[-1].read_bytes())
+        """The newest checkpoint that loads; a damaged one is skipped with a one-line warning.
+        None when there is none at all; ValueError naming the files when none loads."""
+        ckpts = sorted(self.ckpt_dir.glob("gen-*.pkl"), reverse=True)
+        damaged = []
+        for f in ckpts:
+            try:
+                state = pickle.loads(f.read_bytes())
+                if not isinstance(state, dict) or "generation" not in state:
+                    raise ValueError("not a checkpoint")
+            except Exception as exc:  # any damage: truncated, garbage, another program's pickle
+                damaged.append(f"{f} ({type(exc).__name__})")
+                continue
+            if damaged:
+                print(f"sgr: warning: damaged checkpoint {', '.join(damaged)}; resuming from {f.name}",
+                      file=sys.stderr)
+            return state
+        if ckpts:
+            raise ValueError(f"no usable checkpoint in {self.ckpt_dir}: "
+                             f"{', '.join(f.name for f in ckpts)} are damaged")
+        return None

@@ -9,6 +9,8 @@ import sys
 # Taichi's banners go to stderr (they would corrupt `sgr ... --json` output); TI_ENABLE_PYBUF=0
 # keeps Taichi from wrapping every kernel call because stdout is redirected meanwhile (no kernel prints)
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")
+# no version banner: a command's stderr is for its warnings and its one-line errors
+os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
 with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
