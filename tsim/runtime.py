@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import contextlib
+import io
 import os
 import sys
 
@@ -37,10 +38,14 @@ def init(arch: str | None = None) -> str:
     # it the worlds are dealt to the threads in blocks of `block_dim` (1 for the step kernels)
     # advanced_optimization off: Taichi's own IR optimisations took ~25 s to compile the kernels
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
-    with contextlib.redirect_stdout(sys.stderr):
+    said = io.StringIO()  # Taichi prints "[Taichi] Starting on arch=..."; other lines go to stderr
+    with contextlib.redirect_stdout(said):
         ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
                 advanced_optimization=False, make_cpu_multithreading_loop=False,
                 log_level=ti.WARN, **kwargs)
+    for line in said.getvalue().splitlines():
+        if not line.startswith("[Taichi] Starting on arch="):
+            print(line, file=sys.stderr)
     _ARCH = arch
     return _ARCH
 

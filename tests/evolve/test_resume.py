@@ -193,3 +193,35 @@ def test_run_files_get_the_permissions_of_the_umask(tmp_path, repo_root):
     assert {f.name for f in files} >= {"config.yaml", "neat.ini", "generations.csv", "champion.json",
                                        "gen-00001.pkl"}
     assert {oct(f.stat().st_mode & 0o777) for f in files} == {"0o644"}
+
+
+def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path, repo_root, capsys,
+                                                                        monkeypatch):
+    import errno
+
+    import evolve.rundir
+    from evolve.cli import main
+
+    cfg = write_config(tmp_path, repo_root, "sgr", generations=5, pop_size=16, checkpoint_every=2)
+    run = RunDir(tmp_path / "run")
+    real_fsync, calls = os.fsync, {"n": 0}
+
+    def fsync_until_full(fd):
+        calls["n"] += 1
+        if calls["n"] > 12:  # some generations in: every later write finds the disk full
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real_fsync(fd)
+
+    monkeypatch.setattr(evolve.rundir.os, "fsync", fsync_until_full)
+    assert main(["evolve", "--config", str(cfg), "--out", str(run.path), "--quiet"]) == 1
+    err = capsys.readouterr().err
+    assert err.startswith("sgr: error: cannot write ") and "No space left on device" in err
+    assert f"sgr evolve --resume {run.path}" in err and err.count("\n") == 1
+    assert not list(run.path.rglob(".*"))  # no temporary file left behind
+    rows_before = run.rows()
+    assert 0 < len(rows_before) < 5  # the CSV is whole: the last complete version
+
+    monkeypatch.setattr(evolve.rundir.os, "fsync", real_fsync)
+    assert main(["evolve", "--resume", str(run.path), "--quiet"]) == 0
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "full"), "--quiet"]) == 0
+    assert fitness_rows(run) == fitness_rows(RunDir(tmp_path / "full"))
