@@ -9,6 +9,7 @@ import pytest
 from evolve.champion import load_champion
 from evolve.cli import main
 from evolve.experiment import Experiment
+from evolve.neat_search import NeatSearch
 from evolve.rundir import RunDir
 from tasks.env import BatchEnv
 
@@ -32,23 +33,41 @@ def _tiny(tmp_path, repo_root, method, task, **extra):
 
 @pytest.mark.parametrize("method", ["direct", "nested"])
 @pytest.mark.parametrize("task", TASKS)
-def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, repo_root, method, task):
-    _run_and_replay(tmp_path, repo_root, method, task)
+def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, repo_root, monkeypatch, method,
+                                                          task):
+    _run_and_replay(tmp_path, repo_root, monkeypatch, method, task)
 
 
-def test_direct_per_cell_layout_runs_and_its_champion_replays(tmp_path, repo_root):
-    champ = _run_and_replay(tmp_path, repo_root, "direct", "ObstacleTraverser-v1", layout="per_cell")
+def test_direct_per_cell_layout_runs_and_its_champion_replays(tmp_path, repo_root, monkeypatch):
+    champ = _run_and_replay(tmp_path, repo_root, monkeypatch, "direct", "ObstacleTraverser-v1",
+                            layout="per_cell")
     cells = champ["controller"]["cell_inputs"]
     assert cells is not None and len(cells) == len(champ["controller"]["action_cells"])
 
 
-def _run_and_replay(tmp_path, repo_root, method, task, **extra) -> dict:
+def _run_and_replay(tmp_path, repo_root, monkeypatch, method, task, **extra) -> dict:
+    # size of the outer population each generation is told about (the outer search is the one with
+    # an evaluate callable; the nested baseline's inner controller searches have none)
+    sizes = []
+    tell = NeatSearch.tell
+
+    def spy(self, *a, **kw):
+        if self.evaluate is not None:
+            sizes.append(len(self.population))
+        return tell(self, *a, **kw)
+
+    monkeypatch.setattr(NeatSearch, "tell", spy)
     out = tmp_path / "run"
     assert main(["evolve", "--config", str(_tiny(tmp_path, repo_root, method, task, **extra)),
                  "--out", str(out), "--quiet"]) == 0
     rows = RunDir(out).rows()
     assert [int(r["generation"]) for r in rows] == [0, 1]
-    assert all(int(r["n_valid"]) + int(r["n_invalid"]) >= 1 for r in rows)
+    # every genome of a generation is counted as valid or invalid: the first generation holds exactly
+    # pop_size (6) genomes, later ones what neat-python's reproduction made (about pop_size)
+    assert sizes[0] == 6
+    assert [int(r["n_valid"]) + int(r["n_invalid"]) for r in rows] == sizes
+    if method == "direct":  # generation 0 has no elites: each valid genome is simulated once
+        assert int(rows[0]["episodes"]) == int(rows[0]["n_valid"])
     champ, body, ctrl = load_champion(out)
     assert champ["method"] == method and champ["task"] == task
     assert champ["controller"]["format"] == "sgr-graph-controller-1"

@@ -1,5 +1,7 @@
 """gymnasium adapters: registration, check_env, evogym's spaces, point read-out, the VectorEnv."""
 
+import json
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -33,17 +35,27 @@ def test_time_limit_truncates_at_the_paper_length_and_is_overridable():
     assert env.step(np.ones(22))[3]
 
 
-def test_robot_and_box_points_follow_evogym_point_order():
-    env = gym.make("sgr/Thrower-v0", body=BODY).unwrapped
-    obs, _ = env.reset()
-    p = env.robot_points()
-    box = env.object_points("package")
-    assert p.shape == (2, 36) and box.shape[0] == 2
-    com = p.mean(axis=1)
-    # the observation holds relative x of every point, then relative y (spec section 6)
-    assert np.allclose(obs[6:6 + 36], p[0] - com[0], atol=1e-15)
-    assert np.allclose(obs[6 + 36:6 + 72], p[1] - com[1], atol=1e-15)
-    assert np.allclose(obs[2:4], box.mean(axis=1) - com, atol=1e-15)
+@pytest.mark.parametrize("case", ["case12_thrower_walker_sq30h15col1",
+                                  "case14_thrower_sample1006_sin20col1",
+                                  "case15_thrower_sample1001_sin40col1"])
+def test_robot_and_box_points_follow_evogym_point_order(data_dir, case):
+    """At reset the robot's and the package's points equal, point for point, the positions evogym's
+    C++ simulator held (`world_pos0`, evogym's global order); the reset observation equals evogym's."""
+    z = np.load(data_dir / "traces" / f"{case}.npz")
+    where = {o["name"]: o for o in json.loads(str(z["world_objects"]))}
+
+    def evogym_points(name):
+        o = where[name]
+        return z["world_pos0"][:, o["first_point"]:o["first_point"] + o["n_points"]]
+
+    env = gym.make("sgr/Thrower-v0", body=z["body"]).unwrapped
+    obs, _ = env.reset(seed=0)
+    assert where["package"]["n_points"] == 12
+    assert np.array_equal(env.robot_points(), evogym_points("robot"))
+    assert np.array_equal(env.object_points("package"), evogym_points("package"))
+    # evogym's env rescales positions (/0.1, *0.1): 1 ulp differences
+    assert obs.shape == z["obs"][0].shape
+    assert np.abs(obs - z["obs"][0]).max() <= 1e-15
 
 
 def test_wrong_action_shape_names_the_problem():

@@ -7,23 +7,33 @@ from tasks.render_episode import render_episode
 from tsim.body import build_body
 from tsim.render import SOFT_COLOR, write_gif
 
-BODY = np.array([[1, 1, 2, 2, 2],
-                 [3, 3, 3, 1, 2],
+# no soft (2) voxels: in Thrower-v0 the ground is fixed (5) and the package is 3 x 2 soft voxels, so
+# every soft-coloured pixel must belong to the package
+BODY = np.array([[1, 1, 3, 3, 3],
+                 [3, 3, 3, 1, 1],
                  [4, 4, 1, 4, 4],
-                 [3, 2, 2, 2, 3],
+                 [3, 1, 1, 1, 3],
                  [4, 0, 0, 0, 4]])
 
 
 def test_render_episode_frames_and_lossless_gif(tmp_path):
-    """A short Thrower episode gives 1 + steps/every frames with the package (soft) visible, and the
-    GIF holds exactly those frames (palette written without quantization)."""
+    """A short Thrower episode gives 1 + steps/every frames, each showing the package, and the GIF
+    holds exactly those frames (palette written without quantization).
+
+    The robot has no soft voxels, so the soft-coloured pixels are the package alone: at 160 px for
+    40 voxels (4 px a voxel) its 3 x 2 voxels fill at most 12 x 8 px, less the 1-px outline.
+    """
     body = build_body(BODY)
+    assert not np.any(body.voxel_type == 2)
     n = body.n_actuators
     frames = render_episode("Thrower-v0", body, lambda t, obs: np.full(n, 1.0 + 0.3 * (t % 2)), 6,
                             160, 80, every=2)
     assert len(frames) == 4
     assert all(f.shape == (80, 160, 3) and f.dtype == np.uint8 for f in frames)
-    assert np.any(np.all(frames[-1] == SOFT_COLOR, axis=-1))
+    for f in frames:
+        rows, cols = np.nonzero(np.all(f == SOFT_COLOR, axis=-1))
+        assert 48 <= len(rows) <= 96  # at least half of the package's 12 x 8 px
+        assert cols.max() - cols.min() < 12 and rows.max() - rows.min() < 8  # one 3 x 2 blob
     path = write_gif(frames, tmp_path / "ep.gif", fps=15)
     back = iio.imread(path)[..., :3]
     assert back.shape == (4, 80, 160, 3)
