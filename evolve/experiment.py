@@ -99,9 +99,14 @@ class Experiment:
         ini = neat_ini_text(cfg["neat_config"], cfg, problem_class(cfg["method"]).neat_overrides(cfg))
         neat_config_from_text(ini)  # a bad INI must fail before the run exists
         run = RunDir(out)
-        run.create(cfg, ini)
-        exp = cls(run, cfg, quiet=quiet)
-        run.save_checkpoint(0, exp.state())
+        run.lock()
+        try:
+            run.create(cfg, ini)
+            exp = cls(run, cfg, quiet=quiet)
+            run.save_checkpoint(0, exp.state())
+        except BaseException:
+            run.unlock()
+            raise
         return exp
 
     @classmethod
@@ -111,22 +116,27 @@ class Experiment:
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
         cfg = run.config()
-        state = run.latest_checkpoint()
-        if state is None:
-            raise ValueError(f"{out} has no checkpoint to resume from")
-        done = state["generation"]
-        if generations is not None:
-            if generations < done:
-                raise ValueError(f"{out} has already run {done} generations; --generations must be "
-                                 f">= {done}")
-            if generations != cfg["generations"]:
-                cfg = {**cfg, "generations": generations}
-                run.update_config(cfg)
-        if done >= cfg["generations"]:
-            raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
-                             "add --generations N to extend it")
-        run.truncate_rows(done)
-        return cls(run, cfg, state=state, quiet=quiet, workers=workers)
+        run.lock()
+        try:
+            state = run.latest_checkpoint()
+            if state is None:
+                raise ValueError(f"{out} has no checkpoint to resume from")
+            done = state["generation"]
+            if generations is not None:
+                if generations < done:
+                    raise ValueError(f"{out} has already run {done} generations; --generations must be "
+                                     f">= {done}")
+                if generations != cfg["generations"]:
+                    cfg = {**cfg, "generations": generations}
+                    run.update_config(cfg)
+            if done >= cfg["generations"]:
+                raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                                 "add --generations N to extend it")
+            run.truncate_rows(done)
+            return cls(run, cfg, state=state, quiet=quiet, workers=workers)
+        except BaseException:
+            run.unlock()
+            raise
 
     def state(self) -> dict:
         state = self.search.state()
@@ -166,8 +176,9 @@ class Experiment:
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
     def close(self) -> None:
-        """Stop the rollout worker processes (a later generation would start them again)."""
+        """Stop the rollout worker processes and let go of the run directory."""
         self.pool.close()
+        self.run.unlock()
 
     def finish(self) -> None:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""

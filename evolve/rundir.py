@@ -11,6 +11,7 @@ Files get the permissions the user's umask gives, as `open()` would create them.
 from __future__ import annotations
 
 import csv
+import fcntl
 import io
 import json
 import os
@@ -55,6 +56,28 @@ class RunDir:
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.ckpt_dir = self.path / "checkpoints"
+
+    # ------------------------------------------------------------------ one process at a time
+    def lock(self) -> None:
+        """Hold the run for this process (until it exits or `unlock`): two processes advancing one
+        run (a sweep resumed while a run of it still goes on, say) would interleave its files."""
+        self.path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise ValueError(f"{self.path} is being run by another process (pid {holder})") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        self._lock_fd = fd
+
+    def unlock(self) -> None:
+        fd = getattr(self, "_lock_fd", None)
+        if fd is not None:
+            os.close(fd)  # releases the flock
+            self._lock_fd = None
 
     # ------------------------------------------------------------------ creation
     def create(self, cfg: dict, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:

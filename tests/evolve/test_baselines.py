@@ -93,6 +93,7 @@ def test_nested_run_resumes_with_identical_numbers(tmp_path, repo_root):
     part.search.step = _die_after(part.search.step, 2)
     with pytest.raises(KeyboardInterrupt):
         part.run_all()
+    part.close()  # what the process's end would do: release the run's lock
     Experiment.resume(str(tmp_path / "part"), quiet=True).run_all()
     cols = ["best", "mean", "median", "n_valid", "episodes"]
     a = [[r[c] for c in cols] for r in RunDir(tmp_path / "full").rows()]

@@ -59,6 +59,7 @@ def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
     crashed.search.step = dying_step
     with pytest.raises(KeyboardInterrupt):
         crashed.run_all()
+    crashed.close()  # what the process's end would do: release the run's lock
     assert len(RunDir(tmp_path / "crash").rows()) == 3  # generation 2 was logged after the checkpoint
     assert main(["evolve", "--resume", str(tmp_path / "crash"), "--quiet"]) == 0
 
