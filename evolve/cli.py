@@ -142,10 +142,13 @@ def parse_body(text: str) -> np.ndarray:
         if not path.is_file():
             raise ValueError(f"bad body matrix: file not found: {path}")
         if path.suffix == ".npy":
+            with path.open("rb") as f:
+                if f.read(6) != b"\x93NUMPY":
+                    raise ValueError(f"bad body matrix: {path}: not a .npy file")
             try:
                 return np.load(path)
-            except (ValueError, EOFError, OSError) as exc:
-                raise ValueError(f"bad body matrix: {path}: not a .npy array file ({exc})") from None
+            except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
+                raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
         try:
             data = json.loads(path.read_text())
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
