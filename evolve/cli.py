@@ -17,6 +17,7 @@ def _demo(args: argparse.Namespace) -> int:
     from tasks.env import BatchEnv
     from tsim.sampling import sample_robot
 
+    out = output_path(args.out, folder=True)
     rng = np.random.default_rng(args.seed)
     bodies = [sample_robot((5, 5), rng) for _ in range(args.robots)]
     env = BatchEnv(args.task, bodies, episode_steps=args.steps)
@@ -27,7 +28,6 @@ def _demo(args: argparse.Namespace) -> int:
         _, r, term, trunc, _ = env.step(sinusoid(t, A)[None, :].repeat(env.n_worlds, 0))
         total += r
     wall = time.perf_counter() - t0
-    out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     best = int(np.argmax(total))
     result = {"task": args.task, "robots": args.robots, "steps": args.steps, "seed": args.seed,
@@ -62,6 +62,34 @@ REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
 DEFAULT_CONFIG = REPO_CONFIGS / "sgr" / "quick.yaml"
 
 
+def positive(cast):
+    """argparse type: a positive number of type `cast` (int or float)."""
+    def parse(text: str):
+        try:
+            value = cast(text)
+        except ValueError:
+            value = 0
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"must be a positive {cast.__name__}, got {text!r}")
+        return value
+    return parse
+
+
+def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) -> Path:
+    """`path` as what a command will write (a folder, or a file); ValueError naming the flag when it
+    cannot be one (it, or a folder above it, is a file; a file output is a folder), before any
+    work is done."""
+    path = Path(path)
+    if path.exists() and path.is_dir() != folder:
+        raise ValueError(f"{flag} {path}: is a {'file' if folder else 'folder'}")
+    for above in path.parents:
+        if above.exists():
+            if not above.is_dir():
+                raise ValueError(f"{flag} {path}: {above} is a file, not a folder")
+            break
+    return path
+
+
 def workers_arg(text: str) -> int | str:
     """argparse type of --workers: a positive int or 'auto'."""
     if text == "auto":
@@ -77,7 +105,9 @@ def workers_arg(text: str) -> int | str:
 
 def _evolve(args: argparse.Namespace) -> int:
     from evolve.experiment import Experiment
+    from tsim import runtime
 
+    runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
     if args.resume:
         if args.config or args.pop or args.seed is not None or args.out:
             raise ValueError("--resume continues a run with its own config; only --generations "
@@ -89,6 +119,7 @@ def _evolve(args: argparse.Namespace) -> int:
         config = args.config or str(DEFAULT_CONFIG)
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{Path(config).stem}-seed{args.seed or 0}-{stamp}")
+        output_path(out, folder=True)
         exp = Experiment.create(config, out, {"generations": args.generations, "pop_size": args.pop,
                                               "seed": args.seed, "workers": args.workers},
                                 quiet=args.quiet)
@@ -117,8 +148,21 @@ def parse_body(text: str) -> np.ndarray:
     if path.suffix in (".json", ".npy"):
         if not path.is_file():
             raise ValueError(f"bad body matrix: file not found: {path}")
-        data = np.load(path) if path.suffix == ".npy" else json.loads(path.read_text())
+        if path.suffix == ".npy":
+            with path.open("rb") as f:
+                if f.read(6) != b"\x93NUMPY":
+                    raise ValueError(f"bad body matrix: {path}: not a .npy file")
+            try:
+                return np.load(path)
+            except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
+                raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
+        try:
+            data = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"bad body matrix: {path}: not valid JSON ({exc})") from None
         if isinstance(data, dict):
+            if "body" not in data and "matrix" not in data:
+                raise ValueError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
             data = data.get("body", data.get("matrix"))
         return np.asarray(data)
     rows = text.split(",")
@@ -135,6 +179,8 @@ def _render(args: argparse.Namespace) -> int:
     from tsim.body import check_robot
     from tsim.render import write_gif
 
+    if args.out:
+        output_path(args.out)
     if args.run_dir:
         if args.task or args.body:
             raise ValueError("give either RUN_DIR or --task with --body, not both")
@@ -154,6 +200,8 @@ def _render(args: argparse.Namespace) -> int:
 def _plot(args: argparse.Namespace) -> int:
     from evolve.plots import plot_run, plot_runs
 
+    if args.out:
+        output_path(args.out)
     if len(args.run_dirs) == 1 and not args.compare:
         out = plot_run(args.run_dirs[0], args.out or Path(args.run_dirs[0]) / "fitness.png")
     else:
@@ -181,8 +229,8 @@ def main(argv: list[str] | None = None) -> int:
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("evolve", help="run an evolution experiment (default: a short SGR Walker-v0 run)")
     e.add_argument("--config", help="YAML experiment config (default configs/sgr/quick.yaml)")
-    e.add_argument("--generations", type=int)
-    e.add_argument("--pop", type=int)
+    e.add_argument("--generations", type=positive(int))
+    e.add_argument("--pop", type=positive(int))
     e.add_argument("--seed", type=int)
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
     e.add_argument("--workers", type=workers_arg,
@@ -195,11 +243,11 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
     r.add_argument("--task")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
-    r.add_argument("--steps", type=int, help="episode length (default: the task's paper length)")
+    r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
     r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif or robot.gif)")
-    r.add_argument("--width", type=int, default=640)
-    r.add_argument("--height", type=int, default=320)
-    r.add_argument("--fps", type=float, default=30.0)
+    r.add_argument("--width", type=positive(int), default=640)
+    r.add_argument("--height", type=positive(int), default=320)
+    r.add_argument("--fps", type=positive(float), default=30.0)
     r.set_defaults(fn=_render)
     pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged")
     pl.add_argument("run_dirs", nargs="+", metavar="RUN_DIR")
@@ -208,8 +256,8 @@ def main(argv: list[str] | None = None) -> int:
     pl.set_defaults(fn=_plot)
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
     d.add_argument("--task", default="Walker-v0")
-    d.add_argument("--robots", type=int, default=32)
-    d.add_argument("--steps", type=int, default=300)
+    d.add_argument("--robots", type=positive(int), default=32)
+    d.add_argument("--steps", type=positive(int), default=300)
     d.add_argument("--seed", type=int, default=0)
     d.add_argument("--out", default="runs/demo")
     d.set_defaults(fn=_demo)
@@ -219,8 +267,8 @@ def main(argv: list[str] | None = None) -> int:
     v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
     b.add_argument("--task", default="Walker-v0")
-    b.add_argument("--robots", type=int, default=128)
-    b.add_argument("--steps", type=int, default=100)
+    b.add_argument("--robots", type=positive(int), default=128)
+    b.add_argument("--steps", type=positive(int), default=100)
     b.add_argument("--json", action="store_true")
     b.set_defaults(fn=_bench)
     args = p.parse_args(argv)

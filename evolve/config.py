@@ -94,6 +94,13 @@ def check_config(raw: dict, source: str = "config") -> dict:
     return cfg
 
 
+def yaml_problem(exc: yaml.YAMLError) -> str:
+    """One line for a YAML syntax error: what and where (PyYAML's own message spans several)."""
+    mark = getattr(exc, "problem_mark", None)
+    what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"{what} at line {mark.line + 1}, column {mark.column + 1}" if mark else what
+
+
 def load_config(path: str | Path, overrides: dict | None = None) -> dict:
     """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
     path = Path(path)
@@ -101,8 +108,12 @@ def load_config(path: str | Path, overrides: dict | None = None) -> dict:
         raise ValueError(f"config file not found: {path}")
     try:
         raw = yaml.safe_load(path.read_text()) or {}
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {exc}") from None
+        raise ValueError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None
+    if not isinstance(raw, dict):
+        raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
     raw = {**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}}
     for key in ("neat_config", "controller_neat_config"):
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():

@@ -53,10 +53,6 @@ class NestedProblem:
         self.gc = neat_config.genome_config
         self.shape = tuple(cfg["robot_shape"])
         self.cells = cell_coordinates(self.shape)
-        n_cells = str(self.shape[0] * self.shape[1])
-        self._ini = lambda k: neat_ini_text(
-            cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
-            {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": n_cells}})
         self._configs: dict[int, object] = {}
         self.inner: dict[bytes, NeatSearch] = {}
 
@@ -64,9 +60,23 @@ class NestedProblem:
     def neat_overrides(cfg: dict) -> dict:
         return {"DefaultGenome": {"num_inputs": "2", "num_outputs": str(N_TYPES)}}
 
+    @staticmethod
+    def controller_config(cfg: dict, k: int):
+        """neat-python config of the inner controllers for a k x k input grid."""
+        n_cells = cfg["robot_shape"][0] * cfg["robot_shape"][1]
+        ini = neat_ini_text(cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
+                            {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": str(n_cells)}})
+        return neat_config_from_text(ini, cfg["controller_neat_config"])
+
+    @staticmethod
+    def check_config(cfg: dict) -> None:
+        """ValueError naming controller_neat_config when it is not a usable neat config: before a
+        run starts, rather than at the first body of its first generation."""
+        NestedProblem.controller_config(cfg, 1)
+
     def _controller_config(self, k: int):
         if k not in self._configs:
-            self._configs[k] = neat_config_from_text(self._ini(k))
+            self._configs[k] = self.controller_config(self.cfg, k)
         return self._configs[k]
 
     def decode(self, genome) -> BodyPhenotype:

@@ -43,8 +43,11 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     f = Path(run_dir) / "generations.csv"
     if not f.is_file():
         raise ValueError(f"{run_dir} has no generations.csv")
-    with f.open(newline="") as fh:
-        rows = list(csv.DictReader(fh))
+    try:
+        with f.open(newline="") as fh:
+            rows = list(csv.DictReader(fh))
+    except (csv.Error, UnicodeDecodeError) as exc:
+        raise ValueError(f"{f}: not a readable CSV file ({exc})") from None
     if not rows:
         return {}
 
@@ -66,7 +69,13 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     cfg: dict = {}
     f = run_dir / "config.yaml"
     if f.is_file():
-        loaded = yaml.safe_load(f.read_text())
+        try:
+            loaded = yaml.safe_load(f.read_text())
+        except UnicodeDecodeError:
+            raise ValueError(f"{f}: not a text file") from None
+        except yaml.YAMLError as exc:
+            mark = getattr(exc, "problem_mark", None)
+            raise ValueError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
         cfg = loaded if isinstance(loaded, dict) else {}
     parent = run_dir.resolve().parent.name or UNKNOWN
     method = str(cfg.get("method") or parent)

@@ -8,6 +8,7 @@ Two folder formats are understood (see the READMEs of shared/reference): trace f
 from __future__ import annotations
 
 import json
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -16,16 +17,32 @@ from scipy.stats import spearmanr
 from tasks.env import BatchEnv
 
 
+def _json(path: Path):
+    try:
+        return json.loads(path.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+
+
+def _npz(path: Path):
+    if not zipfile.is_zipfile(path):
+        raise ValueError(f"{path}: not a .npz file")
+    try:
+        return np.load(path)
+    except (ValueError, EOFError, OSError, zipfile.BadZipFile) as exc:
+        raise ValueError(f"{path}: unreadable .npz file ({exc})") from None
+
+
 def validate_traces(folder: Path) -> dict:
-    index = json.loads((folder / "index.json").read_text())
+    index = _json(folder / "index.json")
     chaos_file = folder / "chaos_floor.json"
-    chaos = json.loads(chaos_file.read_text()) if chaos_file.exists() else None
+    chaos = _json(chaos_file) if chaos_file.exists() else None
     by_task: dict[str, list] = {}
     for case in index["cases"]:
         by_task.setdefault(case["task"], []).append(case)
     cases_out, tasks_out = [], {}
     for task, cases in by_task.items():
-        data = [np.load(folder / c["file"]) for c in cases]
+        data = [_npz(folder / c["file"]) for c in cases]
         steps = int(data[0]["steps"])
         bodies = [z["body"] for z in data]
         env = BatchEnv(task, bodies, episode_steps=steps, passive_ok=True)
@@ -67,9 +84,9 @@ def validate_traces(folder: Path) -> dict:
 
 def validate_returns(folder: Path) -> dict:
     tasks_out = {}
-    summary = json.loads((folder / "summary.json").read_text()) if (folder / "summary.json").exists() else {}
+    summary = _json(folder / "summary.json") if (folder / "summary.json").exists() else {}
     for f in sorted(folder.glob("*.npz")):
-        z = np.load(f)
+        z = _npz(f)
         if "returns" not in z.files:
             continue
         task = str(z["task"])
@@ -109,7 +126,7 @@ def validate(folder: str | Path) -> dict:
         r = validate_traces(folder)
         out["cases"] += r["cases"]
         out["tasks"].update(r["tasks"])
-    if any("returns" in np.load(f).files for f in folder.glob("*.npz")):
+    if any("returns" in _npz(f).files for f in folder.glob("*.npz")):
         found = True
         for task, vals in validate_returns(folder)["tasks"].items():
             out["tasks"].setdefault(task, {}).update(vals)

@@ -7,29 +7,50 @@ import io
 import os
 import sys
 
-# Taichi's banners go to stderr (they would corrupt `sgr ... --json` output); TI_ENABLE_PYBUF=0
-# keeps Taichi from wrapping every kernel call because stdout is redirected meanwhile (no kernel prints)
+# Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
+# warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0 keeps Taichi from wrapping every kernel call because stdout is redirected
+# meanwhile (no kernel prints)
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")
-# no version banner: a command's stderr is for its warnings and its one-line errors
-os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")
+os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # no version banner
 with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
+ARCHS = ("cpu", "gpu", "cuda", "vulkan", "metal")
 _ARCH: str | None = None
 
 
+def requested_arch(arch: str | None = None) -> str:
+    """`arch`, else $SGR_ARCH, else cpu; raises ValueError for a name that is not an arch."""
+    if arch is None and os.environ.get("SGR_ARCH"):
+        arch = os.environ["SGR_ARCH"]
+        if arch not in ARCHS:
+            raise ValueError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
+    arch = arch or "cpu"
+    if arch not in ARCHS:
+        raise ValueError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
+    return arch
+
+
+def _taichi_archs(arch: str) -> list:
+    # "gpu" tries only the GPU backends this package supports: Taichi's own ti.gpu list also probes
+    # OpenGL, whose probe crashes the process on some machines without a display
+    return [ti.cuda, ti.metal, ti.vulkan] if arch == "gpu" else [getattr(ti, arch)]
+
+
 def init(arch: str | None = None) -> str:
-    """Initialise Taichi once; later calls with another arch raise (Taichi cannot switch)."""
+    """Initialise Taichi once; later calls with another arch raise (Taichi cannot switch).
+
+    An arch that Taichi cannot use here (no device, driver or backend) raises ValueError rather
+    than running on the CPU as Taichi would."""
     global _ARCH
-    arch = arch or os.environ.get("SGR_ARCH", "cpu")
-    if arch not in ("cpu", "gpu", "cuda", "vulkan", "metal"):
-        raise ValueError(f"unknown arch {arch!r}; use cpu, gpu, cuda, vulkan or metal")
+    from_env = arch is None and bool(os.environ.get("SGR_ARCH"))
+    arch = requested_arch(arch)
     if _ARCH is not None:
         if arch != _ARCH:
             raise ValueError(f"Taichi already runs on {_ARCH}; cannot switch to {arch} in one process")
         return _ARCH
-    threads = os.environ.get("SGR_THREADS")
-    kwargs = {"cpu_max_num_threads": int(threads)} if threads else {}
+    threads = _threads_env()
+    kwargs = {"cpu_max_num_threads": threads} if threads else {}
     # fast_math off: IEEE semantics like evogym's C++ build (no reassociation), so results do not
     # depend on how a kernel is written or optimised (the parallel and serial kernels and every
     # capacity tier agree bit for bit) and the parity with evogym's traces is as good or better
@@ -38,18 +59,39 @@ def init(arch: str | None = None) -> str:
     # it the worlds are dealt to the threads in blocks of `block_dim` (1 for the step kernels)
     # advanced_optimization off: Taichi's own IR optimisations took ~25 s to compile the kernels
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
-    said = io.StringIO()  # Taichi prints "[Taichi] Starting on arch=..."; other lines go to stderr
-    with contextlib.redirect_stdout(said):
-        ti.init(arch=getattr(ti, arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
+    # log_level ERROR while Taichi probes the arch: its probe warnings (e.g. "libcuda.so lib not
+    # found") and its fallback to the CPU would otherwise print before our error
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        ti.init(arch=_taichi_archs(arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
                 advanced_optimization=False, make_cpu_multithreading_loop=False,
-                log_level=ti.WARN, **kwargs)
-    for line in said.getvalue().splitlines():
+                log_level=ti.ERROR, **kwargs)
+    ti.set_logging_level(ti.WARN)
+    if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
+        ti.reset()
+        what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
+        raise ValueError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
+                         "use SGR_ARCH=cpu")
+    for line in out.getvalue().splitlines():
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
     _ARCH = arch
     return _ARCH
 
 
+def _threads_env() -> int | None:
+    """$SGR_THREADS as a positive int, None when unset."""
+    text = os.environ.get("SGR_THREADS")
+    if not text:
+        return None
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if n < 1:
+        raise ValueError(f"SGR_THREADS={text}: must be a positive int")
+    return n
+
+
 def threads() -> int:
-    n = os.environ.get("SGR_THREADS")
-    return int(n) if n else (os.cpu_count() or 1)
+    return _threads_env() or os.cpu_count() or 1
