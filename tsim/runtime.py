@@ -8,8 +8,9 @@ import os
 import sys
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
-# warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0 keeps Taichi from wrapping every kernel call because stdout is redirected
-# meanwhile (no kernel prints)
+# warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0
+# keeps Taichi from wrapping every kernel call because stdout is redirected meanwhile (no kernel
+# prints)
 os.environ.setdefault("TI_ENABLE_PYBUF", "0")
 os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # no version banner
 with contextlib.redirect_stdout(sys.stderr):
