@@ -141,6 +141,29 @@ def _evolve(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sweep(args: argparse.Namespace) -> int:
+    from evolve.sweep import LocalBackend, Sweep, run_sweep
+
+    if args.resume:
+        if args.config or args.out:
+            raise ValueError("--resume continues a sweep with its own sweep file; drop --config and --out")
+        sweep = Sweep.open(args.resume)
+    else:
+        if not args.config:
+            raise ValueError("sgr sweep needs --config SWEEP.yaml (or --resume DIR)")
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        out = args.out or str(Path("runs") / f"sweep-{Path(args.config).stem}-{stamp}")
+        sweep = Sweep.create(args.config, out)
+        print(f"sweep directory: {out}")
+    if args.backend == "ray":
+        raise ValueError("--backend ray is not available yet; use --backend local")
+    try:
+        failed = run_sweep(sweep, LocalBackend(args.parallel), quiet=args.quiet)
+    except KeyboardInterrupt:
+        return 130
+    return 1 if failed else 0
+
+
 def parse_body(text: str) -> np.ndarray:
     """BODY argument: rows separated by commas, one digit per voxel ("33333,33033,...") or a
     .json / .npy file holding the matrix."""
@@ -239,6 +262,16 @@ def main(argv: list[str] | None = None) -> int:
                    help="continue a run from its last checkpoint (with --generations N: extend it to N)")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)
+    sw = sub.add_parser("sweep", help="every method x task x seed of a sweep file, resumable")
+    sw.add_argument("--config", metavar="SWEEP.yaml", help="methods, tasks, seeds, [configs], [overrides]")
+    sw.add_argument("--out", help="sweep directory (default runs/sweep-<name>-<time>)")
+    sw.add_argument("--resume", metavar="DIR",
+                    help="continue a sweep: finished runs are kept, the others resumed")
+    sw.add_argument("--backend", choices=("local", "ray"), default="local")
+    sw.add_argument("--parallel", type=positive(int), default=1, metavar="K",
+                    help="local backend: runs at once, each with CPUs / K rollout workers (default 1)")
+    sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
+    sw.set_defaults(fn=_sweep)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
     r.add_argument("--task")
