@@ -164,6 +164,14 @@ def _sweep(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _report(args: argparse.Namespace) -> int:
+    from evolve.report import write_report
+
+    out = write_report(args.dir, args.out, robustness=not args.no_robustness)
+    print(f"wrote {out}, {out.parent / 'summary.csv'} and {out.parent / 'curves.png'}")
+    return 0
+
+
 def parse_body(text: str) -> np.ndarray:
     """BODY argument: rows separated by commas, one digit per voxel ("33333,33033,...") or a
     .json / .npy file holding the matrix."""
@@ -272,6 +280,12 @@ def main(argv: list[str] | None = None) -> int:
                     help="local backend: runs at once, each with CPUs / K rollout workers (default 1)")
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
+    rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")
+    rp.add_argument("dir", metavar="DIR", help="a sweep directory, or a folder of run directories")
+    rp.add_argument("--out", help="report path (default DIR/report.md); summary.csv, curves.png beside it")
+    rp.add_argument("--no-robustness", action="store_true",
+                    help="skip replaying each champion under 1e-9 action perturbations")
+    rp.set_defaults(fn=_report)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
     r.add_argument("--task")
