@@ -105,6 +105,7 @@ def workers_arg(text: str) -> int | str:
 
 def _evolve(args: argparse.Namespace) -> int:
     from evolve.experiment import Experiment
+    from evolve.rollout_pool import WorkerDied
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
@@ -131,6 +132,10 @@ def _evolve(args: argparse.Namespace) -> int:
         print(f"\ninterrupted at generation {exp.search.generation}; continue with: "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 130
+    except WorkerDied as exc:
+        print(f"sgr: error: {exc}; the run stopped at generation {exp.search.generation} and keeps its "
+              f"last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        return 1
     except OSError as exc:  # e.g. a full disk: every file of the run is still whole (atomic writes)
         print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped at generation "
               f"{exp.search.generation} and keeps its last checkpoint: make room, then "

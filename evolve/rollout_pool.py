@@ -58,6 +58,10 @@ def balanced_chunks(costs: Sequence[float], n: int) -> list[list[int]]:
     return [sorted(c) for c in chunks if c]
 
 
+class WorkerDied(RuntimeError):
+    """A rollout worker process died twice on the same chunk."""
+
+
 class RolloutPool:
     """Episode returns of (body, policy item) pairs, in this process (workers=1) or split over
     persistent worker processes (`python -m evolve.rollout_worker`), started on first use.
@@ -80,17 +84,14 @@ class RolloutPool:
         if self.workers == 1:
             return run_chunk(task, list(bodies), list(items), factory, episode_steps)
         chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], self.workers)
-        procs = self._start(len(chunks))
-        for proc, c in zip(procs, chunks, strict=False):
-            job = (task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps)
+        jobs = [(task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps)
+                for c in chunks]
+        for proc, job in zip(self._start(len(chunks)), jobs, strict=True):
             self._send(proc, job)
         out = np.zeros(len(bodies))
         failure = None
-        for proc, c in zip(procs, chunks, strict=False):  # read every reply, even after a failure
-            try:
-                ok, value = pickle.loads(read_frame(proc.stdout))
-            except (EOFError, OSError, pickle.UnpicklingError):
-                raise self._died(proc) from None
+        for i, (c, job) in enumerate(zip(chunks, jobs, strict=True)):  # every reply, even after a failure
+            ok, value = self._reply(i, job)
             if ok:
                 out[c] = value
             elif failure is None:
@@ -99,26 +100,47 @@ class RolloutPool:
             raise failure
         return out
 
+    def _reply(self, i: int, job: tuple) -> tuple[bool, object]:
+        """Worker i's reply to `job` (already sent). A worker that died (killed by the OOM killer,
+        say) is started again and given its job once more: a chunk's returns depend on the job
+        alone, so the generation's results are the same."""
+        for attempt in range(2):
+            proc = self._procs[i]
+            try:
+                return pickle.loads(read_frame(proc.stdout))
+            except (EOFError, OSError, pickle.UnpicklingError):
+                if attempt == 1:
+                    raise self._died(proc) from None
+                print(f"sgr: warning: rollout worker process {proc.pid} died (exit code {proc.wait()}); "
+                      "starting it again", file=sys.stderr)
+                proc.stdout.close()
+                self._procs[i] = self._spawn()
+                self._send(self._procs[i], job)
+        raise AssertionError("unreachable")
+
     def _start(self, n: int) -> list[subprocess.Popen]:
         """The first n workers, starting those not running yet."""
+        while len(self._procs) < n:
+            self._procs.append(self._spawn())
+        return self._procs[:n]
+
+    def _spawn(self) -> subprocess.Popen:
         root = str(Path(__file__).resolve().parents[1])
         env = {**os.environ, "SGR_THREADS": "1",  # one Taichi thread per worker process
                "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
-        while len(self._procs) < n:
-            self._procs.append(subprocess.Popen([sys.executable, "-m", "evolve.rollout_worker"],
-                                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env))
-        return self._procs[:n]
+        return subprocess.Popen([sys.executable, "-m", "evolve.rollout_worker"],
+                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
 
     def _send(self, proc: subprocess.Popen, job: tuple) -> None:
         try:
             write_frame(proc.stdin, job)
-        except BrokenPipeError:
-            raise self._died(proc) from None
+        except BrokenPipeError:  # a dead worker: reading its reply finds out and starts it again
+            pass
 
-    def _died(self, proc: subprocess.Popen) -> RuntimeError:
+    def _died(self, proc: subprocess.Popen) -> WorkerDied:
         """Stop the pool and describe the worker that died (its traceback went to stderr)."""
         self.close()
-        return RuntimeError(f"rollout worker process {proc.pid} died (exit code {proc.poll()}); "
+        return WorkerDied(f"rollout worker process {proc.pid} died (exit code {proc.poll()}); "
                             "its error is above; set workers: 1 to run in this process")
 
     def close(self) -> None:

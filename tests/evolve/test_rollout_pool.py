@@ -66,6 +66,35 @@ def test_errors_in_a_worker_are_raised_in_the_caller_and_the_pool_survives():
         assert pool.run("Walker-v0", bodies, ctrls, dense_policy, 5).shape == (4,)
 
 
+def test_a_worker_killed_mid_generation_is_started_again_with_the_same_results(capsys):
+    import os
+    import signal
+    import threading
+    import time
+
+    rng = np.random.default_rng(2)
+    bodies = [sample_robot((5, 5), rng) for _ in range(6)]
+    ctrls = [_random_dense(b, rng) for b in bodies]
+    local = RolloutPool(1).run("Walker-v0", bodies, ctrls, dense_policy, 60)
+    with RolloutPool(2) as pool:
+        killed = []
+
+        def kill_first_worker():  # SIGKILL by PID while the generation is under way
+            while not pool._procs:
+                time.sleep(0.001)
+            killed.append(pool._procs[0].pid)
+            os.kill(killed[0], signal.SIGKILL)
+
+        t = threading.Thread(target=kill_first_worker)
+        t.start()
+        split = pool.run("Walker-v0", bodies, ctrls, dense_policy, 60)
+        t.join()
+        assert pool._procs[0].pid != killed[0]
+    assert np.array_equal(split, local)
+    err = capsys.readouterr().err
+    assert f"rollout worker process {killed[0]} died (exit code -9); starting it again" in err
+
+
 def test_worker_counts_are_checked():
     assert resolve_workers("auto") >= 1
     assert resolve_workers(3) == 3
