@@ -225,3 +225,17 @@ def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path
     assert main(["evolve", "--resume", str(run.path), "--quiet"]) == 0
     assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "full"), "--quiet"]) == 0
     assert fitness_rows(run) == fitness_rows(RunDir(tmp_path / "full"))
+
+
+def test_a_run_advanced_by_another_process_is_refused_with_one_line(tmp_path, repo_root, capsys):
+    from evolve.cli import main
+
+    cfg = write_config(tmp_path, repo_root, "sgr", generations=2, pop_size=8)
+    running = Experiment.create(str(cfg), str(tmp_path / "run"), {}, quiet=True)  # holds the run
+    try:
+        assert main(["evolve", "--resume", str(tmp_path / "run"), "--quiet"]) == 2
+        err = capsys.readouterr().err
+        assert f"is being run by another process (pid {os.getpid()})" in err and err.count("\n") == 1
+    finally:
+        running.close()
+    assert main(["evolve", "--resume", str(tmp_path / "run"), "--quiet"]) == 0  # free once it stops
