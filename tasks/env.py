@@ -14,27 +14,23 @@ from collections.abc import Sequence
 import numpy as np
 
 from tasks import observations as O
-from tasks.specs import task_spec
+from tasks.spec import Measure
+from tasks.specs import task_spec, task_world
 from tsim.body import Body
 from tsim.sim import BatchSim
-from tsim.world import task_world
 
 UNSTABLE_PENALTY = -3.0
-GOALS = {"Walker-v0": (99, 1.0), "ObstacleTraverser-v1": (59, 2.0)}  # (voxel x of the goal, bonus)
-FLOOR_SIGHT = {"ObstacleTraverser-v1": 5}
-CEIL_SIGHT = {"Climber-v2": 3}
 
 
 def obs_dim(task: str, n_points: int) -> int:
-    """evogym's observation length for a robot of n points."""
-    extra = {"Walker-v0": 2, "ObstacleTraverser-v1": 14, "Climber-v2": 10, "Thrower-v0": 6}
-    task_spec(task)
-    return extra[task] + 2 * n_points
+    """evogym's observation length for a robot of n points on `task`."""
+    return task_spec(task).obs_dim(n_points)
 
 
 class BatchEnv:
     """Batched evogym task. `episode_steps` defaults to the SGR paper's length for the task;
-    pass "evogym" for evogym's registered limit."""
+    pass "evogym" for evogym's registered limit. Everything task-specific comes from the task's
+    spec (`tasks/spec.py`)."""
 
     def __init__(self, task: str, bodies: Sequence[Body | object],
                  episode_steps: int | str | None = None, *, arch: str | None = None,
@@ -53,27 +49,24 @@ class BatchEnv:
         self.n_worlds = self.sim.n_worlds
         self.n_actuators = self.sim.n_actuators.copy()
         self.n_points = self.sim.n_robot_points.copy()
-        self.obs_dims = np.array([obs_dim(task, n) for n in self.n_points])
+        self.obs_dims = np.array([self.spec.obs_dim(n) for n in self.n_points])
         self.max_obs_dim = int(self.obs_dims.max())
         N = self.sim.max_robot_points
         self._mask = np.arange(N)[None, :] < self.n_points[:, None]
         world = self.sim.world
         self._terrain = (np.concatenate([o.pos0 for o in world.fixed_objects], axis=1)
                          if world.fixed_objects else np.zeros((2, 0)))
-        self._has_package = any(o.name == "package" for o in world.free_objects)
+        self._head = self.spec.head_width()
         self._rel_cols = self._relative_columns()
         self.reset()
 
     # ------------------------------------------------------------------ layout helpers
-    def _head(self) -> int:
-        return {"Walker-v0": 2, "ObstacleTraverser-v1": 3, "Climber-v2": 3, "Thrower-v0": 6}[self.task]
-
     def _relative_columns(self) -> np.ndarray:
         """Column of each robot point's relative x and y in the observation row (dump column for
         padding)."""
         B, N = self._mask.shape
         p = np.arange(N)[None, :]
-        head = self._head()
+        head = self._head
         cx = np.where(self._mask, head + p, self.max_obs_dim)
         cy = np.where(self._mask, head + self.n_points[:, None] + p, self.max_obs_dim)
         return np.stack([cx, cy], axis=2)
@@ -82,14 +75,18 @@ class BatchEnv:
         N = self.sim.max_robot_points
         return self.sim.state[:, :N, 0:2], self.sim.state[:, :N, 2:4]
 
-    def _package(self) -> tuple[np.ndarray, np.ndarray]:
-        pos = np.stack([self.sim.object_pos(w, "package").T for w in range(self.n_worlds)])
-        vel = np.stack([self.sim.object_vel(w, "package").T for w in range(self.n_worlds)])
+    def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(B, n, 2) positions and velocities of free object `name` in every world."""
+        pos = np.stack([self.sim.object_pos(w, name).T for w in range(self.n_worlds)])
+        vel = np.stack([self.sim.object_vel(w, name).T for w in range(self.n_worlds)])
         return pos, vel
 
-    def _package_com(self) -> np.ndarray:
-        pos = self._package()[0]
-        return O.com(pos, np.ones(pos.shape[:2], dtype=bool))
+    def _measure(self, com: np.ndarray) -> Measure:
+        objects = {}
+        for name in self.spec.tracked:
+            pos = self._object_points(name)[0]
+            objects[name] = O.com(pos, np.ones(pos.shape[:2], dtype=bool))
+        return Measure(com, objects)
 
     # ------------------------------------------------------------------ API
     def reset(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -113,18 +110,17 @@ class BatchEnv:
         if np.any(self.elapsed >= self.episode_steps):
             raise RuntimeError("episode is over (truncated); call reset()")
         self.sim.set_actions(actions)
-        com_before = self._robot_coms()[0]
-        pkg_before = self._package_com() if self._has_package else None
+        before = self._measure(self._robot_coms()[0])
         active = ~self.terminated
         self.sim.step()
         self.elapsed += 1
         unstable = self.sim.unstable & active
         com_after, vcom_after = self._robot_coms()
-        reward = self._reward(com_before, com_after, pkg_before)
+        reward = self.spec.reward(before, self._measure(com_after))
         reward = np.where(unstable, reward + UNSTABLE_PENALTY, reward)
         done = unstable.copy()
-        if self.task in GOALS:
-            gx, bonus = GOALS[self.task]
+        if self.spec.goal is not None:
+            gx, bonus = self.spec.goal
             goal = active & (com_after[:, 0] > gx * 0.1)
             reward = np.where(goal, reward + bonus, reward)
             done |= goal
@@ -136,18 +132,7 @@ class BatchEnv:
         info = {"unstable": unstable, "t": self.elapsed.copy()}
         return self._obs.copy(), reward, self.terminated.copy(), truncated, info
 
-    # ------------------------------------------------------------------ task definitions
-    def _reward(self, com_before, com_after, pkg_before) -> np.ndarray:
-        d = com_after - com_before
-        if self.task == "Climber-v2":
-            return d[:, 1] + d[:, 0] * 0.2
-        if self.task == "Thrower-v0":
-            pkg_after = self._package_com()
-            penalty = (com_before[:, 0] - com_after[:, 0]) * 0.25
-            penalty = np.where(com_after[:, 0] < 0, -penalty, penalty)
-            return pkg_after[:, 0] - pkg_before[:, 0] + penalty
-        return d[:, 0]
-
+    # ------------------------------------------------------------------ measurements
     def _robot_coms(self) -> tuple[np.ndarray, np.ndarray]:
         """(B, 2) position and velocity COMs of the robots in one pass over the state; equal to
         `O.com` bit for bit (the same sums in point order; padding rows hold zeros unless a free
@@ -159,37 +144,31 @@ class BatchEnv:
         return s[:, 0:2], s[:, 2:4]
 
     def _observe(self, com: np.ndarray | None = None, vcom: np.ndarray | None = None) -> np.ndarray:
-        """Observations of the current state; `com`, `vcom` from `_robot_coms` if already known."""
+        """Observations of the current state, the spec's blocks in order; `com`, `vcom` from
+        `_robot_coms` if already known."""
         if com is None or vcom is None:
             com, vcom = self._robot_coms()
         pos, vel = self._robot()
         m = self._mask
         B = self.n_worlds
+        scene = O.Scene(pos=pos, vel=vel, mask=m, n_points=self.n_points, com=com, vcom=vcom,
+                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points)
         obs = np.zeros((B, self.max_obs_dim + 1))
-        if self.task == "Thrower-v0":
-            ppos, pvel = self._package()
-            pm = np.ones(ppos.shape[:2], dtype=bool)
-            obs[:, 0:2] = vcom
-            obs[:, 2:4] = O.com(ppos, pm) - com
-            obs[:, 4:6] = O.com(pvel, pm)
-        else:
-            obs[:, 0:2] = vcom
-            if self.task != "Walker-v0":
-                obs[:, 2] = O.orientation(pos, self._pos0, m)
-        rel = (pos - com[:, None, :]) * m[:, :, None]  # = O.relative(pos, m)
-        rows = np.arange(B)[:, None, None]
-        obs[rows, self._rel_cols] = rel
-        sight = None
-        if self.task in FLOOR_SIGHT:
-            sight = O.terrain_sight(O.com_voxel_units(pos, self.n_points), self._terrain,
-                                    FLOOR_SIGHT[self.task], below=True)
-        elif self.task in CEIL_SIGHT:
-            sight = O.terrain_sight(O.com_voxel_units(pos, self.n_points), self._terrain,
-                                    CEIL_SIGHT[self.task], below=False)
-        if sight is not None:
-            start = self._head() + 2 * self.n_points
-            cols = start[:, None] + np.arange(sight.shape[1])[None, :]
-            obs[np.arange(B)[:, None], cols] = sight
+        col, after_points = 0, None  # blocks after the points start at head + 2 n per robot
+        for block in self.spec.observation:
+            if block.width < 0:
+                rel = (pos - com[:, None, :]) * m[:, :, None]  # = O.relative(pos, m)
+                obs[np.arange(B)[:, None, None], self._rel_cols] = rel
+                after_points = self._head + 2 * self.n_points
+                continue
+            values = block.fn(scene)
+            if after_points is None:
+                obs[:, col:col + block.width] = values
+                col += block.width
+            else:
+                cols = after_points[:, None] + np.arange(block.width)[None, :]
+                obs[np.arange(B)[:, None], cols] = values
+                after_points = after_points + block.width
         return obs[:, :self.max_obs_dim]
 
     def observe(self) -> np.ndarray:

@@ -1,4 +1,5 @@
-"""Batched versions of evogym's observation helpers (spec section 6), numpy over padded arrays.
+"""Batched versions of evogym's observation helpers (spec section 6), numpy over padded arrays,
+and the observation blocks task specs are made of.
 
 Arrays are (B, N, 2) point positions/velocities in world units with a (B, N) validity mask; every
 helper returns one row per world.
@@ -6,9 +7,29 @@ helper returns one row per world.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from dataclasses import dataclass
+
 import numpy as np
 
+from tasks.spec import Block
 from tsim import constants as C
+
+
+@dataclass
+class Scene:
+    """What observation blocks see: the robots' points (B, N, 2) with their mask, COMs (B, 2),
+    positions at reset, the static terrain's points (2, M), and free objects by name."""
+
+    pos: np.ndarray
+    vel: np.ndarray
+    mask: np.ndarray
+    n_points: np.ndarray
+    com: np.ndarray
+    vcom: np.ndarray
+    pos0: np.ndarray
+    terrain: np.ndarray
+    object_points: Callable[[str], tuple[np.ndarray, np.ndarray]]  # name -> (B, n, 2) pos, vel
 
 PI_EVOGYM = 3.1415926
 
@@ -80,3 +101,34 @@ def terrain_sight(com_vox: np.ndarray, terrain: np.ndarray, sight_dist: int, *, 
             e = np.where(win.any(axis=1), e, cy[:, 0] + sight_range)
             out[:, k] = np.clip(e - cy[:, 0], 0, sight_range)
     return out * C.CELL
+
+
+# ---------------------------------------------------------------------- observation blocks
+VCOM = Block("robot velocity COM", 2, lambda s: s.vcom)
+ORIENTATION = Block("robot orientation", 1, lambda s: orientation(s.pos, s.pos0, s.mask)[:, None])
+POINTS = Block("robot points relative to its COM (x of every point, then y)", -1, lambda s: None)
+
+
+def _object_com(s: Scene, name: str, which: int) -> np.ndarray:
+    pts = s.object_points(name)[which]
+    return com(pts, np.ones(pts.shape[:2], dtype=bool))
+
+
+def object_offset(name: str) -> Block:
+    return Block(f"{name} COM relative to the robot COM", 2, lambda s: _object_com(s, name, 0) - s.com)
+
+
+def object_vcom(name: str) -> Block:
+    return Block(f"{name} velocity COM", 2, lambda s: _object_com(s, name, 1))
+
+
+def floor_sight(dist: int) -> Block:
+    """evogym's get_floor_obs: terrain height below the COM in 2 * dist + 1 columns."""
+    return Block(f"floor sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
+        com_voxel_units(s.pos, s.n_points), s.terrain, dist, below=True))
+
+
+def ceiling_sight(dist: int) -> Block:
+    """evogym's get_ceil_obs: terrain above the COM in 2 * dist + 1 columns."""
+    return Block(f"ceiling sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
+        com_voxel_units(s.pos, s.n_points), s.terrain, dist, below=False))

@@ -1,24 +1,20 @@
-"""Static facts of the four tasks (spec section 7): world, robot placement, episode lengths."""
+"""The task registry: every task's spec by its evogym id, and its world."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from functools import cache
+from importlib import resources
 
+from tasks.spec import TaskSpec
+from tasks.suite import climber, obstacle_traverser, thrower, walker
+from tsim.world import World, load_world
 
-@dataclass(frozen=True)
-class TaskSpec:
-    name: str
-    origin: tuple[int, int]  # grid cell of the bottom-left of the robot's body matrix
-    paper_steps: int  # episode length used by the SGR paper (our default)
-    evogym_steps: int  # evogym's registered max_episode_steps
-
-
-TASKS: dict[str, TaskSpec] = {
-    "Walker-v0": TaskSpec("Walker-v0", (1, 1), 500, 500),
-    "ObstacleTraverser-v1": TaskSpec("ObstacleTraverser-v1", (2, 4), 600, 1000),
-    "Climber-v2": TaskSpec("Climber-v2", (1, 1), 400, 1000),
-    "Thrower-v0": TaskSpec("Thrower-v0", (1, 1), 300, 300),
-}
+TASKS: dict[str, TaskSpec] = {s.name: s for s in (
+    walker.SPEC,
+    obstacle_traverser.SPEC,
+    climber.SPEC,
+    thrower.SPEC,
+)}
 
 
 def task_spec(name: str) -> TaskSpec:
@@ -26,3 +22,11 @@ def task_spec(name: str) -> TaskSpec:
         return TASKS[name]
     except KeyError:
         raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(TASKS)}") from None
+
+
+@cache
+def task_world(name: str) -> World:
+    """The task's evogym world (files in tasks/worlds, MIT licence, see LICENSE-evogym there)."""
+    spec = task_spec(name)
+    with resources.as_file(resources.files("tasks") / "worlds" / spec.world) as p:
+        return load_world(p)

@@ -17,7 +17,7 @@ import numpy as np
 
 from tsim import constants as C
 from tsim.body import Body, build_body
-from tsim.world import World, task_world
+from tsim.world import World, load_world
 
 BACKGROUND = (244, 245, 247)
 GRID = (204, 204, 204)
@@ -208,12 +208,12 @@ class Renderer:
     Scale is fixed: `view_voxels` voxels across the image width (evogym shows 40 x 20 voxels).
     """
 
-    def __init__(self, world: World | str, body: Body | object, width: int = 640, height: int = 320, *,
+    def __init__(self, world: World | str | Path, body: Body | object, width: int = 640, height: int = 320, *,
                  view_voxels: float = 40.0, grid: bool = True, follow: float = 0.15,
                  track_objects: bool = True):
         if width < 1 or height < 1:
             raise ValueError(f"image size must be positive, got {width}x{height}")
-        self.world = task_world(world) if isinstance(world, str) else world
+        self.world = world if isinstance(world, World) else load_world(world)
         self.body = body if isinstance(body, Body) else build_body(body)
         self.width, self.height = int(width), int(height)
         self.scale = self.width / (view_voxels * C.CELL)  # pixels per world unit

@@ -1,4 +1,5 @@
-"""Worlds: evogym world files turned into static terrain and free objects.
+"""Worlds: evogym world files turned into static terrain and free objects (the files themselves
+belong to the tasks that use them; see tasks/worlds).
 
 Fixed terrain never moves in evogym (material 5: every corner point is fixed), so it is kept as
 static geometry with a dense cell grid for contact look-ups, not as simulated points. Free objects
@@ -9,16 +10,12 @@ from __future__ import annotations
 
 import json
 from dataclasses import dataclass
-from functools import cache
-from importlib import resources
 from pathlib import Path
 
 import numpy as np
 
 from tsim import constants as C
 from tsim.body import Body, build_body
-
-TASK_WORLDS = ("Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0")
 
 
 @dataclass(frozen=True, eq=False)
@@ -104,15 +101,6 @@ def load_world(path: str | Path) -> World:
     objects = tuple(_object_from_json(n, d, grid_w) for n, d in sorted(items))
     terrain = _build_terrain(objects, grid_w, grid_h)
     return World(name=path.stem, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
-
-
-@cache
-def task_world(task: str) -> World:
-    """One of the four shipped task worlds (evogym's files, MIT licence, see tsim/worlds)."""
-    if task not in TASK_WORLDS:
-        raise ValueError(f"unknown task {task!r}; known tasks: {', '.join(TASK_WORLDS)}")
-    with resources.as_file(resources.files("tsim") / "worlds" / f"{task}.json") as p:
-        return load_world(p)
 
 
 # evogym edge orientation of a voxel's sides in corner slots (TL=0, TR=1, BR=2, BL=3):

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
+from tasks.specs import task_world
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
-from tsim.world import task_world
 
 
 @pytest.fixture()
@@ -56,8 +56,3 @@ def test_deactivated_world_stops_moving(sim):
     for w in (1, 2):
         assert np.abs(sim.robot_pos(w) - before[w]).max() > 1e-6
     assert sim.time.tolist() == [1, 4, 4]
-
-
-def test_unknown_task_names_the_task():
-    with pytest.raises(ValueError, match="unknown task 'Jumper-v9'"):
-        task_world("Jumper-v9")

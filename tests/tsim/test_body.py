@@ -5,9 +5,9 @@ import json
 import numpy as np
 import pytest
 
+from tasks.specs import task_world
 from tsim import constants as C
 from tsim.body import BL, BR, TL, TR, build_body, check_robot, full_connectivity, is_connected
-from tsim.world import task_world
 
 
 def _cases(data_dir):

@@ -5,10 +5,9 @@ follow the same physics as the validated 5x5 ones."""
 import numpy as np
 import pytest
 
-from tasks.specs import task_spec
+from tasks.specs import task_spec, task_world
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
-from tsim.world import task_world
 
 
 def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0) -> BatchSim:

@@ -3,10 +3,10 @@
 import numpy as np
 import pytest
 
+from tasks.specs import task_world
 from tsim import constants as C
 from tsim.body import build_body
 from tsim.sim import BatchSim
-from tsim.world import task_world
 
 TOL = 0.002
 

@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 
+from tasks.specs import task_world
 from tsim.body import build_body
 from tsim.render import (
     BLUES,
@@ -61,7 +62,7 @@ def test_material_pixel_counts_match_voxel_counts_in_walker_at_reset():
     the robot's box; terrain colour lies under the robot, not above it."""
     body = build_body(BODY)
     pts = body.place(*WALKER_ORIGIN)  # BatchSim's reset positions
-    r = Renderer("Walker-v0", body, 640, 320, view_voxels=20.0)  # 32 px per voxel
+    r = Renderer(task_world("Walker-v0"), body, 640, 320, view_voxels=20.0)  # 32 px per voxel
     img = r.frame(pts)
     assert img.shape == (320, 640, 3) and img.dtype == np.uint8
     ppv = 32
@@ -97,7 +98,7 @@ def test_camera_follows_robot_smoothly():
     """The view starts centred on the robot, then moves a `follow` fraction of each jump per frame."""
     body = build_body(BODY)
     pts = body.place(*WALKER_ORIGIN)
-    r = Renderer("Walker-v0", body, 640, 320, follow=0.25)  # 16 px per voxel, 160 px per unit
+    r = Renderer(task_world("Walker-v0"), body, 640, 320, follow=0.25)  # 16 px per voxel, 160 px per unit
     r.frame(pts)
     x0 = r.view[0]
     assert abs((x0 + 2.0) - 0.35) <= 1 / 160  # robot centre x 0.35 is mid-view (view 4.0 wide)
@@ -108,7 +109,7 @@ def test_camera_follows_robot_smoothly():
 def test_non_finite_points_do_not_break_a_frame():
     """A blown-up robot (NaN points) is skipped; terrain still renders and the camera stays put."""
     body = build_body(BODY)
-    r = Renderer("Walker-v0", body, 320, 160)
+    r = Renderer(task_world("Walker-v0"), body, 320, 160)
     r.frame(body.place(1, 1))
     view = r.view
     img = r.frame(np.full((2, body.n_points), np.nan))

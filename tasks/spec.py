@@ -1,0 +1,63 @@
+"""The contract of a task: `TaskSpec` holds every fact that makes one evogym task what it is.
+
+`BatchEnv` is task-agnostic: it places the robot at `origin` in the world file `world`, writes the
+observation as the spec's blocks in order, calls the spec's `reward` with the measurements taken
+before and after each step, and ends an episode at the goal, at evogym's instability rule or at
+the episode length. A task is one file in `tasks/suite/` with its `SPEC` (and its reward), plus one
+line in `tasks/specs.py`'s registry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class Measure:
+    """What rewards see of the state at one instant: the robot's COM (B, 2) and the COMs of the
+    objects the spec tracks, by name."""
+
+    com: np.ndarray
+    objects: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Block:
+    """`width` consecutive observation entries computed by `fn(scene) -> (B, width)`; width -1
+    stands for 2 x the robot's point count (the relative point positions)."""
+
+    name: str
+    width: int
+    fn: Callable[[object], np.ndarray]
+
+
+Reward = Callable[[Measure, Measure], np.ndarray]  # (before, after) -> (B,) reward of one step
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    name: str
+    world: str  # evogym world file in tasks/worlds/
+    origin: tuple[int, int]  # grid cell of the bottom-left of the robot's body matrix
+    paper_steps: int  # episode length used by the SGR paper (our default)
+    evogym_steps: int  # evogym's registered max_episode_steps
+    observation: tuple[Block, ...]  # in order; exactly one block of width -1 (the robot's points)
+    reward: Reward
+    tracked: tuple[str, ...] = ()  # objects whose COM the reward needs (Measure.objects)
+    goal: tuple[int, float] | None = None  # (voxel x the robot's COM must pass, bonus); ends the episode
+
+    def obs_dim(self, n_points: int) -> int:
+        """evogym's observation length for a robot of n points."""
+        return sum(2 * n_points if b.width < 0 else b.width for b in self.observation)
+
+    def head_width(self) -> int:
+        """Entries before the robot's relative points (the same for every robot of a batch)."""
+        w = 0
+        for b in self.observation:
+            if b.width < 0:
+                return w
+            w += b.width
+        raise ValueError(f"task {self.name}: the observation has no block of the robot's points")
