@@ -91,15 +91,15 @@ def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) 
 
 
 def workers_arg(text: str) -> int | str:
-    """argparse type of --workers: a positive int or 'auto'."""
-    if text == "auto":
+    """argparse type of --workers: a positive int, 'auto' or 'ray'."""
+    if text in ("auto", "ray"):
         return text
     try:
         n = int(text)
     except ValueError:
         n = 0
     if n < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive int or 'auto', got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be a positive int, 'auto' or 'ray', got {text!r}")
     return n
 
 
@@ -257,7 +257,8 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--seed", type=int)
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
     e.add_argument("--workers", type=workers_arg,
-                   help="rollout processes: a number or 'auto' (default: the config's, auto = all CPUs)")
+                   help="rollout processes: a number, 'auto' (all CPUs) or 'ray' (the actors of a Ray "
+                        "cluster); default: the config's")
     e.add_argument("--resume", metavar="DIR",
                    help="continue a run from its last checkpoint (with --generations N: extend it to N)")
     e.add_argument("--quiet", action="store_true")
