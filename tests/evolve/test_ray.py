@@ -1,5 +1,5 @@
-"""Ray: one run's rollouts on Ray actors give exactly the results of local processes, also when an
-actor is killed mid-generation. One local Ray instance (2 CPUs) for the
+"""Ray: a sweep's runs as Ray tasks, and one run's rollouts on Ray actors, give exactly the results of
+local processes, also when an actor is killed mid-generation. One local Ray instance (2 CPUs) for the
 module."""
 
 from __future__ import annotations
@@ -15,7 +15,8 @@ import yaml
 ray = pytest.importorskip("ray")
 
 from evolve.experiment import Experiment  # noqa: E402
-from evolve.ray_backend import RayRolloutPool  # noqa: E402
+from evolve.ray_backend import RayBackend, RayRolloutPool  # noqa: E402
+from evolve.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
 
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 
@@ -33,6 +34,50 @@ def fitness(run_path) -> list[tuple]:
 
     rows = RunDir(run_path).rows()
     return [tuple(r[k] for k in FITNESS) for r in rows]
+
+
+# ---------------------------------------------------------------------------------- sweep backend
+def test_a_sweep_on_ray_gives_the_local_backends_results(tmp_path, capsys):
+    sweep_file = tmp_path / "sweep.yaml"
+    sweep_file.write_text(yaml.safe_dump({
+        "methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": 1,
+        "overrides": {"generations": 3, "pop_size": 8, "episode_steps": 10, "render_champion": False,
+                      "nested": {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1}}}))
+    results = {}
+    for name, backend in (("local", LocalBackend(2)), ("ray", RayBackend(2))):
+        sweep = Sweep.create(sweep_file, tmp_path / name)
+        assert run_sweep(sweep, backend, quiet=True) == 0
+        results[name] = {run.name: fitness(sweep.run_dir(run).path) for run in sweep.runs}
+        assert sweep.pending() == []
+    assert results["ray"] == results["local"]
+    assert sorted(results["ray"]) == ["nested-Walker-v0-s0", "sgr-Walker-v0-s0"]
+    assert all(len(rows) == 3 for rows in results["ray"].values())
+    assert "2/2 runs done" in capsys.readouterr().out
+
+
+def test_ray_backend_sizes_runs_by_the_nodes_cpus_and_reports_failed_tasks(tmp_path):
+    one = RayBackend(1)
+    assert (one.parallel, one.cpus_per_run) == (1, 2)
+    two = RayBackend(2)
+    assert (two.parallel, two.cpus_per_run) == (2, 1)
+    sweep = Sweep.create(_write(tmp_path / "s.yaml", {"methods": ["sgr"], "tasks": ["Walker-v0"],
+                                                       "seeds": 1}), tmp_path / "sw")
+    run = sweep.runs[0]
+    sweep.run_dir(run).path.mkdir(parents=True)  # no config: `sgr evolve --resume` fails
+    two.start(sweep, run)
+    ended = {}
+    for _ in range(600):
+        ended = two.poll()
+        if ended:
+            break
+        time.sleep(0.1)
+    assert ended[run] != 0 and not two.procs
+    assert "not a run directory" in (sweep.run_dir(run).path / "log.txt").read_text()
+
+
+def _write(path, data):
+    path.write_text(yaml.safe_dump(data))
+    return path
 
 
 # ---------------------------------------------------------------------------------- rollout pool
