@@ -91,15 +91,15 @@ def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) 
 
 
 def workers_arg(text: str) -> int | str:
-    """argparse type of --workers: a positive int or 'auto'."""
-    if text == "auto":
+    """argparse type of --workers: a positive int, 'auto' or 'ray'."""
+    if text in ("auto", "ray"):
         return text
     try:
         n = int(text)
     except ValueError:
         n = 0
     if n < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive int or 'auto', got {text!r}")
+        raise argparse.ArgumentTypeError(f"must be a positive int, 'auto' or 'ray', got {text!r}")
     return n
 
 
@@ -149,6 +149,11 @@ def _evolve(args: argparse.Namespace) -> int:
 def _sweep(args: argparse.Namespace) -> int:
     from evolve.sweep import LocalBackend, Sweep, run_sweep
 
+    if args.backend == "ray":
+        from evolve.ray_backend import require_ray
+        require_ray("--backend ray")  # before the sweep directory exists
+    elif args.address:
+        raise ValueError("--address goes with --backend ray")
     if args.resume:
         if args.config or args.out:
             raise ValueError("--resume continues a sweep with its own sweep file; drop --config and --out")
@@ -161,9 +166,12 @@ def _sweep(args: argparse.Namespace) -> int:
         sweep = Sweep.create(args.config, out)
         print(f"sweep directory: {out}")
     if args.backend == "ray":
-        raise ValueError("--backend ray is not available yet; use --backend local")
+        from evolve.ray_backend import RayBackend
+        backend = RayBackend(args.parallel, address=args.address)
+    else:
+        backend = LocalBackend(args.parallel)
     try:
-        failed = run_sweep(sweep, LocalBackend(args.parallel), quiet=args.quiet)
+        failed = run_sweep(sweep, backend, quiet=args.quiet)
     except KeyboardInterrupt:
         return 130
     return 1 if failed else 0
@@ -270,7 +278,8 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--seed", type=int)
     e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
     e.add_argument("--workers", type=workers_arg,
-                   help="rollout processes: a number or 'auto' (default: the config's, auto = all CPUs)")
+                   help="rollout processes: a number, 'auto' (all CPUs) or 'ray' (the actors of a Ray "
+                        "cluster); default: the config's")
     e.add_argument("--resume", metavar="DIR",
                    help="continue a run from its last checkpoint (with --generations N: extend it to N)")
     e.add_argument("--quiet", action="store_true")
@@ -280,9 +289,14 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("--out", help="sweep directory (default runs/sweep-<name>-<time>)")
     sw.add_argument("--resume", metavar="DIR",
                     help="continue a sweep: finished runs are kept, the others resumed")
-    sw.add_argument("--backend", choices=("local", "ray"), default="local")
+    sw.add_argument("--backend", choices=("local", "ray"), default="local",
+                    help="local: runs on this machine; ray: runs as tasks on a Ray cluster (default local)")
+    sw.add_argument("--address", metavar="ADDR",
+                    help="ray backend: join this running cluster ('auto': the one on this machine); "
+                         "default: start a local Ray instance")
     sw.add_argument("--parallel", type=positive(int), default=1, metavar="K",
-                    help="local backend: runs at once, each with CPUs / K rollout workers (default 1)")
+                    help="runs at once (on each machine with --backend ray), each with CPUs / K rollout "
+                         "workers (default 1)")
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
     rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")

@@ -85,8 +85,8 @@ def check_config(raw: dict, source: str = "config") -> dict:
         raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                          f"got {steps!r}")
     w = cfg["workers"]
-    if isinstance(w, str) and w != "auto" or isinstance(w, int) and w < 1:
-        raise ValueError(f"{source}: key 'workers' must be a positive int or 'auto', got {w!r}")
+    if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
+        raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
     if method == "direct" and cfg["layout"] not in ("per_output", "per_cell"):
         raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', got {cfg['layout']!r}")
     if method == "sgr" and cfg["cppn_outputs"] not in (1, 2):

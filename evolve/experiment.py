@@ -106,13 +106,21 @@ def genome_json(genome) -> dict:
                             for c in genome.connections.values()]}
 
 
+def rollout_pool(workers: int | str):
+    """Local worker processes (a number, 'auto'), or the actors of a Ray cluster ('ray')."""
+    if workers == "ray":
+        from evolve.ray_backend import RayRolloutPool
+        return RayRolloutPool()
+    return RolloutPool(workers)
+
+
 class Experiment:
     def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
                  workers: int | str | None = None):
         """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self.neat_config = load_neat_config(run.path / "neat.ini")
-        self.pool = RolloutPool(cfg.get("workers", "auto") if workers is None else workers)
+        self.pool = rollout_pool(cfg.get("workers", "auto") if workers is None else workers)
         self.problem = problem_class(cfg["method"])(cfg, self.neat_config, self.pool)
         if state is not None and hasattr(self.problem, "restore"):
             self.problem.restore(state["problem"])
@@ -126,6 +134,9 @@ class Experiment:
         problem = problem_class(cfg["method"])
         ini = neat_ini_text(cfg["neat_config"], cfg, problem.neat_overrides(cfg))
         neat_config_from_text(ini, cfg["neat_config"])  # a bad INI must fail before the run exists
+        if cfg["workers"] == "ray":
+            from evolve.ray_backend import require_ray
+            require_ray("workers: ray")
         if hasattr(problem, "check_config"):  # e.g. the nested method's controller INI
             problem.check_config(cfg)
         run = RunDir(out)

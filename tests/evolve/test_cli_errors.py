@@ -235,3 +235,23 @@ def test_argparse_errors(capsys, argv, detail):
     err = capsys.readouterr().err
     assert exc.value.code == 2 and detail in err and "Traceback" not in err
     assert err.splitlines()[-1].startswith("sgr")
+
+
+def test_ray_options_without_ray(tmp_path, repo_root, capsys, monkeypatch):
+    import importlib.util
+
+    find_spec = importlib.util.find_spec
+    monkeypatch.setattr(importlib.util, "find_spec",
+                        lambda name, *a: None if name == "ray" else find_spec(name, *a))
+    sweep = tmp_path / "sweep.yaml"
+    sweep.write_text("methods: [sgr]\ntasks: [Walker-v0]\nseeds: 1\n")
+    line = in_process(capsys, "sweep", "--config", str(sweep), "--out", str(tmp_path / "sw"),
+                      "--backend", "ray")
+    assert line == 'sgr: error: --backend ray needs Ray: pip install "sgr[ray]"'
+    assert not (tmp_path / "sw").exists()
+    line = in_process(capsys, "evolve", "--config", str(tiny_config(tmp_path, repo_root)), "--workers", "ray",
+                      "--out", str(tmp_path / "run"))
+    assert line == 'sgr: error: workers: ray needs Ray: pip install "sgr[ray]"'
+    assert not (tmp_path / "run").exists()
+    in_process(capsys, "sweep", "--config", str(sweep), "--address", "auto",
+               names=["--address", "--backend ray"])

@@ -29,9 +29,9 @@ def _write(tmp_path, repo_root, **changes):
     ({"cppn_outputs": 3}, "key 'cppn_outputs' must be 1 or 2"),
     ({"max_weight": True}, "key 'max_weight' must be float"),
     ({"method": "cmaes"}, "key 'method' must be one of"),
-    ({"workers": "many"}, "key 'workers' must be a positive int or 'auto'"),
+    ({"workers": "many"}, "key 'workers' must be a positive int, 'auto' or 'ray'"),
     ({"layout": "per_cell"}, "unknown key 'layout' for method 'sgr'"),
-    ({"workers": 0}, "key 'workers' must be a positive int or 'auto'"),
+    ({"workers": 0}, "key 'workers' must be a positive int, 'auto' or 'ray'"),
 ])
 def test_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):
     p = _write(tmp_path, repo_root, **changes)
