@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.controller import DenseController
-from evolve.graph_controller import FORMAT as GRAPH_FORMAT
-from evolve.graph_controller import GraphController
+from evolve.nn.dense import DenseController
+from evolve.nn.graph import FORMAT as GRAPH_FORMAT
+from evolve.nn.graph import GraphController
 from evolve.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS

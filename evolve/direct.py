@@ -18,9 +18,9 @@ from functools import partial
 
 import numpy as np
 
-from evolve.cppn import CompiledCPPN
-from evolve.graph_controller import GraphController
-from evolve.neat_batch import GraphPolicy, NetworkBatch
+from evolve.nn.batch import GraphPolicy, NetworkBatch
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.graph import GraphController
 from evolve.rollout_pool import RolloutPool
 from evolve.sgr_decoder import is_valid_robot
 from evolve.substrate import N_TYPES, cell_coordinates

@@ -10,7 +10,7 @@ from typing import Protocol
 
 import numpy as np
 
-from evolve.controller import ControllerBatch, DenseController
+from evolve.nn.dense import ControllerBatch, DenseController
 from tasks.env import BatchEnv
 
 

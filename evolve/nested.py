@@ -15,11 +15,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evolve.cppn import CompiledCPPN
 from evolve.experiment import neat_config_from_text, neat_ini_text
-from evolve.graph_controller import GraphController
-from evolve.neat_batch import GraphPolicy, NetworkBatch
 from evolve.neat_search import NeatSearch
+from evolve.nn.batch import GraphPolicy, NetworkBatch
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.graph import GraphController
 from evolve.rollout_pool import RolloutPool
 from evolve.sgr_decoder import is_valid_robot
 from evolve.substrate import N_TYPES, cell_coordinates, controller_side

@@ -13,9 +13,9 @@ from functools import cache
 
 import numpy as np
 
-from evolve.controller import DenseController
-from evolve.cppn import CompiledCPPN
 from evolve.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.dense import DenseController
 from evolve.substrate import body_substrate, cell_coordinates, controller_side, controller_substrate
 from tasks.env import obs_dim
 from tsim.body import build_body, has_actuator, is_connected

@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from evolve.controller import DenseController
 from evolve.evaluate import dense_policy
+from evolve.nn.dense import DenseController
 from evolve.rollout_pool import RolloutPool, balanced_chunks, resolve_workers
 from tasks.env import obs_dim
 from tsim.body import build_body

@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from evolve.controller import ControllerBatch, DenseController
-from evolve.cppn import CompiledCPPN
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.dense import ControllerBatch, DenseController
 from evolve.sgr_decoder import DecoderSettings, body_from_cppn, decode, is_valid_robot
 from evolve.substrate import cell_coordinates, controller_side
 from tasks.env import obs_dim

@@ -1,7 +1,7 @@
 """A NEAT network controller in plain JSON (the baselines' champions), runnable with numpy only.
 
 Nodes are listed in evaluation order with their incoming links; value = activation(bias +
-response * sum(w * value(src))) with neat-python's activation scalings (see `evolve.cppn`).
+response * sum(w * value(src))) with neat-python's activation scalings (`NEAT_ACTIVATIONS`).
 """
 
 from __future__ import annotations
@@ -9,10 +9,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from neat.graphs import feed_forward_layers
 
-from evolve.controller import ACTION_CENTRE, ACTION_HALF_RANGE
-from evolve.cppn import ACTIVATIONS
+from evolve.nn.activations import NEAT_ACTIVATIONS, to_action
+from evolve.nn.feedforward import compile_genome
 
 FORMAT = "sgr-graph-controller-1"
 
@@ -34,17 +33,10 @@ class GraphController:
     def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
                     output_offset: int, action_cells: np.ndarray,
                     cell_inputs: np.ndarray | None = None) -> GraphController:
-        conns = [c.key for c in genome.connections.values() if c.enabled]
-        inputs, outputs = list(genome_config.input_keys), list(genome_config.output_keys)
-        layers, required = feed_forward_layers(inputs, outputs, conns)
-        known = required | set(inputs)
-        nodes = []
-        for layer in layers:
-            for k in sorted(layer):
-                ng = genome.nodes[k]
-                links = [[i, genome.connections[(i, o)].weight] for i, o in conns if o == k and i in known]
-                nodes.append({"key": k, "bias": ng.bias, "response": ng.response,
-                              "activation": ng.activation, "links": links})
+        net = compile_genome(genome, genome_config)
+        inputs, outputs = list(net.input_keys), list(net.output_keys)
+        nodes = [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
+                  "links": [[i, w] for i, w in n.links]} for n in net.nodes]
         return cls(inputs, outputs, nodes, input_size, input_offset, output_offset,
                    np.asarray(action_cells, dtype=np.int64),
                    None if cell_inputs is None else np.asarray(cell_inputs, dtype=np.float64))
@@ -57,7 +49,7 @@ class GraphController:
         v = dict(zip(self.input_keys, x, strict=True))
         for n in self.nodes:
             s = sum(w * v[i] for i, w in n["links"])
-            v[n["key"]] = float(ACTIVATIONS[n["activation"]](np.float64(n["bias"] + n["response"] * s)))
+            v[n["key"]] = float(NEAT_ACTIVATIONS[n["activation"]](np.float64(n["bias"] + n["response"] * s)))
         return np.array([v.get(k, 0.0) for k in self.output_keys])
 
     def act(self, obs: np.ndarray) -> np.ndarray:
@@ -65,7 +57,7 @@ class GraphController:
             y = self.outputs(obs)[self.output_offset + self.action_cells]
         else:
             y = np.array([self.outputs(obs, xy)[self.output_offset] for xy in self.cell_inputs])
-        return ACTION_CENTRE + ACTION_HALF_RANGE * y
+        return to_action(y)
 
     def to_json(self) -> dict:
         return {"format": FORMAT, "input_keys": self.input_keys, "output_keys": self.output_keys,

@@ -6,7 +6,7 @@ import neat
 import numpy as np
 import pytest
 
-from evolve.cppn import CompiledCPPN
+from evolve.nn.cppn import CompiledCPPN
 
 
 def _config(n_out: int, ini) -> neat.Config:

@@ -12,28 +12,11 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 import numpy as np
-from neat.graphs import feed_forward_layers
 
-from evolve.cppn import ACTIVATIONS
+from evolve.nn.activations import NEAT_ACTIVATIONS, to_action
+from evolve.nn.feedforward import compile_genome
 
-ACT_NAMES = tuple(ACTIVATIONS)
-
-
-def _layers(genome, genome_config):
-    conns = [c.key for c in genome.connections.values() if c.enabled]
-    inputs = list(genome_config.input_keys)
-    layers, required = feed_forward_layers(inputs, list(genome_config.output_keys), conns)
-    known = required | set(inputs)
-    incoming: dict[int, list] = {}
-    for i, o in conns:
-        if i in known:
-            incoming.setdefault(o, []).append((i, genome.connections[(i, o)].weight))
-    for layer in layers:
-        for node in layer:
-            agg = genome.nodes[node].aggregation
-            if agg != "sum":
-                raise ValueError(f"aggregation {agg!r} is not supported by batched networks (sum only)")
-    return [sorted(layer) for layer in layers], incoming
+ACT_NAMES = tuple(NEAT_ACTIVATIONS)
 
 
 class NetworkBatch:
@@ -48,10 +31,16 @@ class NetworkBatch:
         self.n_out = len(configs[0].output_keys)
         if any(len(c.output_keys) != self.n_out for c in configs):
             raise ValueError("all networks of a batch need the same number of outputs")
-        compiled = [_layers(g, c) for g, c in zip(genomes, configs, strict=True)]
+        compiled = [compile_genome(g, c) for g, c in zip(genomes, configs, strict=True)]
+        for net in compiled:
+            for n in net.nodes:
+                if n.aggregation != "sum":
+                    raise ValueError(f"aggregation {n.aggregation!r} is not supported by batched "
+                                     "networks (sum only)")
         B = len(genomes)
-        depth = max((len(L) for L, _ in compiled), default=0)
-        widths = [max((len(L[d]) if d < len(L) else 0) for L, _ in compiled) for d in range(depth)]
+        depth = max((len(net.layers) for net in compiled), default=0)
+        widths = [max((len(net.layers[d]) if d < len(net.layers) else 0) for net in compiled)
+                  for d in range(depth)]
         starts = np.concatenate([[self.n_in], self.n_in + np.cumsum(widths)]).astype(int)
         self.n_slots = int(starts[-1]) + 1
         zero_slot = self.n_slots - 1
@@ -61,22 +50,21 @@ class NetworkBatch:
                                 np.zeros((B, w)), np.zeros((B, w), dtype=np.int64)))
         self.out_slot = np.full((B, self.n_out), zero_slot, dtype=np.int64)
         act_index = {a: i for i, a in enumerate(ACT_NAMES)}
-        for b, ((layers, incoming), genome, gc) in enumerate(zip(compiled, genomes, configs, strict=True)):
-            slot = {k: j for j, k in enumerate(gc.input_keys)}
-            for d, layer in enumerate(layers):
+        for b, net in enumerate(compiled):
+            slot = {k: j for j, k in enumerate(net.input_keys)}
+            for d, layer in enumerate(net.layers):
                 for j, node in enumerate(layer):
-                    slot[node] = int(starts[d]) + j
-            for d, layer in enumerate(layers):
+                    slot[node.key] = int(starts[d]) + j
+            for d, layer in enumerate(net.layers):
                 _, W, bias, resp, act = self.blocks[d]
                 for j, node in enumerate(layer):
-                    ng = genome.nodes[node]
-                    if ng.activation not in act_index:
-                        raise ValueError(f"activation {ng.activation!r} is not supported; "
+                    if node.activation not in act_index:
+                        raise ValueError(f"activation {node.activation!r} is not supported; "
                                          f"use one of {sorted(act_index)}")
-                    for i, w in incoming.get(node, []):
+                    for i, w in node.links:
                         W[b, slot[i], j] += w
-                    bias[b, j], resp[b, j], act[b, j] = ng.bias, ng.response, act_index[ng.activation]
-            for o, k in enumerate(gc.output_keys):
+                    bias[b, j], resp[b, j], act[b, j] = node.bias, node.response, act_index[node.activation]
+            for o, k in enumerate(net.output_keys):
                 if k in slot:
                     self.out_slot[b, o] = slot[k]
         self._used = [sorted(set(np.unique(a).tolist())) for *_, a in self.blocks]
@@ -92,7 +80,7 @@ class NetworkBatch:
             out = np.zeros_like(z)
             for a in used:
                 m = (act == a)[:, None, :]
-                out = np.where(m, ACTIVATIONS[ACT_NAMES[a]](z), out)
+                out = np.where(m, NEAT_ACTIVATIONS[ACT_NAMES[a]](z), out)
             v[:, :, start:start + W.shape[2]] = out
         idx = np.broadcast_to(self.out_slot[:, None, :], (B, Q, self.n_out))
         return np.take_along_axis(v, idx, axis=2)
@@ -101,7 +89,7 @@ class NetworkBatch:
 class GraphPolicy:
     """Batched NEAT-network controllers: robot b's observation enters inputs
     [input_offset, input_offset + obs_len) (others 0); its actions are the outputs at
-    output_offset + action cell, mapped like the dense controllers: 1.1 + 0.5 * y.
+    output_offset + action cell, mapped like the dense controllers (`to_action`).
 
     With `cell_xy` ((cells, 2) body-cell coordinates) each network is instead queried once per
     actuator, with the actuator cell's (x, y) in inputs 0-1, and output `output_offset` is that
@@ -128,8 +116,8 @@ class GraphPolicy:
             x = np.zeros((B, 1, self.nets.n_in))
             x[:, 0, self.input_offset:self.input_offset + w] = obs[:, :w]
             y = self.nets.forward(x)[:, 0, :]
-            return 1.1 + 0.5 * y[self._rows, self.cols]
+            return to_action(y[self._rows, self.cols])
         x = np.zeros((B, self.query_xy.shape[1], self.nets.n_in))
         x[:, :, 0:2] = self.query_xy
         x[:, :, self.input_offset:self.input_offset + w] = obs[:, None, :w]
-        return 1.1 + 0.5 * self.nets.forward(x)[:, :, self.output_offset]
+        return to_action(self.nets.forward(x)[:, :, self.output_offset])

@@ -13,9 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-ACT_FNS = {"tanh": np.tanh, "identity": lambda z: z, "relu": lambda z: np.maximum(z, 0.0),
-           "sigmoid": lambda z: 1.0 / (1.0 + np.exp(-z))}
-ACTION_CENTRE, ACTION_HALF_RANGE = 1.1, 0.5
+from evolve.nn.activations import PLAIN_ACTIVATIONS, to_action
 
 
 @dataclass
@@ -33,12 +31,12 @@ class DenseController:
         x = np.zeros(self.weights[0].shape[0])
         x[:self.input_size] = obs
         for W, b, a in zip(self.weights, self.biases, self.activations, strict=True):
-            x = ACT_FNS[a](x @ W + b)
+            x = PLAIN_ACTIVATIONS[a](x @ W + b)
         return x
 
     def act(self, obs: np.ndarray) -> np.ndarray:
         """The slow, obvious forward pass for one robot (the test oracle of `ControllerBatch`)."""
-        return ACTION_CENTRE + ACTION_HALF_RANGE * self.outputs(obs)[self.action_cells]
+        return to_action(self.outputs(obs)[self.action_cells])
 
     def to_json(self) -> dict:
         return {"format": "sgr-dense-controller-1",
@@ -90,5 +88,5 @@ class ControllerBatch:
         """(B, obs_width) padded observations -> (B, action_width) padded actions."""
         x = obs
         for W, b, a in zip(self.Ws, self.bs, self.activations, strict=True):
-            x = ACT_FNS[a](np.einsum("bi,bio->bo", x, W) + b)
-        return ACTION_CENTRE + ACTION_HALF_RANGE * x[self._rows, self.cells]
+            x = PLAIN_ACTIVATIONS[a](np.einsum("bi,bio->bo", x, W) + b)
+        return to_action(x[self._rows, self.cells])

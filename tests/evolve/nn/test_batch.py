@@ -3,7 +3,7 @@
 import neat
 import numpy as np
 
-from evolve.neat_batch import NetworkBatch
+from evolve.nn.batch import NetworkBatch
 
 
 def test_batched_networks_equal_neat_python_activate(neat_config, genomes):
@@ -21,8 +21,8 @@ def test_batched_networks_equal_neat_python_activate(neat_config, genomes):
 def test_per_cell_queries_match_the_json_controller(neat_config, genomes):
     """The direct baseline's per_cell layout: each actuator is a query with its cell's (x, y) in
     inputs 0-1; the batched policy and the champion's JSON controller give the same actions."""
-    from evolve.graph_controller import GraphController
-    from evolve.neat_batch import GraphPolicy
+    from evolve.nn.batch import GraphPolicy
+    from evolve.nn.graph import GraphController
     from evolve.substrate import cell_coordinates
 
     cfg = neat_config(outputs=6)  # 7 inputs: (x, y) + a 5-long observation; 5 materials + 1 action
