@@ -100,7 +100,8 @@ def _evolve(args: argparse.Namespace) -> int:
         print(f"\ninterrupted at generation {exp.search.generation}; continue with: "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 130
-    except OSError as exc:  # e.g. a full disk: every file of the run is still whole (atomic writes)
+    except OSError as exc:  # e.g. a full disk: every file of the run is still whole (atomic writes;
+        # a row of generations.csv cut short is skipped by readers and dropped on resume)
         print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped at generation "
               f"{exp.search.generation} and keeps its last checkpoint: make room, then "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)

@@ -9,6 +9,7 @@ band over seeds, so the spread between seeds is visible rather than hidden in a 
 from __future__ import annotations
 
 import csv
+import io
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -43,8 +44,8 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     f = Path(run_dir) / "generations.csv"
     if not f.is_file():
         raise ValueError(f"{run_dir} has no generations.csv")
-    with f.open(newline="") as fh:
-        rows = list(csv.DictReader(fh))
+    text = f.read_text()
+    rows = list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))  # a line being written is no row
     if not rows:
         return {}
 
