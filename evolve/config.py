@@ -34,7 +34,7 @@ PER_METHOD: dict[str, dict[str, tuple[Any, Any]]] = {
             "body_distance_weight": (float, 0.1)},
     "direct": {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")},
     "nested": {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
-               "inner_keep_generations": ((int, type(None)), 5), "controller_neat_config": (str, None)},
+               "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)},
 }
 REQUIRED_FOR = {"nested": ("controller_neat_config",)}
 

@@ -30,7 +30,8 @@ METHODS = {
     "sgr": {"neat_config": "configs/neat/sgr.ini", "pop_size": 64},
     "direct": {"neat_config": "configs/neat/direct.ini", "pop_size": 64},
     "nested": {"neat_config": "configs/neat/nested-body.ini", "pop_size": 10, "inner_pop_size": 10,
-               "inner_generations": 1, "controller_neat_config": "configs/neat/nested-controller.ini"},
+               "inner_generations": 1, "controller_neat_config": "configs/neat/nested-controller.ini",
+               "inner_keep_generations": 2},  # inner populations are forgotten before and after the resume
 }
 
 
