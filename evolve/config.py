@@ -34,7 +34,7 @@ PER_METHOD: dict[str, dict[str, tuple[Any, Any]]] = {
             "body_distance_weight": (float, 0.1)},
     "direct": {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")},
     "nested": {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
-               "controller_neat_config": (str, None)},
+               "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)},
 }
 REQUIRED_FOR = {"nested": ("controller_neat_config",)}
 
@@ -67,7 +67,8 @@ def check_config(raw: dict, source: str = "config") -> dict:
         val = raw[key]
         if typ is float and isinstance(val, int) and not isinstance(val, bool):
             val = float(val)
-        ok = isinstance(val, typ) and not (isinstance(val, bool) and typ in (int, float))
+        types = typ if isinstance(typ, tuple) else (typ,)
+        ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
             raise ValueError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
         cfg[key] = val
@@ -89,6 +90,14 @@ def check_config(raw: dict, source: str = "config") -> dict:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
     if method == "direct" and cfg["layout"] not in ("per_output", "per_cell"):
         raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', got {cfg['layout']!r}")
+    if method == "nested":
+        for key in ("inner_pop_size", "inner_generations"):
+            if cfg[key] < 1:
+                raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+        keep = cfg["inner_keep_generations"]
+        if keep is not None and keep < 1:
+            raise ValueError(f"{source}: key 'inner_keep_generations' must be a positive int or null "
+                             f"(never forget), got {keep}")
     if method == "sgr" and cfg["cppn_outputs"] not in (1, 2):
         raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
     return cfg

@@ -10,6 +10,7 @@ import math
 import sys
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
 
 import neat
@@ -185,7 +186,9 @@ class Experiment:
             state["problem"] = self.problem.state()
         return state
 
-    def run_all(self) -> None:
+    def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
+        """Run to the configured number of generations; `after_generation(self)` is called once
+        each generation's row, champion and checkpoint are written (bench/soak.py measures there)."""
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
         while search.generation < cfg["generations"]:
@@ -195,6 +198,8 @@ class Experiment:
             if search.generation % cfg["checkpoint_every"] == 0 or search.generation == cfg["generations"]:
                 self.run.save_checkpoint(search.generation, self.state())
             self._progress(row, time.perf_counter() - t_start)
+            if after_generation is not None:
+                after_generation(self)
 
     def _write_champion(self) -> None:
         best = self.search.best

@@ -49,6 +49,7 @@ class NeatSearch:
                                                               self.reporters, self.stagnation)
             self.population = self.reproduction.create_new(neat_config.genome_type, gc,
                                                            neat_config.pop_size)
+            self.reproduction.ancestors.clear()
             self.species = neat_config.species_set_type(neat_config.species_set_config, self.reporters)
             self.generation = 0
             self.best: dict | None = None
@@ -94,6 +95,7 @@ class NeatSearch:
             self.population = self.reproduction.create_new(self.config.genome_type,
                                                            self.config.genome_config,
                                                            self.config.pop_size)
+        self._trim_history()
         neat_s = time.perf_counter() - t2
         self.pending_build_s = self._decode_all()
         t3 = time.perf_counter()
@@ -101,6 +103,17 @@ class NeatSearch:
         row["neat_s"] = neat_s + time.perf_counter() - t3
         self.generation += 1
         return row
+
+    def _trim_history(self) -> None:
+        """neat-python keeps two records that grow with every generation and are pickled into every
+        checkpoint: the reproduction's `ancestors` (the parents of every genome ever made; nothing
+        reads it) and each species' whole `fitness_history`, of which stagnation reads only the
+        maximum. Drop the first and keep the second as its maximum. No result changes: Python's max
+        folds from the left, so max([max(h), x]) is max(h + [x]) for any values, NaN included."""
+        self.reproduction.ancestors.clear()
+        for s in self.species.species.values():
+            if len(s.fitness_history) > 1:
+                s.fitness_history[:] = [max(s.fitness_history)]
 
     def _decode_all(self) -> float:
         t = time.perf_counter()

@@ -6,6 +6,12 @@ zero-padded to a k x k grid (k = ceil(sqrt(obs length))) -> one output per cell;
 outputs at actuator cells. Per outer generation every body's inner population runs
 `inner_generations` generations; the controllers of all bodies are simulated as one batch per
 inner generation. A body's fitness is the best return its inner population has reached.
+
+Inner populations are forgotten once their body has been absent from the outer population for
+`inner_keep_generations` outer generations (null: never, the memory and checkpoints then grow with
+every body ever seen); a body that comes back later starts a fresh inner population. The body of
+the run's champion (the latest `champion()` call) keeps its population, so its controller stays
+available however long ago it was found.
 """
 
 from __future__ import annotations
@@ -55,6 +61,10 @@ class NestedProblem:
         self.cells = cell_coordinates(self.shape)
         self._configs: dict[int, object] = {}
         self.inner: dict[bytes, NeatSearch] = {}
+        self.keep_generations: int | None = cfg.get("inner_keep_generations")
+        self.generation = 0  # outer generations evaluated
+        self.last_seen: dict[bytes, int] = {}  # body -> last outer generation it was in
+        self.pinned: bytes | None = None  # body of the latest champion() call
 
     @staticmethod
     def neat_overrides(cfg: dict) -> dict:
@@ -106,7 +116,19 @@ class NestedProblem:
                 s.tell(fit[start:start + len(a)])
                 start += len(a)
         best = {key: s.best["fitness"] for key, s in zip(bodies, searches, strict=True)}
+        self.last_seen.update(dict.fromkeys(bodies, self.generation))
+        self._forget()
+        self.generation += 1
         return np.array([best[p.body.tobytes()] for p in phenotypes]), episodes
+
+    def _forget(self) -> None:
+        """Drop the inner populations of bodies absent for `keep_generations` outer generations
+        (this one included), except the champion's."""
+        if self.keep_generations is None:
+            return
+        for key in [k for k, seen in self.last_seen.items()
+                    if self.generation - seen >= self.keep_generations and k != self.pinned]:
+            del self.inner[key], self.last_seen[key]
 
     def _simulate(self, flat: list[ControllerPhenotype], searches, asks) -> np.ndarray:
         configs = [s.config.genome_config for s, a in zip(searches, asks, strict=True) for _ in a]
@@ -115,7 +137,14 @@ class NestedProblem:
                              self.cfg["episode_steps"])
 
     def champion(self, p: BodyPhenotype) -> dict:
-        s = self._inner_for(p.body)
+        """The champion's body and the best controller of its inner population, which from now on
+        is kept (the Experiment calls this with the best-ever phenotype after every generation)."""
+        key = p.body.tobytes()
+        s = self.inner.get(key)
+        if s is None:  # creating one here would consume random numbers and give an untrained controller
+            raise ValueError("the champion's body has no inner population: it was forgotten before "
+                             "champion() was called for it")
+        self.pinned = key
         b = build_body(p.body)
         ctrl = GraphController.from_genome(s.best["genome"], s.config.genome_config,
                                            obs_dim(self.cfg["task"], b.n_points), 0, 0, b.actuator_flat)
@@ -124,9 +153,14 @@ class NestedProblem:
     # checkpoint hooks: the inner populations are part of the run's state
     def state(self) -> dict:
         return {"inner": {key: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
-                          for key, s in self.inner.items()}}
+                          for key, s in self.inner.items()},
+                "generation": self.generation, "last_seen": dict(self.last_seen), "pinned": self.pinned}
 
     def restore(self, state: dict) -> None:
+        # checkpoints from before inner populations were forgotten: every body counts as just seen
+        self.generation = state.get("generation", 0)
+        self.last_seen = dict(state.get("last_seen", dict.fromkeys(state["inner"], self.generation)))
+        self.pinned = state.get("pinned")
         self.inner = {}
         for key, (st, k) in state["inner"].items():
             body = np.frombuffer(key, dtype=np.int64).reshape(self.shape).copy()

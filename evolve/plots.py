@@ -9,6 +9,7 @@ band over seeds, so the spread between seeds is visible rather than hidden in a 
 from __future__ import annotations
 
 import csv
+import io
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -44,8 +45,9 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     if not f.is_file():
         raise ValueError(f"{run_dir} has no generations.csv")
     try:
-        with f.open(newline="") as fh:
-            rows = list(csv.DictReader(fh))
+        text = f.read_text()
+        # a line being written (no newline yet) is no row
+        rows = list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))
     except (csv.Error, UnicodeDecodeError) as exc:
         raise ValueError(f"{f}: not a readable CSV file ({exc})") from None
     if not rows:

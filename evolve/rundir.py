@@ -3,7 +3,11 @@
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
 checkpoints/gen-XXXXX.pkl (state at the start of generation XXXXX). Every file that a crash could
 leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
-a kill or a full disk leaves the previous version whole. The two newest checkpoints are kept: a
+a kill or a full disk leaves the previous version whole; generations.csv gets one line per
+generation appended and flushed to disk instead (rewriting it made every generation cost time in
+proportion to the run's length), and a last line cut short by a kill or a full disk, which lacks
+its newline, is no row: readers skip it and the next write or a resume drops it. The two newest
+checkpoints are kept: a
 damaged newest one (a disk that lied about fsync, a copy cut short) falls back to the one before.
 Files get the permissions the user's umask gives, as `open()` would create them.
 """
@@ -55,6 +59,19 @@ def atomic_write(path: Path, data: bytes) -> None:
         if isinstance(exc, OSError) and exc.filename is None:  # name the file (a full disk)
             raise OSError(exc.errno, exc.strerror, str(path)) from exc
         raise
+
+
+def _ends_a_line(path: Path) -> bool:
+    """Whether a file exists, is not empty and its last byte is a newline."""
+    try:
+        with path.open("rb") as f:
+            f.seek(0, os.SEEK_END)
+            if f.tell() == 0:
+                return False
+            f.seek(-1, os.SEEK_END)
+            return f.read(1) == b"\n"
+    except OSError:
+        return False
 
 
 class RunDir:
@@ -116,8 +133,8 @@ class RunDir:
         f = self.path / "generations.csv"
         if not f.is_file():
             return []
-        with f.open() as fh:
-            return list(csv.DictReader(fh))
+        text = f.read_text()
+        return list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))  # whole lines only
 
     def _write_rows(self, rows: list[dict]) -> None:
         buf = io.StringIO()
@@ -128,9 +145,22 @@ class RunDir:
         atomic_write(self.path / "generations.csv", buf.getvalue().encode())
 
     def append_row(self, row: dict) -> None:
-        rows = self.rows()
-        rows.append({k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()})
-        self._write_rows(rows)
+        row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
+        path = self.path / "generations.csv"
+        if not _ends_a_line(path):  # no file, or a line cut short: rewrite it whole
+            self._write_rows([*self.rows(), row])
+            return
+        buf = io.StringIO()
+        csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow({k: row[k] for k in COLUMNS})
+        try:
+            with path.open("ab") as f:
+                f.write(buf.getvalue().encode())
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError as exc:
+            if exc.filename is None:  # name the file (a full disk)
+                raise OSError(exc.errno, exc.strerror, str(path)) from exc
+            raise
 
     def truncate_rows(self, generation: int) -> None:
         """Drop rows of generations >= `generation` (they are recomputed after a resume)."""

@@ -113,3 +113,69 @@ def _die_after(step, n):
             raise KeyboardInterrupt
         return step()
     return dying
+
+
+def test_nested_inner_populations_stay_bounded_and_the_champion_keeps_its_controller(tmp_path, repo_root):
+    """With inner_keep_generations K, only the bodies of the last K outer generations and the
+    champion's body keep an inner population; the champion JSON still replays to its fitness."""
+    keep = 2
+    p = _tiny(tmp_path, repo_root, "nested", "Walker-v0", generations=8, inner_keep_generations=keep)
+    exp = Experiment.create(str(p), str(tmp_path / "run"), {}, quiet=True)
+    seen: list[set[bytes]] = []
+    evaluate = exp.problem.evaluate
+
+    def recording(phenotypes):
+        seen.append({ph.body.tobytes() for ph in phenotypes})
+        return evaluate(phenotypes)
+    exp.search.evaluate = recording
+    kept = []
+    exp.run_all(after_generation=lambda e: kept.append((set(e.problem.inner), e.problem.pinned)))
+    exp.close()
+    assert len(kept) == 8
+    for g, (inner, pinned) in enumerate(kept):
+        recent = set().union(*seen[max(0, g + 1 - keep):g + 1])
+        assert inner <= recent | {pinned} and len(inner) <= len(recent) + 1
+    assert len(set().union(*seen)) > len(exp.problem.inner), "no inner population was forgotten"
+    champ, body, ctrl = load_champion(tmp_path / "run")
+    assert exp.problem.pinned == np.array(champ["body"], dtype=np.int64).tobytes()
+    env = BatchEnv("Walker-v0", [body], episode_steps=8)
+    obs, total = env.reset(), 0.0
+    for _ in range(8):
+        obs, r, term, _, _ = env.step([ctrl.act(obs[0, :env.obs_dims[0]])])
+        total += r[0]
+        if term[0]:
+            break
+    assert total == pytest.approx(champ["fitness"], abs=1e-9)
+
+
+def test_nested_champion_body_is_pinned_while_absent_bodies_are_forgotten(repo_root):
+    from evolve.experiment import load_config, neat_config_from_text, neat_ini_text
+    from evolve.nested import BodyPhenotype, NestedProblem
+
+    cfg = load_config(repo_root / "configs/nested/Walker-v0.yaml",
+                      {"inner_pop_size": 4, "inner_generations": 1, "episode_steps": 4,
+                       "inner_keep_generations": 2})
+    neat_config = neat_config_from_text(neat_ini_text(cfg["neat_config"], cfg,
+                                                      NestedProblem.neat_overrides(cfg)))
+    problem = NestedProblem(cfg, neat_config)
+    champ, other, third = (np.full((5, 5), 3), np.full((5, 5), 4), np.full((5, 5), 1))
+    champ[0], third[4] = 0, 3
+    as_phenotypes = lambda *bodies: [BodyPhenotype(b, True) for b in bodies]
+    problem.evaluate(as_phenotypes(champ, other))                  # generation 0
+    problem.champion(BodyPhenotype(champ, True))
+    problem.evaluate(as_phenotypes(third))                         # 1: champ, other absent once
+    assert set(problem.inner) == {champ.tobytes(), other.tobytes(), third.tobytes()}
+    problem.evaluate(as_phenotypes(third))                         # 2: absent twice -> forgotten
+    assert set(problem.inner) == {champ.tobytes(), third.tobytes()}
+    assert set(problem.last_seen) == set(problem.inner)
+    problem.champion(BodyPhenotype(champ, True))                   # its controller is still there
+    restored = NestedProblem(cfg, neat_config)
+    restored.restore(problem.state())
+    assert (restored.generation, restored.last_seen, restored.pinned) == \
+        (problem.generation, problem.last_seen, problem.pinned)
+    problem.evaluate(as_phenotypes(other))                         # 3: back, with a fresh population
+    assert problem.inner[other.tobytes()].generation == 1
+    problem.pool.close()
+    # a run whose config.yaml predates the key (resumed from its raw config) forgets nothing
+    old = {k: v for k, v in cfg.items() if k != "inner_keep_generations"}
+    assert NestedProblem(old, neat_config).keep_generations is None

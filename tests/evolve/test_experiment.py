@@ -41,6 +41,23 @@ def test_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, messag
     assert not (tmp_path / "run" / "generations.csv").exists()
 
 
+@pytest.mark.parametrize("changes, message", [
+    ({"inner_keep_generations": 0}, "key 'inner_keep_generations' must be a positive int or null"),
+    ({"inner_keep_generations": "forever"}, "key 'inner_keep_generations' must be int or null"),
+    ({"inner_keep_generations": True}, "key 'inner_keep_generations' must be int or null"),
+    ({"inner_pop_size": 0}, "key 'inner_pop_size' must be >= 1"),
+    ({"inner_generations": 0}, "key 'inner_generations' must be >= 1"),
+])
+def test_nested_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):
+    neat = repo_root / "configs/neat"
+    p = _write(tmp_path, repo_root, method="nested", neat_config=str(neat / "nested-body.ini"),
+               controller_neat_config=str(neat / "nested-controller.ini"), **changes)
+    assert main(["evolve", "--config", str(p), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "run" / "generations.csv").exists()
+
+
 def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
     p = _write(tmp_path, repo_root)
     full = Experiment.create(str(p), str(tmp_path / "full"), {}, quiet=True)

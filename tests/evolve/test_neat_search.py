@@ -41,3 +41,36 @@ def test_speciation_distance_adds_v_times_the_body_distance(neat_config, genomes
     assert a.distance(b, gc) == base + 0.25 * body_distance(gc.body_cache[a.key], gc.body_cache[b.key])
     gc.body_distance_weight = 0.0
     assert a.distance(b, gc) == base
+
+
+def test_ancestors_and_fitness_histories_stay_bounded_and_trimming_them_changes_nothing(neat_config):
+    """neat-python's reproduction records the parents of every genome ever made and each species
+    its whole fitness history; we keep neither (the history as its maximum), with the same run."""
+    from types import SimpleNamespace
+
+    def run(trim: bool) -> tuple:
+        cfg = neat_config(pop=30)
+        cfg.species_set_config.compatibility_threshold = 1.5  # many species, some stagnate
+
+        def evaluate(phenotypes):  # rounded: ties and plateaus, so species stagnate
+            return np.array([round(sum(c.weight for c in p.genome.connections.values() if c.enabled), 1)
+                             for p in phenotypes])
+        search = NeatSearch(cfg, lambda g: SimpleNamespace(valid=True, body=np.zeros((5, 5)), genome=g),
+                            evaluate, seed=4)
+        if not trim:
+            search._trim_history = lambda: None
+        stagnant = []
+        search.reporters.add(SimpleNamespace(species_stagnant=lambda sid, s: stagnant.append(sid),
+                                             info=lambda msg: None))
+        rows = [search.step() for _ in range(45)]
+        longest = max(len(s.fitness_history) for s in search.species.species.values())
+        fitness = [(r["best"], r["mean"], r["n_species"]) for r in rows]
+        genomes = {k: sorted((c.key, c.weight) for c in g.connections.values())
+                   for k, g in search.population.items()}
+        return fitness, genomes, len(search.reproduction.ancestors), longest, stagnant
+
+    trimmed, untrimmed = run(True), run(False)
+    assert trimmed[:2] == untrimmed[:2]
+    assert trimmed[2] == 0 and untrimmed[2] > 300
+    assert trimmed[3] == 1 and untrimmed[3] > 20  # longer than max_stagnation: stagnation was decided
+    assert trimmed[4] == untrimmed[4] and len(trimmed[4]) >= 3  # the same species stagnated

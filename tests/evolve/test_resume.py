@@ -19,7 +19,7 @@ import pytest
 import yaml
 
 from evolve.experiment import Experiment
-from evolve.rundir import RunDir
+from evolve.rundir import COLUMNS, RunDir
 
 FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 GENERATIONS = 12
@@ -30,7 +30,8 @@ METHODS = {
     "sgr": {"neat_config": "configs/neat/sgr.ini", "pop_size": 64},
     "direct": {"neat_config": "configs/neat/direct.ini", "pop_size": 64},
     "nested": {"neat_config": "configs/neat/nested-body.ini", "pop_size": 10, "inner_pop_size": 10,
-               "inner_generations": 1, "controller_neat_config": "configs/neat/nested-controller.ini"},
+               "inner_generations": 1, "controller_neat_config": "configs/neat/nested-controller.ini",
+               "inner_keep_generations": 2},  # inner populations are forgotten before and after the resume
 }
 
 
@@ -239,3 +240,33 @@ def test_a_run_advanced_by_another_process_is_refused_with_one_line(tmp_path, re
     finally:
         running.close()
     assert main(["evolve", "--resume", str(tmp_path / "run"), "--quiet"]) == 0  # free once it stops
+
+
+def test_generations_csv_is_appended_and_a_row_cut_short_is_no_row(tmp_path, repo_root, monkeypatch):
+    cfg = write_config(tmp_path, repo_root, "sgr", generations=2, pop_size=8, checkpoint_every=1)
+    full = Experiment.create(str(cfg), str(tmp_path / "full"), {"generations": 3}, quiet=True)
+    full.run_all()
+    full.close()
+    exp = Experiment.create(str(cfg), str(tmp_path / "run"), {}, quiet=True)
+    with monkeypatch.context() as m:  # appending a row reads nothing back: O(1) per generation
+        m.setattr(RunDir, "rows", lambda self: pytest.fail("append_row re-read generations.csv"))
+        exp.run_all()
+    exp.close()
+    csv_path = exp.run.path / "generations.csv"
+    whole = csv_path.read_bytes()
+    with csv_path.open("ab") as f:  # a kill or a full disk in the middle of writing generation 2's row
+        f.write(b"2,1.2345")
+    assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))[:2]
+    from evolve.plots import read_generations
+    assert len(read_generations(exp.run.path)["best"]) == 2
+    resumed = Experiment.resume(str(exp.run.path), quiet=True, generations=3)
+    assert csv_path.read_bytes() == whole  # the resume dropped the cut row
+    resumed.run_all()
+    resumed.close()
+    assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))
+    with csv_path.open("ab") as f:
+        f.write(b"3,0.5")
+    exp.run.append_row({**exp.run.rows()[-1], "generation": 3})  # a cut row is dropped on the next write
+    lines = csv_path.read_text().splitlines()
+    assert [r["generation"] for r in exp.run.rows()] == ["0", "1", "2", "3"]
+    assert len(lines) == 5 and all(line.count(",") == len(COLUMNS) - 1 for line in lines)
