@@ -15,7 +15,7 @@ import tempfile
 import time
 
 from evolve.cli import workers_arg
-from evolve.experiment import Experiment
+from evolve.runs.experiment import Experiment
 from tasks.specs import task_spec
 
 

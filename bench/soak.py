@@ -29,7 +29,7 @@ from pathlib import Path
 import yaml
 
 from evolve.cli import workers_arg
-from evolve.experiment import Experiment
+from evolve.runs.experiment import Experiment
 
 ROOT = Path(__file__).resolve().parent.parent
 

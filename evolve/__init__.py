@@ -1,1 +1,14 @@
-"""Genomes and search (SGR and baselines) on top of tasks; also home of the `sgr` command line."""
+"""Genomes and search on top of tasks: SGR and the paper's baselines behind one contract
+(`evolve.methods`), NEAT plumbing (`evolve.search`), networks (`evolve.nn`), batched rollouts
+(`evolve.rollout`), runs, sweeps and reports (`evolve.runs`), and the `sgr` command line.
+
+    from evolve import Experiment
+    exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5,
+                                  "pop_size": 16, "episode_steps": 100}, out="runs/notebook")
+    exp.run_all(); exp.finish()
+"""
+
+from evolve.methods import METHODS, Problem
+from evolve.runs import Experiment, RunDir, config_from_dict, load_config
+
+__all__ = ["METHODS", "Experiment", "Problem", "RunDir", "config_from_dict", "load_config"]

@@ -1,93 +1,17 @@
-"""`sgr` command line: evolve, render, plot, demo, validate, bench."""
+"""`sgr` command line. The dispatcher lives here (evolve is the only layer that may import all
+three); evolve's own commands are evolve, sweep, report, render and plot, and the task and
+simulator commands (demo, validate, bench) come from tasks/cli.py."""
 
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 
-
-def _demo(args: argparse.Namespace) -> int:
-    """Short main job: a batch of random robots with open-loop gaits; writes results.json."""
-    from tasks.bench import sinusoid
-    from tasks.env import BatchEnv
-    from tsim.sampling import sample_robot
-
-    out = output_path(args.out, folder=True)
-    rng = np.random.default_rng(args.seed)
-    bodies = [sample_robot((5, 5), rng) for _ in range(args.robots)]
-    env = BatchEnv(args.task, bodies, episode_steps=args.steps)
-    t0 = time.perf_counter()
-    total = np.zeros(env.n_worlds)
-    A = env.sim.max_actuators
-    for t in range(args.steps):
-        _, r, term, trunc, _ = env.step(sinusoid(t, A)[None, :].repeat(env.n_worlds, 0))
-        total += r
-    wall = time.perf_counter() - t0
-    out.mkdir(parents=True, exist_ok=True)
-    best = int(np.argmax(total))
-    result = {"task": args.task, "robots": args.robots, "steps": args.steps, "seed": args.seed,
-              "returns": total.tolist(), "best_return": float(total[best]),
-              "best_body": bodies[best].tolist(), "unstable": int(env.sim.unstable.sum()),
-              "wall_s": wall, "robot_steps_per_s": args.robots * args.steps / wall}
-    (out / "results.json").write_text(json.dumps(result, indent=1))
-    print(f"{args.task}: {args.robots} robots x {args.steps} steps in {wall:.1f} s "
-          f"({result['robot_steps_per_s']:.0f} robot-steps/s); best return "
-          f"{result['best_return']:.3f}; wrote {out / 'results.json'}")
-    return 0
-
-
-def _validate(args: argparse.Namespace) -> int:
-    from tasks.validate import validate
-
-    report = validate(args.dir)
-    if args.json:
-        print(json.dumps(report))
-        return 0
-    for c in report["cases"]:
-        print(f"{c['file']:<48} {c['task']:<22} com_err_final {c['com_err_final']:.2e} "
-              f"com_err_max50 {c['com_err_max50']:.2e} obs_err_step0 {c['obs_err_step0']:.1e} "
-              f"return_err {c['return_err']:.2e}")
-    for task, t in report["tasks"].items():
-        print(task, " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                             for k, v in t.items()))
-    return 0
-
-
-REPO_CONFIGS = Path(__file__).resolve().parents[1] / "configs"
-DEFAULT_CONFIG = REPO_CONFIGS / "sgr" / "quick.yaml"
-
-
-def positive(cast):
-    """argparse type: a positive number of type `cast` (int or float)."""
-    def parse(text: str):
-        try:
-            value = cast(text)
-        except ValueError:
-            value = 0
-        if not value > 0:
-            raise argparse.ArgumentTypeError(f"must be a positive {cast.__name__}, got {text!r}")
-        return value
-    return parse
-
-
-def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) -> Path:
-    """`path` as what a command will write (a folder, or a file); ValueError naming the flag when it
-    cannot be one (it, or a folder above it, is a file; a file output is a folder), before any
-    work is done."""
-    path = Path(path)
-    if path.exists() and path.is_dir() != folder:
-        raise ValueError(f"{flag} {path}: is a {'file' if folder else 'folder'}")
-    for above in path.parents:
-        if above.exists():
-            if not above.is_dir():
-                raise ValueError(f"{flag} {path}: {above} is a file, not a folder")
-            break
-    return path
+from tasks.cli import output_path, parse_body, positive, register_task_commands
 
 
 def workers_arg(text: str) -> int | str:
@@ -104,8 +28,8 @@ def workers_arg(text: str) -> int | str:
 
 
 def _evolve(args: argparse.Namespace) -> int:
-    from evolve.experiment import Experiment
-    from evolve.rollout_pool import WorkerDied
+    from evolve.rollout.pool import WorkerDied
+    from evolve.runs.experiment import Experiment
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
@@ -117,7 +41,9 @@ def _evolve(args: argparse.Namespace) -> int:
                                 generations=args.generations)
         print(f"resuming {args.resume} at generation {exp.search.generation}")
     else:
-        config = args.config or str(DEFAULT_CONFIG)
+        from evolve.runs.config import configs_dir
+
+        config = args.config or str(configs_dir() / "sgr" / "quick.yaml")
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{Path(config).stem}-seed{args.seed or 0}-{stamp}")
         output_path(out, folder=True)
@@ -148,10 +74,10 @@ def _evolve(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from evolve.sweep import LocalBackend, Sweep, run_sweep
+    from evolve.runs.sweep import LocalBackend, Sweep, run_sweep
 
     if args.backend == "ray":
-        from evolve.ray_backend import require_ray
+        from evolve.rollout.ray_cluster import require_ray
         require_ray("--backend ray")  # before the sweep directory exists
     elif args.address:
         raise ValueError("--address goes with --backend ray")
@@ -167,7 +93,7 @@ def _sweep(args: argparse.Namespace) -> int:
         sweep = Sweep.create(args.config, out)
         print(f"sweep directory: {out}")
     if args.backend == "ray":
-        from evolve.ray_backend import RayBackend
+        from evolve.runs.ray_sweep import RayBackend
         backend = RayBackend(args.parallel, address=args.address)
     else:
         backend = LocalBackend(args.parallel)
@@ -179,46 +105,15 @@ def _sweep(args: argparse.Namespace) -> int:
 
 
 def _report(args: argparse.Namespace) -> int:
-    from evolve.report import write_report
+    from evolve.runs.report import write_report
 
     out = write_report(args.dir, args.out, robustness=not args.no_robustness)
     print(f"wrote {out}, {out.parent / 'summary.csv'} and {out.parent / 'curves.png'}")
     return 0
 
 
-def parse_body(text: str) -> np.ndarray:
-    """BODY argument: rows separated by commas, one digit per voxel ("33333,33033,...") or a
-    .json / .npy file holding the matrix."""
-    path = Path(text)
-    if path.suffix in (".json", ".npy"):
-        if not path.is_file():
-            raise ValueError(f"bad body matrix: file not found: {path}")
-        if path.suffix == ".npy":
-            with path.open("rb") as f:
-                if f.read(6) != b"\x93NUMPY":
-                    raise ValueError(f"bad body matrix: {path}: not a .npy file")
-            try:
-                return np.load(path)
-            except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
-                raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
-        try:
-            data = json.loads(path.read_text())
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ValueError(f"bad body matrix: {path}: not valid JSON ({exc})") from None
-        if isinstance(data, dict):
-            if "body" not in data and "matrix" not in data:
-                raise ValueError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
-            data = data.get("body", data.get("matrix"))
-        return np.asarray(data)
-    rows = text.split(",")
-    if not all(r and r.isdigit() for r in rows) or len({len(r) for r in rows}) != 1:
-        raise ValueError(f"bad body matrix: {text!r} is not equal-length rows of digits separated "
-                         "by commas (e.g. 33333,33333,33033,33033,33033)")
-    return np.array([[int(ch) for ch in r] for r in rows])
-
-
 def _render(args: argparse.Namespace) -> int:
-    from evolve.champion import champion_gif
+    from evolve.runs.champion import champion_gif
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot
@@ -243,7 +138,7 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from evolve.plots import plot_run, plot_runs
+    from evolve.runs.plots import plot_run, plot_runs
 
     if args.out:
         output_path(args.out)
@@ -252,20 +147,6 @@ def _plot(args: argparse.Namespace) -> int:
     else:
         out = plot_runs(args.run_dirs, args.out or "fitness.png")
     print(f"wrote {out}")
-    return 0
-
-
-def _bench(args: argparse.Namespace) -> int:
-    from tasks.bench import bench
-
-    r = bench(args.task, args.robots, args.steps)
-    if args.json:
-        print(json.dumps(r))
-    else:
-        print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
-              f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "
-              f"{r['physics_robot_steps_per_s']:.0f} (physics only); compile {r['compile_s']:.1f} s; "
-              f"threads {r['threads']}")
     return 0
 
 
@@ -321,23 +202,7 @@ def main(argv: list[str] | None = None) -> int:
     pl.add_argument("--out", help="PNG path (default RUN_DIR/fitness.png for one run, else fitness.png)")
     pl.add_argument("--compare", action="store_true", help="group style even for a single run")
     pl.set_defaults(fn=_plot)
-    d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
-    d.add_argument("--task", default="Walker-v0")
-    d.add_argument("--robots", type=positive(int), default=32)
-    d.add_argument("--steps", type=positive(int), default=300)
-    d.add_argument("--seed", type=int, default=0)
-    d.add_argument("--out", default="runs/demo")
-    d.set_defaults(fn=_demo)
-    v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
-    v.add_argument("dir")
-    v.add_argument("--json", action="store_true")
-    v.set_defaults(fn=_validate)
-    b = sub.add_parser("bench", help="robot-steps per second on random bodies")
-    b.add_argument("--task", default="Walker-v0")
-    b.add_argument("--robots", type=positive(int), default=128)
-    b.add_argument("--steps", type=positive(int), default=100)
-    b.add_argument("--json", action="store_true")
-    b.set_defaults(fn=_bench)
+    register_task_commands(sub)
     args = p.parse_args(argv)
     try:
         return args.fn(args)

@@ -3,7 +3,7 @@ import random
 import neat
 import pytest
 
-from evolve.experiment import load_neat_config, neat_ini_text
+from evolve.search.neat_ini import load_neat_config, neat_ini_text
 
 
 @pytest.fixture()

@@ -21,9 +21,9 @@ def test_batched_networks_equal_neat_python_activate(neat_config, genomes):
 def test_per_cell_queries_match_the_json_controller(neat_config, genomes):
     """The direct baseline's per_cell layout: each actuator is a query with its cell's (x, y) in
     inputs 0-1; the batched policy and the champion's JSON controller give the same actions."""
+    from evolve.methods.substrate import cell_coordinates
     from evolve.nn.batch import GraphPolicy
     from evolve.nn.graph import GraphController
-    from evolve.substrate import cell_coordinates
 
     cfg = neat_config(outputs=6)  # 7 inputs: (x, y) + a 5-long observation; 5 materials + 1 action
     gs = genomes(cfg, 4, mutations=8, seed=3)

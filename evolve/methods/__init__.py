@@ -1,0 +1,25 @@
+"""Methods behind one contract (`Problem`, evolve/methods/base.py) and their registry: a method is
+one file and one line here."""
+
+from __future__ import annotations
+
+from evolve.methods.base import Problem
+from evolve.methods.direct import DirectProblem
+from evolve.methods.nested import NestedProblem
+from evolve.methods.sgr import SgrProblem
+
+METHODS: dict[str, type[Problem]] = {p.name: p for p in (
+    SgrProblem,
+    DirectProblem,
+    NestedProblem,
+)}
+
+
+def method(name: str) -> type[Problem]:
+    try:
+        return METHODS[name]
+    except KeyError:
+        raise ValueError(f"unknown method {name!r}; known methods: {', '.join(METHODS)}") from None
+
+
+__all__ = ["METHODS", "DirectProblem", "NestedProblem", "Problem", "SgrProblem", "method"]

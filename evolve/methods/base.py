@@ -1,0 +1,77 @@
+"""The contract of a method: a `Problem` turns genomes into robots and robots into fitness.
+
+`NeatSearch` (evolve/search) runs NEAT over the method's genomes and asks the problem for
+everything method-specific: how a genome decodes (`decode`), how a generation of decoded robots
+is evaluated (`evaluate`), what the champion file holds (`champion`), which neat-python settings
+the method fixes (`neat_overrides`), its config keys, and any state of its own that a checkpoint
+must keep (`state`/`restore`). A method is one file with one `Problem` subclass, plus one line in
+evolve/methods/__init__.py's registry.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar, Protocol
+
+import numpy as np
+
+from evolve.rollout.pool import RolloutPool
+
+# config key -> (type or tuple of types, default)
+Schema = dict[str, tuple[Any, Any]]
+
+
+class Phenotype(Protocol):
+    """What `decode` returns: at least the body and whether it is a valid robot (invalid genomes
+    are removed before selection and never simulated)."""
+
+    body: np.ndarray
+    valid: bool
+
+
+class Problem:
+    name: ClassVar[str]  # the config's `method`
+    config_keys: ClassVar[Schema] = {}  # the method's keys beyond the common ones (evolve/runs/config.py)
+    # keys holding files (relative to the YAML that names them) -> default file in configs/neat/
+    default_files: ClassVar[dict[str, str]] = {}
+    reevaluate_elites: ClassVar[bool] = False  # True when evaluation changes state (nested's inner search)
+
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
+        """`cfg` is the resolved config (every key present); `pool` simulates episodes."""
+        self.cfg = cfg
+        self.neat_config = neat_config
+        self.pool = pool or RolloutPool(1)
+
+    @classmethod
+    def validate(cls, cfg: dict, source: str) -> None:
+        """Value checks beyond the schema's types; raise ValueError naming `source` and the key."""
+
+    @classmethod
+    def neat_overrides(cls, cfg: dict) -> dict[str, dict[str, str]]:
+        """INI values the method fixes, by section (e.g. the network's input and output counts)."""
+        return {}
+
+    def decode(self, genome) -> Phenotype:
+        raise NotImplementedError
+
+    def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:
+        """Fitness of each (valid) phenotype and the number of episodes simulated."""
+        raise NotImplementedError
+
+    def champion(self, phenotype: Phenotype) -> dict:
+        """The champion file's method-specific keys: at least `body` and `controller` (JSON)."""
+        raise NotImplementedError
+
+    def state(self) -> dict:
+        """The method's own run state for checkpoints (beyond the NEAT population)."""
+        return {}
+
+    def restore(self, state: dict) -> None:
+        """Take back what `state` returned, in a fresh process."""
+
+
+def positive(cfg: dict, source: str, *keys: str) -> None:
+    """Raise naming the first of `keys` whose value is below 1."""
+    for key in keys:
+        if cfg[key] < 1:
+            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")

@@ -1,0 +1,103 @@
+"""Direct-encoding NEAT baseline: one NEAT network per genome is both body generator and controller.
+
+Inputs: 2 body coordinates + the observation (zero-padded to the largest robot of the grid).
+Body: each cell's (x, y) with the observation inputs at 0, argmax of the 5 material outputs.
+Control, config key `layout`:
+- "per_output" (default; the paper's description): outputs 5 materials + one per body cell;
+  coordinates 0, the observation in the rest; actions are the cell outputs at actuator cells
+  (evogym's order), 1.1 + 0.5 * y.
+- "per_cell" (ours): outputs 5 materials + 1 action; the network is queried once per actuator
+  with its cell's (x, y) and the observation, as SGR's CPPN is queried per substrate node.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from functools import partial
+
+import numpy as np
+
+from evolve.methods.base import Problem
+from evolve.methods.sgr_decoder import is_valid_robot
+from evolve.methods.substrate import N_TYPES, cell_coordinates
+from evolve.nn.batch import GraphPolicy, NetworkBatch
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.graph import GraphController
+from evolve.rollout.pool import RolloutPool
+from tasks.env import obs_dim
+from tsim.body import build_body
+
+N_COORDS = 2
+
+
+def n_inputs(task: str, shape: tuple[int, int]) -> int:
+    return N_COORDS + obs_dim(task, (shape[0] + 1) * (shape[1] + 1))
+
+
+@dataclass
+class DirectPhenotype:
+    body: np.ndarray
+    valid: bool
+    genome: object = None
+
+
+LAYOUTS = ("per_output", "per_cell")
+
+
+def direct_policy(env, genomes: Sequence, genome_config, cell_xy: np.ndarray | None = None) -> GraphPolicy:
+    """Batched direct-encoding networks driving the robots of env (picklable for `RolloutPool`);
+    `cell_xy` (the body cells' coordinates) selects the per_cell layout."""
+    cells = [b.actuator_flat for b in env.sim.bodies]
+    return GraphPolicy(NetworkBatch(list(genomes), genome_config), cells, env.sim.max_actuators,
+                       N_COORDS, N_TYPES, cell_xy=cell_xy)
+
+
+class DirectProblem(Problem):
+    """The paper's direct-encoding baseline: one NEAT network is both body generator and
+    controller (layouts in the module docstring)."""
+
+    name = "direct"
+    config_keys = {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")}
+    default_files = {"neat_config": "direct.ini"}
+
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
+        super().__init__(cfg, neat_config, pool)
+        self.gc = neat_config.genome_config
+        self.shape = tuple(cfg["robot_shape"])
+        self.cells = cell_coordinates(self.shape)
+        self.per_cell = cfg.get("layout", "per_output") == "per_cell"
+
+    @classmethod
+    def validate(cls, cfg: dict, source: str) -> None:
+        if cfg["layout"] not in LAYOUTS:
+            raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
+                             f"got {cfg['layout']!r}")
+
+    @classmethod
+    def neat_overrides(cls, cfg: dict) -> dict:
+        shape = tuple(cfg["robot_shape"])
+        n_control = 1 if cfg.get("layout", "per_output") == "per_cell" else shape[0] * shape[1]
+        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
+                                  "num_outputs": str(N_TYPES + n_control)}}
+
+    def decode(self, genome) -> DirectPhenotype:
+        x = np.zeros((len(self.cells), len(self.gc.input_keys)))
+        x[:, :N_COORDS] = self.cells
+        out = CompiledCPPN(genome, self.gc)(x)[:, :N_TYPES]
+        body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
+        return DirectPhenotype(body, is_valid_robot(body), genome)
+
+    def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> tuple[np.ndarray, int]:
+        return self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
+                             [p.genome for p in phenotypes],
+                             partial(direct_policy, genome_config=self.gc,
+                                     cell_xy=self.cells if self.per_cell else None),
+                             self.cfg["episode_steps"]), len(phenotypes)
+
+    def champion(self, p: DirectPhenotype) -> dict:
+        b = build_body(p.body)
+        cell_inputs = self.cells[np.asarray(b.actuator_flat, dtype=np.int64)] if self.per_cell else None
+        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),
+                                           N_COORDS, N_TYPES, b.actuator_flat, cell_inputs)
+        return {"body": p.body.tolist(), "controller": ctrl.to_json()}

@@ -1,0 +1,183 @@
+"""Nested-loop NEAT baseline: an outer NEAT population of body networks, and for every distinct
+body an inner NEAT population of controllers that persists across outer generations.
+
+Body network: (x, y) of a cell -> 5 material outputs, argmax. Controller network: the observation
+zero-padded to a k x k grid (k = ceil(sqrt(obs length))) -> one output per cell; actions are the
+outputs at actuator cells. Per outer generation every body's inner population runs
+`inner_generations` generations; the controllers of all bodies are simulated as one batch per
+inner generation. A body's fitness is the best return its inner population has reached.
+
+Inner populations are forgotten once their body has been absent from the outer population for
+`inner_keep_generations` outer generations (null: never, the memory and checkpoints then grow with
+every body ever seen); a body that comes back later starts a fresh inner population. The body of
+the run's champion (the latest `champion()` call) keeps its population, so its controller stays
+available however long ago it was found.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from evolve.methods.base import Problem, positive
+from evolve.methods.sgr_decoder import is_valid_robot
+from evolve.methods.substrate import N_TYPES, cell_coordinates, controller_side
+from evolve.nn.batch import GraphPolicy, NetworkBatch
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.graph import GraphController
+from evolve.rollout.pool import RolloutPool
+from evolve.search.neat_ini import neat_config_from_text, neat_ini_text
+from evolve.search.neat_search import NeatSearch
+from tasks.env import obs_dim
+from tsim.body import build_body
+
+
+@dataclass
+class BodyPhenotype:
+    body: np.ndarray
+    valid: bool
+
+
+@dataclass
+class ControllerPhenotype:
+    genome: object
+    body: np.ndarray
+    valid: bool = True
+
+
+def nested_policy(env, items: Sequence) -> GraphPolicy:
+    """Inner controller networks, items = (genome, genome config), driving the robots of env."""
+    nets = NetworkBatch([g for g, _ in items], [c for _, c in items])
+    return GraphPolicy(nets, [b.actuator_flat for b in env.sim.bodies], env.sim.max_actuators)
+
+
+class NestedProblem(Problem):
+    """The paper's nested-loop baseline: NEAT over body networks outside, a NEAT population of
+    controllers per distinct body inside (module docstring)."""
+
+    name = "nested"
+    config_keys = {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
+                   "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)}
+    default_files = {"neat_config": "nested-body.ini", "controller_neat_config": "nested-controller.ini"}
+    reevaluate_elites = True  # a body's fitness is its inner search's best, which goes on improving
+
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
+        super().__init__(cfg, neat_config, pool)
+        self.gc = neat_config.genome_config
+        self.shape = tuple(cfg["robot_shape"])
+        self.cells = cell_coordinates(self.shape)
+        self._configs: dict[int, object] = {}
+        self.inner: dict[bytes, NeatSearch] = {}
+        self.keep_generations: int | None = cfg.get("inner_keep_generations")
+        self.generation = 0  # outer generations evaluated
+        self.last_seen: dict[bytes, int] = {}  # body -> last outer generation it was in
+        self.pinned: bytes | None = None  # body of the latest champion() call
+
+    @classmethod
+    def neat_overrides(cls, cfg: dict) -> dict:
+        return {"DefaultGenome": {"num_inputs": "2", "num_outputs": str(N_TYPES)}}
+
+    @classmethod
+    def validate(cls, cfg: dict, source: str) -> None:
+        """Also loads controller_neat_config: a bad one fails before a run starts, rather than at
+        the first body of its first generation."""
+        positive(cfg, source, "inner_pop_size", "inner_generations")
+        keep = cfg["inner_keep_generations"]
+        if keep is not None and keep < 1:
+            raise ValueError(f"{source}: key 'inner_keep_generations' must be a positive int or null "
+                             f"(never forget), got {keep}")
+        cls.controller_config(cfg, 1)
+
+    @staticmethod
+    def controller_config(cfg: dict, k: int):
+        """neat-python config of the inner controllers for a k x k input grid."""
+        n_cells = cfg["robot_shape"][0] * cfg["robot_shape"][1]
+        ini = neat_ini_text(cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
+                            {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": str(n_cells)}})
+        return neat_config_from_text(ini, cfg["controller_neat_config"])
+
+    def _controller_config(self, k: int):
+        if k not in self._configs:
+            self._configs[k] = self.controller_config(self.cfg, k)
+        return self._configs[k]
+
+    def decode(self, genome) -> BodyPhenotype:
+        out = CompiledCPPN(genome, self.gc)(self.cells)
+        body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
+        return BodyPhenotype(body, is_valid_robot(body))
+
+    def _inner_for(self, body: np.ndarray) -> NeatSearch:
+        key = body.tobytes()
+        if key not in self.inner:
+            k = controller_side(obs_dim(self.cfg["task"], build_body(body).n_points))
+            self.inner[key] = NeatSearch(self._controller_config(k),
+                                         lambda g, b=body: ControllerPhenotype(g, b), None, seed=None)
+        return self.inner[key]
+
+    def evaluate(self, phenotypes: Sequence[BodyPhenotype]) -> tuple[np.ndarray, int]:
+        bodies = {p.body.tobytes(): p.body for p in phenotypes}
+        searches = [self._inner_for(b) for b in bodies.values()]
+        episodes = 0
+        for _ in range(self.cfg["inner_generations"]):
+            asks = [s.ask() for s in searches]
+            flat = [p for a in asks for _, p in a]
+            fit = self._simulate(flat, searches, asks)
+            episodes += len(flat)
+            start = 0
+            for s, a in zip(searches, asks, strict=True):
+                s.tell(fit[start:start + len(a)])
+                start += len(a)
+        best = {key: s.best["fitness"] for key, s in zip(bodies, searches, strict=True)}
+        self.last_seen.update(dict.fromkeys(bodies, self.generation))
+        self._forget()
+        self.generation += 1
+        return np.array([best[p.body.tobytes()] for p in phenotypes]), episodes
+
+    def _forget(self) -> None:
+        """Drop the inner populations of bodies absent for `keep_generations` outer generations
+        (this one included), except the champion's."""
+        if self.keep_generations is None:
+            return
+        for key in [k for k, seen in self.last_seen.items()
+                    if self.generation - seen >= self.keep_generations and k != self.pinned]:
+            del self.inner[key], self.last_seen[key]
+
+    def _simulate(self, flat: list[ControllerPhenotype], searches, asks) -> np.ndarray:
+        configs = [s.config.genome_config for s, a in zip(searches, asks, strict=True) for _ in a]
+        items = [(p.genome, c) for p, c in zip(flat, configs, strict=True)]
+        return self.pool.run(self.cfg["task"], [p.body for p in flat], items, nested_policy,
+                             self.cfg["episode_steps"])
+
+    def champion(self, p: BodyPhenotype) -> dict:
+        """The champion's body and the best controller of its inner population, which from now on
+        is kept (the Experiment calls this with the best-ever phenotype after every generation)."""
+        key = p.body.tobytes()
+        s = self.inner.get(key)
+        if s is None:  # creating one here would consume random numbers and give an untrained controller
+            raise ValueError("the champion's body has no inner population: it was forgotten before "
+                             "champion() was called for it")
+        self.pinned = key
+        b = build_body(p.body)
+        ctrl = GraphController.from_genome(s.best["genome"], s.config.genome_config,
+                                           obs_dim(self.cfg["task"], b.n_points), 0, 0, b.actuator_flat)
+        return {"body": p.body.tolist(), "controller": ctrl.to_json()}
+
+    # checkpoint hooks: the inner populations are part of the run's state
+    def state(self) -> dict:
+        return {"inner": {key: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
+                          for key, s in self.inner.items()},
+                "generation": self.generation, "last_seen": dict(self.last_seen), "pinned": self.pinned}
+
+    def restore(self, state: dict) -> None:
+        # checkpoints from before inner populations were forgotten: every body counts as just seen
+        self.generation = state.get("generation", 0)
+        self.last_seen = dict(state.get("last_seen", dict.fromkeys(state["inner"], self.generation)))
+        self.pinned = state.get("pinned")
+        self.inner = {}
+        for key, (st, k) in state["inner"].items():
+            body = np.frombuffer(key, dtype=np.int64).reshape(self.shape).copy()
+            self.inner[key] = NeatSearch(self._controller_config(k),
+                                         lambda g, b=body: ControllerPhenotype(g, b), None, seed=None,
+                                         state=st)

@@ -1,0 +1,48 @@
+"""The SGR method: a CPPN genome decoded into a body and a controller, fitness = episode return."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from evolve.methods.base import Problem
+from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
+from evolve.rollout.episodes import dense_policy
+from evolve.rollout.pool import RolloutPool
+
+
+class SgrProblem(Problem):
+    """One CPPN genome, queried HyperNEAT-style over a 3-D substrate: a body network (z > 0) and
+    a controller network (z < 0); fitness is the episode return (docs/EVOLVE.md)."""
+
+    name = "sgr"
+    config_keys = {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
+                   "body_distance_weight": (float, 0.1)}
+    default_files = {"neat_config": "sgr.ini"}
+
+    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
+        super().__init__(cfg, neat_config, pool)
+        self.genome_config = neat_config.genome_config
+        self.settings = DecoderSettings(shape=tuple(cfg["robot_shape"]), cppn_outputs=cfg["cppn_outputs"],
+                                        threshold=cfg["weight_threshold"], max_weight=cfg["max_weight"])
+
+    @classmethod
+    def validate(cls, cfg: dict, source: str) -> None:
+        if cfg["cppn_outputs"] not in (1, 2):
+            raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
+
+    @classmethod
+    def neat_overrides(cls, cfg: dict) -> dict:
+        return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(cfg["cppn_outputs"])}}
+
+    def decode(self, genome) -> Phenotype:
+        return decode(genome, self.genome_config, self.cfg["task"], self.settings)
+
+    def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:
+        fitness = self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
+                                [p.controller for p in phenotypes], dense_policy, self.cfg["episode_steps"])
+        return fitness, len(phenotypes)
+
+    def champion(self, phenotype: Phenotype) -> dict:
+        return {"body": phenotype.body.tolist(), "controller": phenotype.controller.to_json()}

@@ -1,0 +1,85 @@
+"""SGR decoding: one CPPN genome -> (body matrix, dense controller), HyperNEAT-style.
+
+The body network (z > 0) is evaluated on every cell of the body grid and each cell takes the
+argmax of its 5 material outputs; the controller network (z < 0) becomes a `DenseController`
+whose input grid is sized to the decoded body's observation. With one CPPN output both
+networks read it; with two, output 0 is the body's and output 1 the controller's.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cache
+
+import numpy as np
+
+from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.methods.substrate import body_substrate, cell_coordinates, controller_side, controller_substrate
+from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.dense import DenseController
+from tasks.env import obs_dim
+from tsim.body import build_body, has_actuator, is_connected
+
+
+@dataclass(frozen=True)
+class DecoderSettings:
+    shape: tuple[int, int] = (5, 5)
+    cppn_outputs: int = 1
+    threshold: float = 0.2
+    max_weight: float = 1.0
+
+    @property
+    def expression(self) -> Expression:
+        return Expression(self.threshold, self.max_weight)
+
+    @property
+    def controller_output(self) -> int:
+        return 0 if self.cppn_outputs == 1 else 1
+
+
+@dataclass
+class Phenotype:
+    body: np.ndarray
+    valid: bool
+    controller: DenseController | None = None
+
+
+@cache
+def _body_queries():
+    return substrate_queries(body_substrate())
+
+
+@cache
+def _controller_queries(k: int, shape: tuple[int, int]):
+    return substrate_queries(controller_substrate(k, shape))
+
+
+def body_from_cppn(cppn: CompiledCPPN, s: DecoderSettings) -> np.ndarray:
+    q, slices = _body_queries()
+    W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, s.expression)
+    x = cell_coordinates(s.shape)
+    out = np.tanh(x @ W1 + b1) @ W2 + b2
+    return np.argmax(out, axis=1).reshape(s.shape).astype(np.int64)
+
+
+def is_valid_robot(body: np.ndarray) -> bool:
+    """The paper's validity rule: connected and holding at least one actuator."""
+    return bool(np.any(body != 0) and is_connected(body) and has_actuator(body))
+
+
+def controller_from_cppn(cppn: CompiledCPPN, body: np.ndarray, task: str,
+                         s: DecoderSettings) -> DenseController:
+    b = build_body(body)
+    n_obs = obs_dim(task, b.n_points)
+    q, slices = _controller_queries(controller_side(n_obs), s.shape)
+    W1, b1, W2, b2 = dense_layers(cppn(q)[:, s.controller_output], slices, s.expression)
+    act = controller_substrate(controller_side(n_obs), s.shape).activations
+    return DenseController([W1, W2], [b1, b2], list(act), n_obs, b.actuator_flat.copy())
+
+
+def decode(genome, genome_config, task: str, s: DecoderSettings) -> Phenotype:
+    cppn = CompiledCPPN(genome, genome_config)
+    body = body_from_cppn(cppn, s)
+    if not is_valid_robot(body):
+        return Phenotype(body, False)
+    return Phenotype(body, True, controller_from_cppn(cppn, body, task, s))

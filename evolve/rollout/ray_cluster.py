@@ -1,0 +1,165 @@
+"""Ray: the runs of a sweep as tasks on a cluster (`sgr sweep --backend ray`), and the rollouts of
+one run on a cluster's actors (`workers: ray`).
+
+This module imports Ray only when one of them is used, so the package works without it.
+
+Sweep backend (`RayBackend`): each run of a sweep is one Ray task that reserves `cpus_per_run`
+CPUs on a node and advances the run there with `sgr evolve --resume RUN --workers cpus_per_run` in
+a subprocess, exactly as the local backend does on this machine. The run directories must lie on a
+filesystem that every node mounts at the same path: the driver creates them, the nodes write them.
+A task that fails (its process exits with an error, its worker or node dies) ends with an exit
+code, and `run_sweep` resumes the run from its own checkpoints, on whichever node has room.
+
+Rollout pool (`RayRolloutPool`): one actor per CPU of the cluster, each a process with one Taichi
+thread that compiles the simulator once and then simulates a chunk of every generation. The
+chunks are `balanced_chunks` of the bodies, as with local workers, and the split does not change
+the returns. An actor that dies is restarted by Ray and its chunk run again.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import logging
+import os
+import random
+from collections.abc import Sequence
+
+import numpy as np
+
+from evolve.rollout.pool import PolicyFactory, balanced_chunks
+
+INSTALL = 'pip install "sgr[ray]"'
+ACTOR_RESTARTS = 3  # a rollout actor that dies is restarted, and its chunk re-run, this many times
+
+
+def require_ray(what: str) -> None:
+    """ValueError (one line for `sgr: error:`) when Ray is not installed; does not import it."""
+    if importlib.util.find_spec("ray") is None:
+        raise ValueError(f"{what} needs Ray: {INSTALL}")
+
+
+def connect(what: str, address: str | None = None, start: str | None = None):
+    """The ray module, connected: to the Ray this process already joined, else to `address`, else
+    as `start` says (None: Ray's default, the cluster in $RAY_ADDRESS or the one `ray start` ran on
+    this machine, else a new local instance; "local": always a new local instance)."""
+    require_ray(what)
+    import ray
+
+    if not ray.is_initialized():
+        try:
+            ray.init(address=address or start, logging_level=logging.WARNING, log_to_driver=False)
+        except ConnectionError as exc:  # e.g. no cluster at that address
+            where = f"at {address}" if address else "here"
+            raise ValueError(f"{what}: cannot join a Ray cluster {where}: "
+                             f"{' '.join(str(exc).split())}") from None
+    return ray
+
+
+# ---------------------------------------------------------------------------------- rollout pool
+class _RolloutActor:
+    """One process with one Taichi thread; the simulator's kernels compile on its first chunk."""
+
+    def pid(self) -> int:
+        return os.getpid()
+
+    def run(self, job: tuple) -> np.ndarray:
+        from evolve.rollout.worker import run_chunk
+
+        return run_chunk(*job)
+
+
+class RayRolloutPool:
+    """Episode returns of (body, policy item) pairs, split over Ray actors (`workers: ray`): one per
+    CPU of the cluster (or `actors`), started on first use. Same interface as `RolloutPool`."""
+
+    def __init__(self, actors: int | None = None):
+        require_ray("workers: ray")
+        self.n_actors = actors
+        self._actors: list = []
+        self._started_ray = False
+
+    def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
+            episode_steps: int | str | None = None) -> np.ndarray:
+        if len(bodies) != len(items):
+            raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
+        if len(bodies) == 0:
+            return np.zeros(0)
+        # Ray draws from Python's `random` (e.g. when it starts), which neat-python evolves with: the
+        # caller's random state is left as it was, as local workers leave it
+        state = random.getstate()
+        try:
+            return self._run(task, bodies, items, factory, episode_steps)
+        finally:
+            random.setstate(state)
+
+    def _run(self, task, bodies, items, factory, episode_steps) -> np.ndarray:
+        ray = self._start()
+        chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(self._actors))
+        refs = [a.run.remote((task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps))
+                for a, c in zip(self._actors, chunks, strict=False)]
+        out = np.zeros(len(bodies))
+        try:
+            for ref, c in zip(refs, chunks, strict=True):
+                out[c] = ray.get(ref)
+        except ray.exceptions.RayTaskError as exc:  # raised in an actor: raise it here as it was
+            raise exc.cause from None
+        except ray.exceptions.RayActorError as exc:  # died more often than it may be restarted
+            raise RuntimeError(f"a Ray rollout actor died {ACTOR_RESTARTS + 1} times ("
+                               f"{' '.join(str(exc).split())[:300]}); set workers: 1 or N to run on "
+                               "this machine") from None
+        return out
+
+    def _start(self):
+        """Ray (joined, or started by this pool) and the actors, created on first use."""
+        import ray
+
+        if not ray.is_initialized():
+            connect("workers: ray")
+            self._started_ray = True
+        if not self._actors:
+            n = self.n_actors or max(1, int(ray.cluster_resources().get("CPU", 1)))
+            env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
+            if os.environ.get("SGR_ARCH"):  # actors simulate where this process would
+                env["SGR_ARCH"] = os.environ["SGR_ARCH"]
+            # the environment is set before the actor's process starts: Taichi reads it at its start
+            cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=ACTOR_RESTARTS,
+                                                    max_task_retries=ACTOR_RESTARTS,
+                                                    runtime_env={"env_vars": env})
+            self._actors = [cls.remote() for _ in range(n)]
+        return ray
+
+    def pids(self) -> list[int]:
+        """The process ids of the actors (starting them)."""
+        state = random.getstate()
+        try:
+            ray = self._start()
+            return ray.get([a.pid.remote() for a in self._actors])
+        finally:
+            random.setstate(state)
+
+    def close(self) -> None:
+        """Stop the actors; shut Ray down if this pool started it."""
+        if not self._actors and not self._started_ray:
+            return
+        import ray
+
+        for actor in self._actors:
+            ray.kill(actor, no_restart=True)
+        self._actors = []
+        if self._started_ray:
+            ray.shutdown()
+            self._started_ray = False
+
+    def __enter__(self) -> RayRolloutPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __del__(self) -> None:
+        if self._actors:
+            try:
+                self.close()
+            except Exception:
+                pass
+

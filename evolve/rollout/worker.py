@@ -1,0 +1,72 @@
+"""A rollout worker process of `RolloutPool`: reads jobs on stdin, writes (ok, returns or
+exception) replies on stdout, each a pickle framed by its 8-byte length; exits at end of input.
+
+Run as `python -m evolve.rollout` (evolve/rollout/__main__.py) by the pool, never by hand.
+"""
+
+from __future__ import annotations
+
+import os
+import pickle
+import signal
+import struct
+import sys
+from collections.abc import Sequence
+from typing import BinaryIO
+
+import numpy as np
+
+from evolve.rollout.episodes import rollout_policy
+
+
+def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps) -> np.ndarray:
+    """Episode returns of one chunk, simulated as one batch."""
+    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps)
+
+
+def write_frame(stream: BinaryIO, obj) -> None:
+    data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
+    stream.write(struct.pack("<Q", len(data)) + data)
+    stream.flush()
+
+
+def read_frame(stream: BinaryIO) -> bytes:
+    """One frame's pickle bytes; EOFError at a clean end of input."""
+    head = stream.read(8)
+    if len(head) < 8:
+        raise EOFError("end of input")
+    (n,) = struct.unpack("<Q", head)
+    data = stream.read(n)
+    if len(data) < n:
+        raise EOFError("truncated frame")
+    return data
+
+
+def main() -> None:
+    # Ctrl-C reaches the whole process group: the pool's owner handles it and closes our input
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # the protocol owns the real stdout; anything printed (e.g. by a library) goes to stderr
+    replies = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
+    os.dup2(sys.stderr.fileno(), sys.stdout.fileno())
+    jobs = sys.stdin.buffer
+    while True:
+        try:
+            data = read_frame(jobs)
+        except EOFError:
+            return
+        try:
+            job = pickle.loads(data)
+        except Exception as exc:
+            reply = (False, RuntimeError(f"a rollout worker could not load its job ({exc}); policy "
+                                         "factories and items must be importable, picklable objects"))
+        else:
+            try:
+                reply = (True, run_chunk(*job))
+            except Exception as exc:  # sent back and raised in the parent
+                reply = (False, exc)
+        try:
+            write_frame(replies, reply)
+        except BrokenPipeError:  # the pool's owner is gone
+            return
+        except Exception:  # an exception that does not pickle
+            write_frame(replies, (False, RuntimeError(f"{type(reply[1]).__name__}: {reply[1]}")))

@@ -1,0 +1,68 @@
+"""A run's champion as a runnable robot: body + dense controller read back from champion.json."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from evolve.nn.dense import DenseController
+from evolve.nn.graph import FORMAT as GRAPH_FORMAT
+from evolve.nn.graph import GraphController
+from evolve.runs.rundir import RunDir
+from tasks.env import obs_dim
+from tasks.specs import TASKS
+from tsim.body import build_body, check_robot
+
+KEYS = ("task", "episode_steps", "body", "controller")
+
+
+def load_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
+    """champion.json's record, body and controller; ValueError naming the file and the key when it
+    is not a champion that runs (checked with one forward pass of the controller)."""
+    f = Path(run_dir) / "champion.json"
+    try:
+        champ = RunDir(run_dir).champion()
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise ValueError(f"{f}: not valid JSON ({exc})") from None
+    if not isinstance(champ, dict):
+        raise ValueError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
+    missing = [k for k in KEYS if k not in champ]
+    if missing:
+        raise ValueError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
+    if champ["task"] not in TASKS:
+        raise ValueError(f"{f}: key 'task': unknown task {champ['task']!r}")
+    steps = champ["episode_steps"]
+    positive = isinstance(steps, int) and not isinstance(steps, bool) and steps > 0
+    if not (positive or steps in (None, "evogym")):
+        raise ValueError(f"{f}: key 'episode_steps' must be a positive int, 'evogym' or null, got {steps!r}")
+    try:
+        body = check_robot(champ["body"])
+    except ValueError as exc:
+        raise ValueError(f"{f}: key 'body': {exc}") from None
+    c = champ["controller"]
+    b = build_body(body)
+    try:
+        graph = isinstance(c, dict) and c.get("format") == GRAPH_FORMAT
+        ctrl = GraphController.from_json(c) if graph else DenseController.from_json(c)
+        actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
+    except (KeyError, IndexError, TypeError, ValueError) as exc:
+        raise ValueError(f"{f}: key 'controller': not a controller of this body and task "
+                         f"({type(exc).__name__}: {exc})") from None
+    if np.shape(actions) != (len(b.actuator_flat),):
+        raise ValueError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
+                         f"{len(b.actuator_flat)} actuators")
+    return champ, body, ctrl
+
+
+def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
+                 height: int = 320, fps: float = 30.0) -> Path:
+    """Render the champion's episode in its task (same episode length as its evaluation)."""
+    from tasks.render_episode import render_episode
+    from tsim.render import write_gif
+
+    champ, body, ctrl = load_champion(run_dir)
+    frames = render_episode(champ["task"], body, lambda t, obs: ctrl.act(obs), champ["episode_steps"],
+                            width, height, indexed=True)
+    return write_gif(frames, out or Path(run_dir) / "champion.gif", fps=fps)

@@ -1,0 +1,139 @@
+"""Experiment configs: YAML files (or dicts) checked against a schema, with errors that name the key.
+
+The schema is the common keys below plus the method's own (`Problem.config_keys`). Paths inside a
+config (neat_config, ...) are relative to the YAML file; left out, they are the method's packaged
+defaults in configs/neat/. `load_config` returns a plain dict with every key present (defaults
+filled), which is what a run directory stores.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from evolve.methods import METHODS
+from tasks.specs import TASKS
+
+REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+
+
+def configs_dir() -> Path:
+    """The configs shipped with sgr: the repository's configs/ in a checkout or an editable
+    install, evolve/configs (mapped there at build time, see pyproject.toml) in an installed one."""
+    if REPO_CONFIGS.is_dir():
+        return REPO_CONFIGS
+    return Path(__file__).resolve().parents[1] / "configs"
+
+
+# key: (type or tuple of types, default); the method's own keys come from its Problem class
+COMMON: dict[str, tuple[Any, Any]] = {
+    "method": (str, None),
+    "task": (str, None),
+    "generations": (int, 250),
+    "pop_size": (int, 128),
+    "seed": (int, 0),
+    "robot_shape": (list, [5, 5]),
+    "episode_steps": ((int, str, type(None)), None),
+    "neat_config": ((str, type(None)), None),
+    "checkpoint_every": (int, 5),
+    "render_champion": (bool, True),
+    "workers": ((int, str), "auto"),
+}
+
+
+def _type_name(t) -> str:
+    ts = t if isinstance(t, tuple) else (t,)
+    return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
+
+
+def check_config(raw: dict, source: str = "config") -> dict:
+    """Fill defaults and validate; raises ValueError naming the offending key."""
+    if not isinstance(raw, dict):
+        raise ValueError(f"{source}: a config must be a mapping of keys to values")
+    method = raw.get("method")
+    if method not in METHODS:
+        raise ValueError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}")
+    problem = METHODS[method]
+    schema = {**COMMON, **problem.config_keys}
+    for key in raw:
+        if key not in schema:
+            raise ValueError(f"{source}: unknown key {key!r} for method {method!r}; "
+                             f"known keys: {', '.join(sorted(schema))}")
+    cfg = {}
+    for key, (typ, default) in schema.items():
+        if key not in raw:
+            if key == "task":
+                raise ValueError(f"{source}: missing required key {key!r}")
+            cfg[key] = default
+            continue
+        val = raw[key]
+        if typ is float and isinstance(val, int) and not isinstance(val, bool):
+            val = float(val)
+        types = typ if isinstance(typ, tuple) else (typ,)
+        ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
+        if not ok:
+            raise ValueError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
+        cfg[key] = val
+    if cfg["task"] not in TASKS:
+        raise ValueError(f"{source}: key 'task': unknown task {cfg['task']!r}; known tasks: "
+                         f"{', '.join(TASKS)}")
+    for key in ("generations", "pop_size", "checkpoint_every"):
+        if cfg[key] < 1:
+            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+    shape = cfg["robot_shape"]
+    if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
+        raise ValueError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
+    steps = cfg["episode_steps"]
+    if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
+        raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
+                         f"got {steps!r}")
+    w = cfg["workers"]
+    if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
+        raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
+    for key, name in problem.default_files.items():
+        if cfg[key] is None:
+            cfg[key] = str(configs_dir() / "neat" / name)
+        if not Path(cfg[key]).is_file():
+            raise ValueError(f"{source}: key {key!r}: file not found: {cfg[key]}")
+    problem.validate(cfg, source)
+    return cfg
+
+
+def yaml_problem(exc: yaml.YAMLError) -> str:
+    """One line for a YAML syntax error: what and where (PyYAML's own message spans several)."""
+    mark = getattr(exc, "problem_mark", None)
+    what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
+    return f"{what} at line {mark.line + 1}, column {mark.column + 1}" if mark else what
+
+
+def load_config(path: str | Path, overrides: dict | None = None) -> dict:
+    """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"config file not found: {path}")
+    try:
+        raw = yaml.safe_load(path.read_text()) or {}
+    except UnicodeDecodeError:
+        raise ValueError(f"{path}: not a text file") from None
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None
+    if not isinstance(raw, dict):
+        raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
+    return config_from_dict({**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}},
+                            str(path), path.parent)
+
+
+def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> dict:
+    """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
+    `base` (default: the current folder)."""
+    if not isinstance(raw, dict):
+        raise ValueError(f"{source}: a config must be a mapping of keys to values, "
+                         f"got a {type(raw).__name__}")
+    problem = METHODS.get(raw.get("method"))
+    raw = dict(raw)
+    for key in problem.default_files if problem else ():
+        if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():
+            raw[key] = str(((base or Path.cwd()) / raw[key]).resolve())
+    return check_config(raw, source)

@@ -1,0 +1,172 @@
+"""Running an experiment: config -> run directory, generation loop, checkpoints, resume."""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+from evolve.methods import METHODS
+from evolve.rollout.pool import RolloutPool
+from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.rundir import RunDir
+from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
+from evolve.search.neat_search import NeatSearch
+
+
+def genome_json(genome) -> dict:
+    return {"key": genome.key,
+            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
+                       "aggregation": n.aggregation} for n in genome.nodes.values()],
+            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
+                            for c in genome.connections.values()]}
+
+
+def rollout_pool(workers: int | str) -> RolloutPool:
+    """Local worker processes (a number, 'auto'), or the actors of a Ray cluster ('ray')."""
+    if workers == "ray":
+        from evolve.rollout.ray_cluster import RayRolloutPool
+        return RayRolloutPool()
+    return RolloutPool(workers)
+
+
+class Experiment:
+    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers.
+
+        exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5}, "runs/x")
+        exp.run_all(); exp.finish()
+    """
+
+    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
+                 workers: int | str | None = None):
+        """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
+        self.run, self.cfg, self.quiet = run, cfg, quiet
+        self.neat_config = load_neat_config(run.path / "neat.ini")
+        self.pool = rollout_pool(cfg.get("workers", "auto") if workers is None else workers)
+        method = METHODS[cfg["method"]]
+        self.problem = method(cfg, self.neat_config, self.pool)
+        if state is not None:
+            self.problem.restore(state.get("problem", {}))
+        self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
+                                 seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
+                                 state=state, reevaluate=method.reevaluate_elites)
+
+    @classmethod
+    def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
+               quiet: bool = False) -> Experiment:
+        """A new run in `out` from a YAML config with `overrides` (CLI flags; None values ignored)."""
+        return cls._start(load_config(config_path, overrides), out, quiet)
+
+    @classmethod
+    def from_config(cls, config: dict, out: str | Path, quiet: bool = False) -> Experiment:
+        """A new run in `out` from a config dict (no YAML file needed; relative paths are taken
+        from the current folder, left-out files are the method's packaged defaults)."""
+        return cls._start(config_from_dict(config, "config"), out, quiet)
+
+    @classmethod
+    def _start(cls, cfg: dict, out: str | Path, quiet: bool) -> Experiment:
+        ini = neat_ini_text(cfg["neat_config"], cfg, METHODS[cfg["method"]].neat_overrides(cfg))
+        neat_config_from_text(ini, cfg["neat_config"])  # a bad INI must fail before the run exists
+        if cfg["workers"] == "ray":
+            from evolve.rollout.ray_cluster import require_ray
+            require_ray("workers: ray")
+        run = RunDir(out)
+        run.lock()
+        try:
+            run.create(cfg, ini)
+            exp = cls(run, cfg, quiet=quiet)
+            run.save_checkpoint(0, exp.state())
+        except BaseException:
+            run.unlock()
+            raise
+        return exp
+
+    @classmethod
+    def resume(cls, out: str | Path, quiet: bool = False, workers: int | str | None = None,
+               generations: int | None = None) -> Experiment:
+        """Continue a run from its newest usable checkpoint; `generations` extends a run (finished
+        or not) to that many generations, exactly as if it had been asked for from the start."""
+        run = RunDir(out)
+        cfg = run.config()
+        run.lock()
+        try:
+            state = run.latest_checkpoint()
+            if state is None:
+                raise ValueError(f"{out} has no checkpoint to resume from")
+            done = state["generation"]
+            if generations is not None:
+                if generations < done:
+                    raise ValueError(f"{out} has already run {done} generations; --generations must be "
+                                     f">= {done}")
+                if generations != cfg["generations"]:
+                    cfg = {**cfg, "generations": generations}
+                    run.update_config(cfg)
+            if done >= cfg["generations"]:
+                raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                                 "add --generations N to extend it")
+            run.truncate_rows(done)
+            return cls(run, cfg, state=state, quiet=quiet, workers=workers)
+        except BaseException:
+            run.unlock()
+            raise
+
+    def state(self) -> dict:
+        return {**self.search.state(), "problem": self.problem.state()}
+
+    def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
+        """Run to the configured number of generations; `after_generation(self)` is called once
+        each generation's row, champion and checkpoint are written (bench/soak.py measures there)."""
+        cfg, search = self.cfg, self.search
+        t_start = time.perf_counter()
+        while search.generation < cfg["generations"]:
+            row = search.step()
+            self.run.append_row(row)
+            self._write_champion()
+            if search.generation % cfg["checkpoint_every"] == 0 or search.generation == cfg["generations"]:
+                self.run.save_checkpoint(search.generation, self.state())
+            self._progress(row, time.perf_counter() - t_start)
+            if after_generation is not None:
+                after_generation(self)
+
+    def _write_champion(self) -> None:
+        best = self.search.best
+        if best is None:
+            return
+        champ = {"format": "sgr-champion-1", "method": self.cfg["method"], "task": self.cfg["task"],
+                 "episode_steps": self.cfg["episode_steps"], "fitness": best["fitness"],
+                 "generation": best["generation"], "genome": genome_json(best["genome"])}
+        champ.update(self.problem.champion(best["phenotype"]))
+        self.run.write_champion(champ)
+
+    def _progress(self, row: dict, elapsed: float) -> None:
+        if self.quiet:
+            return
+        best = self.search.best["fitness"] if self.search.best else math.nan
+        print(f"gen {row['generation'] + 1:>4}/{self.cfg['generations']}  best {row['best']:8.3f}  "
+              f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
+              f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
+              f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
+              f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+
+    def close(self) -> None:
+        """Stop the rollout worker processes and let go of the run directory."""
+        self.pool.close()
+        self.run.unlock()
+
+    def finish(self) -> None:
+        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
+        from evolve.runs.champion import champion_gif
+        from evolve.runs.plots import plot_run
+
+        self.close()
+        plot_run(self.run.path, self.run.path / "fitness.png")
+        best = self.search.best
+        if best is None:
+            return
+        if self.cfg.get("render_champion", True):
+            champion_gif(self.run.path)
+        if not self.quiet:
+            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
+                  f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")

@@ -1,0 +1,208 @@
+"""A sweep's results as a table, a CSV and a figure, with the SGR authors' figures beside ours.
+
+`sgr report DIR` reads every run directory under DIR (a sweep's `runs/` or any folder of runs) and
+writes report.md, summary.csv and curves.png. "Best at generation g" is the best fitness found in
+generations 1..g (1-based; generation 1 is the first evaluated population), the quantity the
+paper's curves plot.
+
+Robustness: evolution in a chaotic simulator can select a lucky trajectory, so each champion is
+replayed from its champion.json with a tiny perturbation added to every action (uniform in
++-`eps`, a different draw per replay); the report gives the mean, sd and min of those returns
+beside the recorded fitness. A champion whose return collapses under a 1e-9 change of its actions
+has found a knife-edge trajectory, not a gait.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import statistics
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+import yaml
+
+from evolve.runs.plots import read_generations, run_labels
+
+CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
+# The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
+AUTHORS: dict[tuple[str, str], tuple[float | str | None, ...]] = {
+    ("sgr", "Walker-v0"): (5.75, 6.09, 6.56, 6.60),
+    ("sgr", "ObstacleTraverser-v1"): (3.01, 7.53, 7.57, 7.57),
+    ("sgr", "Climber-v2"): (0.46, 0.90, 1.04, 1.08),
+    ("sgr", "Thrower-v0"): (1.22, 1.94, 3.16, 3.50),
+    # their "direct NEAT" logs are almost certainly SGR runs (docs/RESULTS.md): end values only
+    ("direct", "Walker-v0"): (None, None, None, 6.70),
+    ("direct", "ObstacleTraverser-v1"): (None, None, None, 7.57),
+    ("direct", "Climber-v2"): (None, None, None, 1.10),
+    ("direct", "Thrower-v0"): (None, None, None, 3.45),
+    ("nested", "ObstacleTraverser-v1"): (1.14, None, None, "2.5-3.2"),  # end: range over their seeds
+}
+SUMMARY_COLUMNS = ["method", "task", "seed", "generations", "best_gen1", "best_gen30", "best_gen100",
+                   "best_final", "champion_fitness", "replay", "robust_mean", "robust_sd", "robust_min",
+                   "s_per_gen", "run"]
+
+
+def run_dirs_under(folder: str | Path) -> list[Path]:
+    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder."""
+    folder = Path(folder)
+    if not folder.is_dir():
+        raise ValueError(f"not a folder: {folder}")
+    base = folder / "runs" if (folder / "runs").is_dir() else folder
+    runs = sorted(d for d in base.iterdir()
+                  if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())
+    if not runs:
+        raise ValueError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
+    return runs
+
+
+def best_so_far(run_dir: Path) -> np.ndarray:
+    cols = read_generations(run_dir)
+    best = cols.get("best", np.zeros(0))
+    best = np.where(np.isfinite(best), best, -np.inf)
+    return np.maximum.accumulate(best) if len(best) else best
+
+
+def champion_robustness(run_dir: Path, replays: int = 10, eps: float = 1e-9) -> dict:
+    """Returns of the champion replayed with uniform(-eps, eps) added to every action, all replays
+    simulated as one batch; replay 0 is unperturbed (it must give the recorded fitness)."""
+    from evolve.runs.champion import load_champion
+    from tasks.env import BatchEnv
+
+    champ, body, ctrl = load_champion(run_dir)
+    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"])
+    obs = env.reset()
+    n = env.obs_dims[0]
+    rng = np.random.default_rng(0)
+    total = np.zeros(replays + 1)
+    for _ in range(env.episode_steps):
+        act = np.stack([ctrl.act(o[:n]) for o in obs])
+        noise = rng.uniform(-eps, eps, act.shape)
+        noise[0] = 0.0
+        obs, r, term, trunc, _ = env.step(act + noise)
+        total += r
+        if np.all(term | trunc):
+            break
+    perturbed = total[1:]
+    return {"champion_fitness": float(champ["fitness"]), "replay": float(total[0]),
+            "robust_mean": float(perturbed.mean()), "robust_sd": float(perturbed.std()),
+            "robust_min": float(perturbed.min())}
+
+
+def summarize(runs: list[Path], robustness: bool = True) -> list[dict]:
+    rows = []
+    for d in runs:
+        method, task = run_labels(d)
+        cfg = yaml.safe_load((d / "config.yaml").read_text())
+        best = best_so_far(d)
+        cols = read_generations(d)
+        row = {"method": method, "task": task, "seed": cfg.get("seed"), "generations": len(best),
+               "run": d.name, "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan)}
+        for g in CHECKPOINTS:
+            row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
+        row["best_final"] = float(best[-1]) if len(best) else math.nan
+        if robustness and (d / "champion.json").is_file():
+            rob = champion_robustness(d)
+            row.update(rob)
+        rows.append(row)
+    return rows
+
+
+def _ms(values: list[float]) -> str:
+    v = [x for x in values if math.isfinite(x)]
+    if not v:
+        return "-"
+    sd = statistics.stdev(v) if len(v) > 1 else 0.0
+    return f"{statistics.fmean(v):.2f} ± {sd:.2f}" + (f" (n={len(v)})" if len(v) != len(values) else "")
+
+
+def _fmt(x: float | str | None) -> str:
+    return "-" if x is None else x if isinstance(x, str) else f"{x:.2f}"
+
+
+def report_markdown(rows: list[dict]) -> str:
+    groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
+    for r in rows:
+        groups[(r["method"], r["task"])].append(r)
+    out = io.StringIO()
+    out.write("# Results\n\nBest fitness found up to generation g (mean ± sd over seeds); "
+              "*authors*: the SGR authors' released logs. Robustness: the champion replayed 10 times "
+              "with uniform(±1e-9) added to every action (mean ± sd of the mean over seeds; worst "
+              "replay of any seed).\n\n")
+    out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
+              "100 / end) | champion | perturbed | worst perturbed |\n")
+    out.write("|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+    for (method, task), rs in sorted(groups.items()):
+        gens = sorted({r["generations"] for r in rs})
+        authors = AUTHORS.get((method, task))
+        a = " / ".join(_fmt(x) for x in authors) if authors else "-"
+        rob = [r for r in rs if "robust_mean" in r]
+        champ = _ms([r["champion_fitness"] for r in rob]) if rob else "-"
+        pert = _ms([r["robust_mean"] for r in rob]) if rob else "-"
+        worst = f"{min(r['robust_min'] for r in rob):.2f}" if rob else "-"
+        out.write(f"| {method} | {task} | {', '.join(str(r['seed']) for r in rs)} | "
+                  f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
+                  + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
+                  + f" | {_ms([r['best_final'] for r in rs])} | {a} | {champ} | {pert} | {worst} |\n")
+    return out.getvalue()
+
+
+def write_summary_csv(rows: list[dict], path: Path) -> None:
+    buf = io.StringIO()
+    w = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n", extrasaction="ignore")
+    w.writeheader()
+    for r in rows:
+        w.writerow({k: r.get(k, "") for k in SUMMARY_COLUMNS})
+    path.write_text(buf.getvalue())
+
+
+def plot_curves(runs: list[Path], path: Path) -> Path:
+    """One panel per task: mean best-so-far fitness per method with a ± sd band over seeds."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    by_task: dict[str, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+    for d in runs:
+        method, task = run_labels(d)
+        b = best_so_far(d)
+        if len(b):
+            by_task[task][method].append(b)
+    tasks = sorted(by_task)
+    cols = min(2, len(tasks))
+    rows_n = math.ceil(len(tasks) / cols)
+    fig = Figure(figsize=(6 * cols, 3.8 * rows_n))
+    FigureCanvasAgg(fig)
+    for i, task in enumerate(tasks):
+        ax = fig.add_subplot(rows_n, cols, i + 1)
+        for method, curves in sorted(by_task[task].items()):
+            n = max(len(c) for c in curves)
+            table = np.full((len(curves), n), np.nan)
+            for j, c in enumerate(curves):
+                table[j, :len(c)] = np.where(np.isfinite(c), c, np.nan)
+            mean = np.nanmean(table, axis=0)
+            sd = np.nanstd(table, axis=0)
+            g = np.arange(1, n + 1)
+            (line,) = ax.plot(g, mean, label=f"{method} ({len(curves)} seeds)")
+            ax.fill_between(g, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, linewidth=0)
+        ax.set_title(task)
+        ax.set_xlabel("generation")
+        ax.set_ylabel("best fitness")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize="small")
+    fig.tight_layout()
+    fig.savefig(path, format="png", dpi=110)
+    return path
+
+
+def write_report(folder: str | Path, out: str | Path | None = None, robustness: bool = True) -> Path:
+    """report.md (at `out`, default folder/report.md), summary.csv and curves.png beside it."""
+    runs = run_dirs_under(folder)
+    out = Path(out) if out else Path(folder) / "report.md"
+    out.parent.mkdir(parents=True, exist_ok=True)
+    rows = summarize(runs, robustness)
+    out.write_text(report_markdown(rows))
+    write_summary_csv(rows, out.parent / "summary.csv")
+    plot_curves(runs, out.parent / "curves.png")
+    return out

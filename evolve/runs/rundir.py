@@ -1,0 +1,216 @@
+"""Run directories: resolved config, per-generation CSV, champion JSON, atomic checkpoints.
+
+Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
+checkpoints/gen-XXXXX.pkl (state at the start of generation XXXXX). Every file that a crash could
+leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
+a kill or a full disk leaves the previous version whole; generations.csv gets one line per
+generation appended and flushed to disk instead (rewriting it made every generation cost time in
+proportion to the run's length), and a last line cut short by a kill or a full disk, which lacks
+its newline, is no row: readers skip it and the next write or a resume drops it. The two newest
+checkpoints are kept: a
+damaged newest one (a disk that lied about fsync, a copy cut short) falls back to the one before.
+Files get the permissions the user's umask gives, as `open()` would create them.
+"""
+
+from __future__ import annotations
+
+import csv
+import fcntl
+import io
+import json
+import os
+import pickle
+import sys
+import tempfile
+from pathlib import Path
+
+import yaml
+
+COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
+           "build_s", "sim_s", "neat_s", "total_s"]
+KEEP_CHECKPOINTS = 2
+
+
+def _umask() -> int:
+    mask = os.umask(0)
+    os.umask(mask)
+    return mask
+
+
+def atomic_write(path: Path, data: bytes) -> None:
+    """Write all of `data` or nothing: temporary file, fsync, rename. The temporary file is made
+    0600 by `mkstemp`; it gets the umask's permissions before it takes the file's place."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
+    try:
+        os.fchmod(fd, 0o666 & ~_umask())
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+        dir_fd = os.open(path.parent, os.O_RDONLY)  # the rename itself survives a power cut
+        try:
+            os.fsync(dir_fd)
+        finally:
+            os.close(dir_fd)
+    except BaseException as exc:
+        Path(tmp).unlink(missing_ok=True)
+        if isinstance(exc, OSError) and exc.filename is None:  # name the file (a full disk)
+            raise OSError(exc.errno, exc.strerror, str(path)) from exc
+        raise
+
+
+def _ends_a_line(path: Path) -> bool:
+    """Whether a file exists, is not empty and its last byte is a newline."""
+    try:
+        with path.open("rb") as f:
+            f.seek(0, os.SEEK_END)
+            if f.tell() == 0:
+                return False
+            f.seek(-1, os.SEEK_END)
+            return f.read(1) == b"\n"
+    except OSError:
+        return False
+
+
+# modules renamed since checkpoints were first written: old checkpoints still load
+MOVED_MODULES = {"evolve.genome": "evolve.search.genome"}
+
+
+class _Unpickler(pickle.Unpickler):
+    def find_class(self, module: str, name: str):
+        return super().find_class(MOVED_MODULES.get(module, module), name)
+
+
+class RunDir:
+    def __init__(self, path: str | Path):
+        self.path = Path(path)
+        self.ckpt_dir = self.path / "checkpoints"
+
+    # ------------------------------------------------------------------ one process at a time
+    def lock(self) -> None:
+        """Hold the run for this process (until it exits or `unlock`): two processes advancing one
+        run (a sweep resumed while a run of it still goes on, say) would interleave its files."""
+        self.path.mkdir(parents=True, exist_ok=True)
+        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
+            os.close(fd)
+            raise ValueError(f"{self.path} is being run by another process (pid {holder})") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+        self._lock_fd = fd
+
+    def unlock(self) -> None:
+        fd = getattr(self, "_lock_fd", None)
+        if fd is not None:
+            os.close(fd)  # releases the flock
+            self._lock_fd = None
+
+    # ------------------------------------------------------------------ creation
+    def create(self, cfg: dict, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
+        if (self.path / "generations.csv").exists():
+            raise ValueError(f"run directory {self.path} already holds a run; use --resume {self.path} "
+                             "or another --out")
+        self.ckpt_dir.mkdir(parents=True, exist_ok=True)
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+        atomic_write(self.path / "neat.ini", neat_ini.encode())
+        for name, text in (extra_files or {}).items():
+            atomic_write(self.path / name, text.encode())
+        self._write_rows([])
+
+    def config(self) -> dict:
+        f = self.path / "config.yaml"
+        if not f.is_file():
+            raise ValueError(f"{self.path} is not a run directory (no config.yaml)")
+        try:
+            cfg = yaml.safe_load(f.read_text())
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{f}: not valid YAML: {exc}".replace("\n", " ")) from None
+        if not isinstance(cfg, dict) or "method" not in cfg:
+            raise ValueError(f"{f}: not a run config (no 'method' key)")
+        return cfg
+
+    def update_config(self, cfg: dict) -> None:
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+
+    # ------------------------------------------------------------------ generations.csv
+    def rows(self) -> list[dict]:
+        f = self.path / "generations.csv"
+        if not f.is_file():
+            return []
+        text = f.read_text()
+        return list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))  # whole lines only
+
+    def _write_rows(self, rows: list[dict]) -> None:
+        buf = io.StringIO()
+        w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: r[k] for k in COLUMNS})
+        atomic_write(self.path / "generations.csv", buf.getvalue().encode())
+
+    def append_row(self, row: dict) -> None:
+        row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
+        path = self.path / "generations.csv"
+        if not _ends_a_line(path):  # no file, or a line cut short: rewrite it whole
+            self._write_rows([*self.rows(), row])
+            return
+        buf = io.StringIO()
+        csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow({k: row[k] for k in COLUMNS})
+        try:
+            with path.open("ab") as f:
+                f.write(buf.getvalue().encode())
+                f.flush()
+                os.fsync(f.fileno())
+        except OSError as exc:
+            if exc.filename is None:  # name the file (a full disk)
+                raise OSError(exc.errno, exc.strerror, str(path)) from exc
+            raise
+
+    def truncate_rows(self, generation: int) -> None:
+        """Drop rows of generations >= `generation` (they are recomputed after a resume)."""
+        self._write_rows([r for r in self.rows() if int(r["generation"]) < generation])
+
+    # ------------------------------------------------------------------ champion, checkpoints
+    def write_champion(self, champion: dict) -> None:
+        atomic_write(self.path / "champion.json", json.dumps(champion, indent=1).encode())
+
+    def champion(self) -> dict:
+        f = self.path / "champion.json"
+        if not f.is_file():
+            raise ValueError(f"{self.path} has no champion.json yet")
+        return json.loads(f.read_text())
+
+    def save_checkpoint(self, generation: int, state: dict) -> Path:
+        self.ckpt_dir.mkdir(parents=True, exist_ok=True)
+        path = self.ckpt_dir / f"gen-{generation:05d}.pkl"
+        atomic_write(path, pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL))
+        for old in sorted(self.ckpt_dir.glob("gen-*.pkl"))[:-KEEP_CHECKPOINTS]:
+            old.unlink()
+        return path
+
+    def latest_checkpoint(self) -> dict | None:
+        """The newest checkpoint that loads; a damaged one is skipped with a one-line warning.
+        None when there is none at all; ValueError naming the files when none loads."""
+        ckpts = sorted(self.ckpt_dir.glob("gen-*.pkl"), reverse=True)
+        damaged = []
+        for f in ckpts:
+            try:
+                state = _Unpickler(io.BytesIO(f.read_bytes())).load()
+                if not isinstance(state, dict) or "generation" not in state:
+                    raise ValueError("not a checkpoint")
+            except Exception as exc:  # any damage: truncated, garbage, another program's pickle
+                damaged.append(f"{f} ({type(exc).__name__})")
+                continue
+            if damaged:
+                print(f"sgr: warning: damaged checkpoint {', '.join(damaged)}; resuming from {f.name}",
+                      file=sys.stderr)
+            return state
+        if ckpts:
+            raise ValueError(f"no usable checkpoint in {self.ckpt_dir}: "
+                             f"{', '.join(f.name for f in ckpts)} are damaged")
+        return None

@@ -1,0 +1,307 @@
+"""Sweeps: every (method, task, seed) of a sweep file as an ordinary run directory, run to the end.
+
+A sweep directory holds `sweep.yaml` (the resolved sweep: absolute config folder, overrides, the
+list of runs) and `runs/<method>-<task>-s<seed>/`, each a run directory that `sgr evolve --resume`
+also accepts. Each run is created here (config resolved, generation 0 checkpointed) and then
+advanced by `sgr evolve --resume` in its own process, so a run that dies is retried from its own
+checkpoints and never takes the others with it, and resuming a sweep is resuming its runs: a
+run's results depend on its config alone, not on when, where or how often it was interrupted.
+
+Sweep file:
+    methods: [sgr, direct, nested]
+    tasks: [Walker-v0, ObstacleTraverser-v1]
+    seeds: [0, 1, 2]                  # or a count: 3 -> 0, 1, 2
+    configs: path/to/configs          # optional: <method>/<task>.yaml; default the packaged configs
+    overrides:                        # optional: applied to every run's config ...
+      generations: 100
+      nested: {inner_generations: 1}  # ... and, under a method's name, to that method's runs only
+"""
+
+from __future__ import annotations
+
+import ctypes
+import math
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import yaml
+
+from evolve.methods import METHODS
+from evolve.runs.config import configs_dir
+from evolve.runs.rundir import RunDir, atomic_write
+from tasks.specs import TASKS
+
+SWEEP_FILE = "sweep.yaml"
+RETRIES = 2  # a run whose process dies is resumed from its checkpoints this many more times
+
+
+@dataclass(frozen=True)
+class SweepRun:
+    method: str
+    task: str
+    seed: int
+
+    @property
+    def name(self) -> str:
+        return f"{self.method}-{self.task}-s{self.seed}"
+
+
+def _fail(source: str, msg: str) -> ValueError:
+    return ValueError(f"{source}: {msg}")
+
+
+def load_sweep(path: str | Path) -> dict:
+    """Read and check a sweep file; returns the resolved sweep (what sweep.yaml stores)."""
+    path = Path(path)
+    if not path.is_file():
+        raise ValueError(f"sweep file not found: {path}")
+    try:
+        raw = yaml.safe_load(path.read_text())
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML: {exc}".replace("\n", " ")) from None
+    return check_sweep(raw, str(path), path.parent)
+
+
+def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
+    if not isinstance(raw, dict):
+        raise _fail(source, "a sweep must be a mapping with methods, tasks and seeds")
+    unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides"}
+    if unknown:
+        raise _fail(source, f"unknown key {sorted(unknown)[0]!r}; known keys: configs, methods, "
+                            "overrides, seeds, tasks")
+    for key in ("methods", "tasks", "seeds"):
+        if key not in raw:
+            raise _fail(source, f"missing required key {key!r}")
+    methods, tasks, seeds = raw["methods"], raw["tasks"], raw["seeds"]
+    if not isinstance(methods, list) or not methods or any(m not in METHODS for m in methods):
+        raise _fail(source, f"key 'methods' must be a list of {', '.join(METHODS)}, got {methods!r}")
+    if not isinstance(tasks, list) or not tasks or any(t not in TASKS for t in tasks):
+        raise _fail(source, f"key 'tasks' must be a list of known tasks ({', '.join(TASKS)}), got {tasks!r}")
+    if isinstance(seeds, int) and not isinstance(seeds, bool) and seeds > 0:
+        seeds = list(range(seeds))
+    if (not isinstance(seeds, list) or not seeds
+            or any(not isinstance(s, int) or isinstance(s, bool) or s < 0 for s in seeds)):
+        raise _fail(source, f"key 'seeds' must be a positive count or a list of seeds >= 0, got {seeds!r}")
+    configs = raw.get("configs")
+    if configs is None:
+        configs = configs_dir()
+    elif not isinstance(configs, str):
+        raise _fail(source, f"key 'configs' must be a folder path, got {configs!r}")
+    configs = Path(configs) if Path(configs).is_absolute() else (base or Path.cwd()) / configs
+    overrides = raw.get("overrides") or {}
+    if not isinstance(overrides, dict) or any(m in overrides and not isinstance(overrides[m], dict)
+                                              for m in METHODS):
+        raise _fail(source, "key 'overrides' must be a mapping of config keys (and of method names to "
+                            "mappings of config keys)")
+    if "seed" in overrides:
+        raise _fail(source, "key 'overrides' must not set 'seed': the sweep's seeds do")
+    sweep = {"methods": list(methods), "tasks": list(tasks), "seeds": list(dict.fromkeys(seeds)),
+             "configs": str(configs.resolve()), "overrides": overrides}
+    for run in runs_of(sweep):  # every config must exist and accept the overrides before any run starts
+        run_config(sweep, run, source)
+    return sweep
+
+
+def runs_of(sweep: dict) -> list[SweepRun]:
+    return [SweepRun(m, t, s) for m in sweep["methods"] for t in sweep["tasks"] for s in sweep["seeds"]]
+
+
+def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path, dict]:
+    """(config file, overrides) of one run, checked: the resolved config is returned by load_config."""
+    from evolve.runs.config import load_config
+
+    path = Path(sweep["configs"]) / run.method / f"{run.task}.yaml"
+    if not path.is_file():
+        raise _fail(source, f"no config for {run.method} on {run.task}: {path} not found")
+    ov = sweep["overrides"]
+    overrides = {k: v for k, v in ov.items() if k not in METHODS}
+    overrides.update(ov.get(run.method, {}), seed=run.seed)
+    load_config(path, overrides)  # raises naming the key
+    return path, overrides
+
+
+class Sweep:
+    """A sweep directory: create it from a sweep file, or open it to resume."""
+
+    def __init__(self, out: str | Path, sweep: dict):
+        self.path = Path(out)
+        self.sweep = sweep
+        self.runs = runs_of(sweep)
+
+    @classmethod
+    def create(cls, sweep_file: str | Path, out: str | Path) -> Sweep:
+        sweep = load_sweep(sweep_file)
+        out = Path(out)
+        if (out / SWEEP_FILE).exists():
+            raise ValueError(f"{out} already holds a sweep; use sgr sweep --resume {out} or another --out")
+        (out / "runs").mkdir(parents=True, exist_ok=True)
+        atomic_write(out / SWEEP_FILE, yaml.safe_dump(sweep, sort_keys=False).encode())
+        return cls(out, sweep)
+
+    @classmethod
+    def open(cls, out: str | Path) -> Sweep:
+        f = Path(out) / SWEEP_FILE
+        if not f.is_file():
+            raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
+        return cls(out, check_sweep(yaml.safe_load(f.read_text()), str(f)))
+
+    def run_dir(self, run: SweepRun) -> RunDir:
+        return RunDir(self.path / "runs" / run.name)
+
+    def status(self, run: SweepRun) -> tuple[int, int]:
+        """(generations done, generations wanted) from the run's files; (0, 0) before it exists."""
+        rd = self.run_dir(run)
+        if not (rd.path / "config.yaml").is_file():
+            return 0, 0
+        return len(rd.rows()), int(rd.config()["generations"])
+
+    def prepare(self, run: SweepRun) -> None:
+        """Create the run directory (config, generation-0 checkpoint) unless it holds a resumable run;
+        a directory left without any checkpoint (killed while being created) is made anew."""
+        from evolve.runs.experiment import Experiment
+
+        rd = self.run_dir(run)
+        if (rd.path / "config.yaml").is_file() and list(rd.ckpt_dir.glob("gen-*.pkl")):
+            return
+        if rd.path.exists():
+            shutil.rmtree(rd.path)
+        path, overrides = run_config(self.sweep, run)
+        Experiment.create(str(path), str(rd.path), overrides, quiet=True).close()
+
+    def pending(self) -> list[SweepRun]:
+        out = []
+        for run in self.runs:
+            done, want = self.status(run)
+            if want == 0 or done < want:
+                out.append(run)
+        return out
+
+
+def die_with_parent() -> None:
+    """In a run's process: SIGKILL when the sweep process dies, so a killed sweep leaves no run
+    going on alone (Linux; elsewhere the run's lock still keeps a resumed sweep from doubling it)."""
+    try:
+        ctypes.CDLL("libc.so.6", use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        pass
+
+
+class LocalBackend:
+    """Runs on this machine, `parallel` at a time, each with cpus / parallel rollout workers."""
+
+    def __init__(self, parallel: int = 1):
+        self.parallel = parallel
+        self.procs: dict[SweepRun, subprocess.Popen] = {}
+
+    def start(self, sweep: Sweep, run: SweepRun) -> None:
+        from evolve.rollout.pool import resolve_workers
+
+        workers = max(1, resolve_workers("auto") // self.parallel)
+        log = open(sweep.run_dir(run).path / "log.txt", "ab")  # noqa: SIM115 (closed by the process)
+        self.procs[run] = subprocess.Popen(
+            [sys.executable, "-m", "evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
+             "--workers", str(workers), "--quiet"],
+            stdout=log, stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
+        log.close()
+
+    def poll(self) -> dict[SweepRun, int]:
+        """Runs that ended since the last call, with their exit codes."""
+        ended = {r: p.returncode for r, p in self.procs.items() if p.poll() is not None}
+        for r in ended:
+            del self.procs[r]
+        return ended
+
+    def stop(self) -> None:
+        for p in self.procs.values():
+            p.send_signal(signal.SIGINT)
+        for p in self.procs.values():
+            p.wait()
+        self.procs = {}
+
+
+def _hms(seconds: float) -> str:
+    if not math.isfinite(seconds):
+        return "?"
+    m, s = divmod(int(seconds), 60)
+    h, m = divmod(m, 60)
+    return f"{h}h{m:02d}m" if h else f"{m}m{s:02d}s"
+
+
+def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: float = 30.0) -> int:
+    """Run every unfinished run; returns the number of runs that failed after their retries."""
+    total = len(sweep.runs)
+    queue = sweep.pending()
+    failures: dict[SweepRun, int] = {}
+    t0 = time.monotonic()
+    gens_at_start = sum(sweep.status(r)[0] for r in sweep.runs)
+    last_report = time.monotonic()
+
+    def say(msg: str) -> None:
+        print(f"[sweep {_hms(time.monotonic() - t0)}] {msg}", flush=True)
+
+    say(f"{total - len(queue)}/{total} runs done; {len(queue)} to run, {backend.parallel} at a time")
+    try:
+        while queue or backend.procs:
+            while queue and len(backend.procs) < backend.parallel:
+                run = queue.pop(0)
+                sweep.prepare(run)
+                backend.start(sweep, run)
+                say(f"start {run.name} at generation {sweep.status(run)[0]}")
+            time.sleep(0.5)
+            for run, rc in backend.poll().items():
+                done, want = sweep.status(run)
+                if done >= want:
+                    say(f"done {run.name}: best {_best(sweep, run)}")
+                    continue
+                failures[run] = failures.get(run, 0) + 1
+                log = sweep.run_dir(run).path / "log.txt"
+                if failures[run] <= RETRIES:
+                    say(f"{run.name} stopped (exit {rc}) at generation {done}; resuming it (see {log})")
+                    queue.insert(0, run)
+                else:
+                    say(f"{run.name} failed {failures[run]} times (exit {rc}); giving up on it (see {log})")
+            if not quiet and time.monotonic() - last_report >= every:
+                last_report = time.monotonic()
+                say(_progress(sweep, backend, t0, gens_at_start))
+    except KeyboardInterrupt:
+        backend.stop()
+        say(f"interrupted; continue with: sgr sweep --resume {sweep.path}")
+        raise
+    failed = [r for r, n in failures.items() if n > RETRIES]
+    say(f"{total - len(sweep.pending())}/{total} runs done"
+        + (f"; failed: {', '.join(r.name for r in failed)}" if failed else "")
+        + f"; report with: sgr report {sweep.path}")
+    return len(failed)
+
+
+def _best(sweep: Sweep, run: SweepRun) -> str:
+    rows = sweep.run_dir(run).rows()
+    return f"{max(float(r['best']) for r in rows):.3f}" if rows else "-"
+
+
+def _progress(sweep: Sweep, backend: LocalBackend, t0: float, gens_at_start: int) -> str:
+    done_runs = total_gens = done_gens = 0
+    for run in sweep.runs:
+        done, want = sweep.status(run)
+        want = want or _wanted(sweep, run)
+        done_runs += done >= want
+        done_gens += done
+        total_gens += want
+    rate = (done_gens - gens_at_start) / max(1e-9, time.monotonic() - t0)  # generations per second
+    eta = (total_gens - done_gens) / rate if rate > 0 else math.inf
+    running = ", ".join(f"{r.name} {sweep.status(r)[0]}/{sweep.status(r)[1]} best {_best(sweep, r)}"
+                        for r in backend.procs)
+    return f"{done_runs}/{len(sweep.runs)} runs done; running: {running or '-'}; ETA {_hms(eta)}"
+
+
+def _wanted(sweep: Sweep, run: SweepRun) -> int:
+    from evolve.runs.config import load_config
+
+    path, overrides = run_config(sweep.sweep, run)
+    return int(load_config(path, overrides)["generations"])
+

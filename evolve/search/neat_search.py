@@ -1,0 +1,208 @@
+"""A neat-python population advanced one generation at a time, with batched evaluation.
+
+neat-python's `Population.run` evaluates one callback per generation; we need more control:
+decode every genome once (cached by key), drop invalid genomes before selection (the SGR paper
+removes them), skip re-simulating elites (their fitness is known and the simulation is
+deterministic), and snapshot the whole state (including Python's `random`, which neat-python
+uses) so a resumed run continues exactly.
+"""
+
+from __future__ import annotations
+
+import itertools
+import random
+import statistics
+import time
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+from neat.reporting import ReporterSet
+
+from evolve.search.genome import peek
+
+Decode = Callable[[Any], Any]  # genome -> phenotype with .valid and .body
+Evaluate = Callable[[Sequence[Any]], tuple[np.ndarray, int]]  # valid phenotypes -> fitness, episodes
+
+
+class NeatSearch:
+    def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
+                 body_distance_weight: float = 0.0, state: dict | None = None,
+                 reevaluate: bool = False):
+        """`seed` None leaves Python's `random` as it is (populations nested in another search);
+        `reevaluate` simulates elites again instead of reusing their fitness (when evaluation has
+        side effects, e.g. the nested baseline evolves a body's controllers)."""
+        self.config = neat_config
+        self.decode = decode
+        self.evaluate = evaluate
+        self.reevaluate = reevaluate
+        gc = neat_config.genome_config
+        gc.body_distance_weight = body_distance_weight
+        gc.body_cache = {}
+        self.reporters = ReporterSet()
+        self.phenotypes: dict[int, Any] = {}
+        if state is None:
+            if seed is not None:
+                random.seed(seed)
+            self.stagnation = neat_config.stagnation_type(neat_config.stagnation_config, self.reporters)
+            self.reproduction = neat_config.reproduction_type(neat_config.reproduction_config,
+                                                              self.reporters, self.stagnation)
+            self.population = self.reproduction.create_new(neat_config.genome_type, gc,
+                                                           neat_config.pop_size)
+            self.reproduction.ancestors.clear()
+            self.species = neat_config.species_set_type(neat_config.species_set_config, self.reporters)
+            self.generation = 0
+            self.best: dict | None = None
+            self.pending_build_s = self._decode_all()
+            self.species.speciate(neat_config, self.population, self.generation)
+        else:
+            self._restore(state)
+
+    # ------------------------------------------------------------------ one generation
+    def step(self) -> dict:
+        """Evaluate the current generation, then breed and speciate the next. Returns the row of
+        generations.csv for the evaluated generation."""
+        t0 = time.perf_counter()
+        todo = self.ask()
+        t1 = time.perf_counter()
+        fit, episodes = self.evaluate([p for _, p in todo]) if todo else (np.zeros(0), 0)
+        sim_s = time.perf_counter() - t1
+        row = self.tell(fit, episodes)
+        row.update(build_s=self._build_s, sim_s=sim_s, total_s=time.perf_counter() - t0)
+        return row
+
+    def ask(self) -> list[tuple[int, Any]]:
+        """(key, phenotype) of the genomes of this generation that need a fitness."""
+        self._build_s = self.pending_build_s + self._decode_all()
+        self._todo = [k for k, g in self.population.items() if self.phenotypes[k].valid
+                      and (g.fitness is None or self.reevaluate)]
+        return [(k, self.phenotypes[k]) for k in self._todo]
+
+    def tell(self, fitness: Sequence[float], episodes: int | None = None) -> dict:
+        """Fitness for the genomes `ask` returned; breeds the next generation."""
+        for k, f in zip(self._todo, fitness, strict=True):
+            self.population[k].fitness = float(f)
+        valid = {k: g for k, g in self.population.items() if self.phenotypes[k].valid}
+        n_invalid = len(self.population) - len(valid)
+        row = self._stats(valid, n_invalid, len(self._todo) if episodes is None else episodes)
+        self._track_best(valid)
+        t2 = time.perf_counter()
+        self._drop(valid)
+        self.population = self.reproduction.reproduce(self.config, self.species, self.config.pop_size,
+                                                      self.generation)
+        if not self.species.species:  # complete extinction: start afresh (reset_on_extinction)
+            self.population = self.reproduction.create_new(self.config.genome_type,
+                                                           self.config.genome_config,
+                                                           self.config.pop_size)
+        self._trim_history()
+        neat_s = time.perf_counter() - t2
+        self.pending_build_s = self._decode_all()
+        t3 = time.perf_counter()
+        self.species.speciate(self.config, self.population, self.generation)
+        row["neat_s"] = neat_s + time.perf_counter() - t3
+        self.generation += 1
+        return row
+
+    def _trim_history(self) -> None:
+        """neat-python keeps two records that grow with every generation and are pickled into every
+        checkpoint: the reproduction's `ancestors` (the parents of every genome ever made; nothing
+        reads it) and each species' whole `fitness_history`, of which stagnation reads only the
+        maximum. Drop the first and keep the second as its maximum. No result changes: Python's max
+        folds from the left, so max([max(h), x]) is max(h + [x]) for any values, NaN included."""
+        self.reproduction.ancestors.clear()
+        for s in self.species.species.values():
+            if len(s.fitness_history) > 1:
+                s.fitness_history[:] = [max(s.fitness_history)]
+
+    def _decode_all(self) -> float:
+        t = time.perf_counter()
+        self.phenotypes = {k: self.phenotypes.get(k) or self.decode(g) for k, g in self.population.items()}
+        # speciation compares with last generation's representatives: keep their bodies too
+        old = self.config.genome_config.body_cache
+        cache = {k: p.body for k, p in self.phenotypes.items()}
+        for s in self.species.species.values():
+            r = s.representative
+            if r is not None and r.key not in cache:
+                cache[r.key] = old[r.key] if r.key in old else self.decode(r).body
+        self.config.genome_config.body_cache = cache
+        return time.perf_counter() - t
+
+    def _drop(self, valid: dict) -> None:
+        """Invalid genomes leave the population and their species before selection."""
+        self.population = valid
+        for sid in list(self.species.species):
+            s = self.species.species[sid]
+            s.members = {k: g for k, g in s.members.items() if k in valid}
+            if not s.members:
+                del self.species.species[sid]
+
+    def _stats(self, valid: dict, n_invalid: int, episodes: int) -> dict:
+        f = [g.fitness for g in valid.values()]
+        return {"generation": self.generation,
+                "best": max(f) if f else float("nan"),
+                "mean": statistics.fmean(f) if f else float("nan"),
+                "median": statistics.median(f) if f else float("nan"),
+                "n_species": len(self.species.species), "n_valid": len(valid),
+                "n_invalid": n_invalid, "episodes": episodes}
+
+    def _track_best(self, valid: dict) -> None:
+        if not valid:
+            return
+        k, g = max(valid.items(), key=lambda kv: (kv[1].fitness, -kv[0]))
+        if self.best is None or g.fitness > self.best["fitness"]:
+            self.best = {"fitness": g.fitness, "generation": self.generation, "key": k,
+                         "genome": g, "phenotype": self.phenotypes[k]}
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        """Everything that decides the rest of the run, picklable, taken without side effects.
+
+        Besides the population, species, reproduction and Python's `random`, neat-python 2 keeps
+        run state in counters (genome, species and node keys; the node counter lives on the
+        genome config, which a new process rebuilds from the INI) and in the innovation tracker
+        (held by the reproduction). Counters are stored as their next value: pickling neat-python's
+        own objects would consume one."""
+        gc = self.config.genome_config
+        node_key, gc.node_indexer = peek(gc.node_indexer)
+        species_key, self.species.indexer = peek(self.species.indexer)
+        genome_key, self.reproduction.genome_indexer = peek(self.reproduction.genome_indexer)
+        repro = dict(self.reproduction.__dict__, genome_indexer=genome_key, reporters=None)
+        species = dict(self.species.__dict__, indexer=species_key, reporters=None)
+        best = None if self.best is None else {k: v for k, v in self.best.items() if k != "phenotype"}
+        return {"format": STATE_FORMAT, "generation": self.generation, "population": self.population,
+                "species": species, "reproduction": repro, "node_indexer": node_key,
+                "random": random.getstate(), "best": best, "pending_build_s": self.pending_build_s}
+
+    def _restore(self, state: dict) -> None:
+        self.generation = state["generation"]
+        self.population = state["population"]
+        self.species = self.config.species_set_type(self.config.species_set_config, self.reporters)
+        self.species.__dict__.update(_counted(state["species"], "indexer"), reporters=self.reporters)
+        self.reproduction = self.config.reproduction_type(self.config.reproduction_config,
+                                                          self.reporters, None)
+        self.reproduction.__dict__.update(_counted(state["reproduction"], "genome_indexer"),
+                                          reporters=self.reporters)
+        self.stagnation = self.reproduction.stagnation
+        self.stagnation.reporters = self.reporters
+        gc = self.config.genome_config
+        gc.innovation_tracker = self.reproduction.innovation_tracker
+        nxt = state.get("node_indexer")
+        gc.node_indexer = None if nxt is None else itertools.count(nxt)
+        random.setstate(state["random"])
+        self.pending_build_s = state["pending_build_s"]
+        self._decode_all()
+        self.best = state["best"]
+        if self.best is not None:
+            self.best["phenotype"] = self.decode(self.best["genome"])
+
+
+STATE_FORMAT = 2  # 1 (unversioned): species pickled whole, no node counter
+
+
+def _counted(saved, key: str) -> dict:
+    """A saved object's attributes with counter `key` (stored as its next value) made a counter
+    again; format-1 checkpoints hold the species set itself."""
+    attrs = dict(saved if isinstance(saved, dict) else vars(saved))
+    if isinstance(attrs.get(key), int):
+        attrs[key] = itertools.count(attrs[key])
+    return attrs

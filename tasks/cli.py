@@ -1,0 +1,155 @@
+"""The `sgr` commands that need only tasks and the simulator (demo, validate, bench), and the
+argument helpers every command shares; `register_task_commands` adds them to the dispatcher in
+evolve/cli.py."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def positive(cast):
+    """argparse type: a positive number of type `cast` (int or float)."""
+    def parse(text: str):
+        try:
+            value = cast(text)
+        except ValueError:
+            value = 0
+        if not value > 0:
+            raise argparse.ArgumentTypeError(f"must be a positive {cast.__name__}, got {text!r}")
+        return value
+    return parse
+
+
+def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) -> Path:
+    """`path` as what a command will write (a folder, or a file); ValueError naming the flag when it
+    cannot be one (it, or a folder above it, is a file; a file output is a folder), before any
+    work is done."""
+    path = Path(path)
+    if path.exists() and path.is_dir() != folder:
+        raise ValueError(f"{flag} {path}: is a {'file' if folder else 'folder'}")
+    for above in path.parents:
+        if above.exists():
+            if not above.is_dir():
+                raise ValueError(f"{flag} {path}: {above} is a file, not a folder")
+            break
+    return path
+
+
+def parse_body(text: str) -> np.ndarray:
+    """BODY argument: rows separated by commas, one digit per voxel ("33333,33033,...") or a
+    .json / .npy file holding the matrix."""
+    path = Path(text)
+    if path.suffix in (".json", ".npy"):
+        if not path.is_file():
+            raise ValueError(f"bad body matrix: file not found: {path}")
+        if path.suffix == ".npy":
+            with path.open("rb") as f:
+                if f.read(6) != b"\x93NUMPY":
+                    raise ValueError(f"bad body matrix: {path}: not a .npy file")
+            try:
+                return np.load(path)
+            except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
+                raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
+        try:
+            data = json.loads(path.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise ValueError(f"bad body matrix: {path}: not valid JSON ({exc})") from None
+        if isinstance(data, dict):
+            if "body" not in data and "matrix" not in data:
+                raise ValueError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
+            data = data.get("body", data.get("matrix"))
+        return np.asarray(data)
+    rows = text.split(",")
+    if not all(r and r.isdigit() for r in rows) or len({len(r) for r in rows}) != 1:
+        raise ValueError(f"bad body matrix: {text!r} is not equal-length rows of digits separated "
+                         "by commas (e.g. 33333,33333,33033,33033,33033)")
+    return np.array([[int(ch) for ch in r] for r in rows])
+
+
+def _demo(args: argparse.Namespace) -> int:
+    """Short main job: a batch of random robots with open-loop gaits; writes results.json."""
+    from tasks.bench import sinusoid
+    from tasks.env import BatchEnv
+    from tsim.sampling import sample_robot
+
+    out = output_path(args.out, folder=True)
+    rng = np.random.default_rng(args.seed)
+    bodies = [sample_robot((5, 5), rng) for _ in range(args.robots)]
+    env = BatchEnv(args.task, bodies, episode_steps=args.steps)
+    t0 = time.perf_counter()
+    total = np.zeros(env.n_worlds)
+    A = env.sim.max_actuators
+    for t in range(args.steps):
+        _, r, term, trunc, _ = env.step(sinusoid(t, A)[None, :].repeat(env.n_worlds, 0))
+        total += r
+    wall = time.perf_counter() - t0
+    out.mkdir(parents=True, exist_ok=True)
+    best = int(np.argmax(total))
+    result = {"task": args.task, "robots": args.robots, "steps": args.steps, "seed": args.seed,
+              "returns": total.tolist(), "best_return": float(total[best]),
+              "best_body": bodies[best].tolist(), "unstable": int(env.sim.unstable.sum()),
+              "wall_s": wall, "robot_steps_per_s": args.robots * args.steps / wall}
+    (out / "results.json").write_text(json.dumps(result, indent=1))
+    print(f"{args.task}: {args.robots} robots x {args.steps} steps in {wall:.1f} s "
+          f"({result['robot_steps_per_s']:.0f} robot-steps/s); best return "
+          f"{result['best_return']:.3f}; wrote {out / 'results.json'}")
+    return 0
+
+
+def _validate(args: argparse.Namespace) -> int:
+    from tasks.validate import validate
+
+    report = validate(args.dir)
+    if args.json:
+        print(json.dumps(report))
+        return 0
+    for c in report["cases"]:
+        print(f"{c['file']:<48} {c['task']:<22} com_err_final {c['com_err_final']:.2e} "
+              f"com_err_max50 {c['com_err_max50']:.2e} obs_err_step0 {c['obs_err_step0']:.1e} "
+              f"return_err {c['return_err']:.2e}")
+    for task, t in report["tasks"].items():
+        print(task, " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
+                             for k, v in t.items()))
+    return 0
+
+
+
+
+def _bench(args: argparse.Namespace) -> int:
+    from tasks.bench import bench
+
+    r = bench(args.task, args.robots, args.steps)
+    if args.json:
+        print(json.dumps(r))
+    else:
+        print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
+              f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "
+              f"{r['physics_robot_steps_per_s']:.0f} (physics only); compile {r['compile_s']:.1f} s; "
+              f"threads {r['threads']}")
+    return 0
+
+
+def register_task_commands(sub) -> None:
+    """Add demo, validate and bench to an argparse subparsers object."""
+    d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
+    d.add_argument("--task", default="Walker-v0")
+    d.add_argument("--robots", type=positive(int), default=32)
+    d.add_argument("--steps", type=positive(int), default=300)
+    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--out", default="runs/demo")
+    d.set_defaults(fn=_demo)
+    v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
+    v.add_argument("dir")
+    v.add_argument("--json", action="store_true")
+    v.set_defaults(fn=_validate)
+    b = sub.add_parser("bench", help="robot-steps per second on random bodies")
+    b.add_argument("--task", default="Walker-v0")
+    b.add_argument("--robots", type=positive(int), default=128)
+    b.add_argument("--steps", type=positive(int), default=100)
+    b.add_argument("--json", action="store_true")
+    b.set_defaults(fn=_bench)

@@ -1,0 +1,119 @@
+"""Runs: config errors name the key; a killed run resumes to the same numbers; run-dir contents."""
+
+import json
+
+import pytest
+import yaml
+
+from evolve.cli import main
+from evolve.runs.champion import load_champion
+from evolve.runs.experiment import Experiment
+from evolve.runs.rundir import RunDir
+from tasks.env import BatchEnv
+
+TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
+        "episode_steps": 15, "checkpoint_every": 2, "render_champion": False}
+
+
+def _write(tmp_path, repo_root, **changes):
+    cfg = {**TINY, "neat_config": str(repo_root / "configs/neat/sgr.ini"), **changes}
+    p = tmp_path / "cfg.yaml"
+    p.write_text(yaml.safe_dump(cfg))
+    return p
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"popsize": 3}, "unknown key 'popsize'"),
+    ({"task": "Jumper-v9"}, "key 'task': unknown task 'Jumper-v9'"),
+    ({"generations": "ten"}, "key 'generations' must be int"),
+    ({"cppn_outputs": 3}, "key 'cppn_outputs' must be 1 or 2"),
+    ({"max_weight": True}, "key 'max_weight' must be float"),
+    ({"method": "cmaes"}, "key 'method' must be one of"),
+    ({"workers": "many"}, "key 'workers' must be a positive int, 'auto' or 'ray'"),
+    ({"layout": "per_cell"}, "unknown key 'layout' for method 'sgr'"),
+    ({"workers": 0}, "key 'workers' must be a positive int, 'auto' or 'ray'"),
+])
+def test_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):
+    p = _write(tmp_path, repo_root, **changes)
+    assert main(["evolve", "--config", str(p), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "run" / "generations.csv").exists()
+
+
+@pytest.mark.parametrize("changes, message", [
+    ({"inner_keep_generations": 0}, "key 'inner_keep_generations' must be a positive int or null"),
+    ({"inner_keep_generations": "forever"}, "key 'inner_keep_generations' must be int or null"),
+    ({"inner_keep_generations": True}, "key 'inner_keep_generations' must be int or null"),
+    ({"inner_pop_size": 0}, "key 'inner_pop_size' must be >= 1"),
+    ({"inner_generations": 0}, "key 'inner_generations' must be >= 1"),
+])
+def test_nested_config_errors_name_the_key(tmp_path, repo_root, capsys, changes, message):
+    neat = repo_root / "configs/neat"
+    p = _write(tmp_path, repo_root, method="nested", neat_config=str(neat / "nested-body.ini"),
+               controller_neat_config=str(neat / "nested-controller.ini"), **changes)
+    assert main(["evolve", "--config", str(p), "--out", str(tmp_path / "run"), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1
+    assert not (tmp_path / "run" / "generations.csv").exists()
+
+
+def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
+    p = _write(tmp_path, repo_root)
+    full = Experiment.create(str(p), str(tmp_path / "full"), {}, quiet=True)
+    full.run_all()
+
+    crashed = Experiment.create(str(p), str(tmp_path / "crash"), {}, quiet=True)
+    step = crashed.search.step
+    calls = {"n": 0}
+
+    def dying_step():
+        calls["n"] += 1
+        if calls["n"] == 4:  # killed while evaluating generation 3, after the gen-2 checkpoint
+            raise KeyboardInterrupt
+        return step()
+
+    crashed.search.step = dying_step
+    with pytest.raises(KeyboardInterrupt):
+        crashed.run_all()
+    crashed.close()  # what the process's end would do: release the run's lock
+    assert len(RunDir(tmp_path / "crash").rows()) == 3  # generation 2 was logged after the checkpoint
+    assert main(["evolve", "--resume", str(tmp_path / "crash"), "--quiet"]) == 0
+
+    cols = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
+    a = [[r[c] for c in cols] for r in RunDir(tmp_path / "full").rows()]
+    b = [[r[c] for c in cols] for r in RunDir(tmp_path / "crash").rows()]
+    assert len(a) == 4 and a == b
+    ca = json.loads((tmp_path / "full" / "champion.json").read_text())
+    cb = json.loads((tmp_path / "crash" / "champion.json").read_text())
+    assert ca == cb and ca["controller"]["layers"][0]["activation"] == "tanh"
+    assert len(ca["body"]) == 5 and ca["fitness"] == max(float(r[1]) for r in a)
+    # the JSON champion alone (dense layers, no neat-python) reproduces its recorded fitness
+    _, body, ctrl = load_champion(tmp_path / "full")
+    env = BatchEnv("Walker-v0", [body], episode_steps=TINY["episode_steps"])
+    obs, total = env.reset(), 0.0
+    for _ in range(TINY["episode_steps"]):
+        obs, r, term, _, _ = env.step([ctrl.act(obs[0, :env.obs_dims[0]])])
+        total += r[0]
+    assert total == pytest.approx(ca["fitness"], abs=1e-9)
+
+
+def test_a_run_directory_is_not_overwritten(tmp_path, repo_root, capsys):
+    p = _write(tmp_path, repo_root, generations=1)
+    out = str(tmp_path / "r")
+    assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 0
+    assert main(["evolve", "--config", str(p), "--out", out, "--quiet"]) == 2
+    assert "already holds a run" in capsys.readouterr().err
+
+
+def test_ctrl_c_stops_the_run_with_a_resume_hint(tmp_path, repo_root, capsys, monkeypatch):
+    p = _write(tmp_path, repo_root)
+
+    def interrupted(self):
+        raise KeyboardInterrupt
+    monkeypatch.setattr(Experiment, "run_all", interrupted)
+    out = tmp_path / "run"
+    assert main(["evolve", "--config", str(p), "--out", str(out), "--quiet"]) == 130
+    err = capsys.readouterr().err
+    assert f"sgr evolve --resume {out}" in err
+    assert RunDir(out).latest_checkpoint() is not None  # generation 0's state is there to resume

@@ -1,0 +1,84 @@
+"""Fitness plots: runs grouped by (method, task), one curve and min..max band per group, PNGs."""
+
+import numpy as np
+import pytest
+import yaml
+
+from evolve.runs.plots import draw_curves, plot_run, plot_runs, run_labels, summarize_runs
+
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def _run(path, best, method=None, task="Walker-v0"):
+    path.mkdir(parents=True)
+    if method is not None:
+        (path / "config.yaml").write_text(yaml.safe_dump({"method": method, "task": task, "seed": 0}))
+    lines = ["generation,best,mean,median,n_species"]
+    lines += [f"{g},{b!r},{b / 2!r},{b / 3!r},3" for g, b in enumerate(best)]
+    (path / "generations.csv").write_text("\n".join(lines) + "\n")
+    return path
+
+
+@pytest.fixture
+def runs(tmp_path):
+    return [_run(tmp_path / "sgr-0", [1.0, 2.0, 3.0], "sgr"),
+            _run(tmp_path / "sgr-1", [3.0, 4.0], "sgr"),  # shorter run (still going)
+            _run(tmp_path / "direct-0", [0.5, 0.5, float("-inf")], "direct")]
+
+
+def test_groups_are_method_task_pairs_with_mean_and_min_max(runs):
+    """Two methods on one task give two groups; sgr's curve is the seed mean with a min..max band,
+    later generations use the runs that reached them, and -inf (no valid robot) is left out."""
+    curves = summarize_runs(runs)
+    assert set(curves) == {("sgr", "Walker-v0"), ("direct", "Walker-v0")}
+    sgr = curves[("sgr", "Walker-v0")]
+    assert sgr.n_runs == 2
+    assert sgr.generation.tolist() == [0, 1, 2]
+    assert np.allclose(sgr.mean, [2.0, 3.0, 3.0])
+    assert np.allclose(sgr.low, [1.0, 2.0, 3.0]) and np.allclose(sgr.high, [3.0, 4.0, 3.0])
+    assert curves[("direct", "Walker-v0")].generation.tolist() == [0, 1]
+
+
+def test_plot_runs_writes_png_with_one_curve_per_group(runs, tmp_path):
+    """The comparison PNG exists and its axes hold exactly one labelled line per (method, task)."""
+    out = plot_runs(runs, tmp_path / "plots" / "compare.png")
+    assert out.read_bytes()[:8] == PNG_MAGIC
+    from matplotlib.figure import Figure
+
+    ax = Figure().add_subplot()
+    lines = draw_curves(ax, summarize_runs(runs))
+    assert len(lines) == len(ax.get_lines()) == 2
+    assert sorted(line.get_label().split(" (")[0] for line in lines) == ["direct / Walker-v0",
+                                                                          "sgr / Walker-v0"]
+    assert all("min-max" in line.get_label() for line in lines)
+
+
+def test_plot_run_writes_png(runs, tmp_path):
+    """A single run's best/mean/median plot is a PNG file."""
+    out = plot_run(runs[0], tmp_path / "one.png")
+    assert out.read_bytes()[:8] == PNG_MAGIC
+
+
+def test_labels_fall_back_without_config(tmp_path):
+    """No config.yaml: the method is the parent directory's name, the task "unknown"."""
+    run = _run(tmp_path / "my-exp" / "seed-3", [1.0])
+    assert run_labels(run) == ("my-exp", "unknown")
+    assert set(summarize_runs([run])) == {("my-exp", "unknown")}
+
+
+def test_plot_runs_without_data_raises(tmp_path):
+    """Runs with no generations rows cannot be plotted; say so instead of writing an empty PNG."""
+    empty = tmp_path / "empty"
+    empty.mkdir()
+    (empty / "generations.csv").write_text("generation,best,mean,median\n")
+    with pytest.raises(ValueError, match="no run"):
+        plot_runs([empty], tmp_path / "x.png")
+
+
+def test_numpy_scalar_reprs_are_read_as_numbers(tmp_path):
+    """A CSV written with repr() of numpy 2 scalars ("np.float64(1.5)") still gives the numbers."""
+    run = tmp_path / "r"
+    run.mkdir()
+    (run / "generations.csv").write_text("generation,best\n0,np.float64(1.5)\n1,np.float64(2.5)\n")
+    curve = next(iter(summarize_runs([run]).values()))
+    assert curve.mean.tolist() == [1.5, 2.5]

@@ -1,0 +1,115 @@
+"""Sweeps: a sweep's runs depend on their configs alone (killed and resumed = uninterrupted), bad
+sweep files are one line, and `sgr report` writes its three files from the runs."""
+
+from __future__ import annotations
+
+import csv
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import yaml
+
+from evolve.cli import main
+from evolve.runs.rundir import RunDir
+
+FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
+TINY = {"methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": [0, 4],
+        "overrides": {"generations": 4, "pop_size": 8, "episode_steps": 12, "checkpoint_every": 2,
+                      "render_champion": False, "workers": 1,
+                      "nested": {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1}}}
+
+
+def write_sweep(tmp_path: Path, sweep: dict, name: str = "sweep.yaml") -> Path:
+    p = tmp_path / name
+    p.write_text(yaml.safe_dump(sweep))
+    return p
+
+
+def fitness(run_dir: Path) -> list[list[str]]:
+    return [[r[c] for c in FITNESS_COLUMNS] for r in RunDir(run_dir).rows()]
+
+
+def run_names() -> list[str]:
+    return [f"{m}-Walker-v0-s{s}" for m in TINY["methods"] for s in TINY["seeds"]]
+
+
+def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
+    spec = write_sweep(tmp_path, TINY)
+    assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "whole"), "--quiet"]) == 0
+
+    cut = tmp_path / "cut"
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "sweep", "--config", str(spec),
+                             "--out", str(cut), "--quiet"], stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    third = cut / "runs" / run_names()[2] / "generations.csv"  # killed inside the third run
+    deadline = time.monotonic() + 120
+    while not (third.is_file() and len(RunDir(third.parent).rows()) >= 1):
+        assert proc.poll() is None, proc.stderr.read()
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait()
+    # the run's own process dies with the sweep (it would otherwise finish the run by itself)
+    pid = (third.parent / ".lock").read_text().strip()
+    deadline = time.monotonic() + 1.0
+    while os.path.exists(f"/proc/{pid}") and "zombie" not in Path(f"/proc/{pid}/status").read_text():
+        assert time.monotonic() < deadline, "a run process outlived its killed sweep"
+        time.sleep(0.01)
+    time.sleep(1.0)
+    assert len(RunDir(third.parent).rows()) < 4
+    assert main(["sweep", "--resume", str(cut), "--quiet"]) == 0
+
+    for name in run_names():
+        a, b = fitness(tmp_path / "whole" / "runs" / name), fitness(cut / "runs" / name)
+        assert len(a) == 4 and a == b, name
+    # every run is an ordinary run directory with the sweep's overrides and its own seed
+    cfg = RunDir(cut / "runs" / "nested-Walker-v0-s4").config()
+    assert (cfg["seed"], cfg["pop_size"], cfg["inner_pop_size"], cfg["generations"]) == (4, 4, 4, 4)
+    stored = yaml.safe_load((cut / "sweep.yaml").read_text())
+    assert stored["seeds"] == [0, 4] and Path(stored["configs"]).is_absolute()
+
+    out = tmp_path / "report" / "paper.md"
+    assert main(["report", str(cut), "--out", str(out)]) == 0
+    assert {p.name for p in out.parent.iterdir()} == {"paper.md", "summary.csv", "curves.png"}
+    rows = list(csv.DictReader((out.parent / "summary.csv").open()))
+    assert sorted(r["run"] for r in rows) == sorted(run_names())
+    for r in rows:
+        best = max(float(x[1]) for x in fitness(cut / "runs" / r["run"]))
+        assert float(r["best_final"]) == best and float(r["champion_fitness"]) == best
+        assert float(r["replay"]) == pytest.approx(best, abs=1e-9)  # the JSON champion replays
+        assert float(r["robust_min"]) <= float(r["robust_mean"])
+    text = out.read_text()
+    assert "| sgr | Walker-v0 | 0, 4 | 4 |" in text and "5.75 / 6.09 / 6.56 / 6.60" in text
+    assert (out.parent / "curves.png").read_bytes()[:4] == b"\x89PNG"
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"methods": ["cmaes"]}, "key 'methods' must be a list of sgr, direct, nested"),
+    ({"tasks": ["Jumper-v9"]}, "key 'tasks' must be a list of known tasks"),
+    ({"seeds": -1}, "key 'seeds' must be a positive count or a list of seeds"),
+    ({"overrides": {"popsize": 3}}, "unknown key 'popsize'"),
+    ({"overrides": {"nested": {"layout": "per_cell"}}}, "unknown key 'layout' for method 'nested'"),
+    ({"overrides": {"seed": 3}}, "must not set 'seed'"),
+    ({"configs": "nowhere"}, "no config for sgr on Walker-v0"),
+    ({"budget": 3}, "unknown key 'budget'"),
+])
+def test_a_bad_sweep_file_is_one_error_line_and_no_sweep(tmp_path, capsys, change, message):
+    spec = write_sweep(tmp_path, {**TINY, **change})
+    assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("sgr: error:") and message in err and err.count("\n") == 1, err
+    assert not (tmp_path / "s").exists()
+
+
+def test_a_sweep_file_that_is_not_a_mapping_and_a_folder_that_is_not_a_sweep(tmp_path, capsys):
+    (tmp_path / "list.yaml").write_text("- sgr\n")
+    assert main(["sweep", "--config", str(tmp_path / "list.yaml"), "--out", str(tmp_path / "s")]) == 2
+    assert "a sweep must be a mapping" in capsys.readouterr().err
+    assert main(["sweep", "--resume", str(tmp_path)]) == 2
+    assert "is not a sweep directory" in capsys.readouterr().err
+    assert main(["report", str(tmp_path)]) == 2
+    assert "holds no run directories" in capsys.readouterr().err

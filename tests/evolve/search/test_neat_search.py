@@ -1,0 +1,76 @@
+"""The NEAT loop: invalid bodies are counted and never simulated; speciation adds v x body distance."""
+
+import neat
+import numpy as np
+
+from evolve.methods.sgr_decoder import DecoderSettings, decode, is_valid_robot
+from evolve.search.body_distance import body_distance
+from evolve.search.neat_search import NeatSearch
+
+
+def test_invalid_bodies_are_counted_excluded_from_simulation_and_from_the_population(neat_config):
+    cfg = neat_config(pop=40)
+    seen = []
+
+    def evaluate(phenotypes):
+        seen.extend(phenotypes)
+        return np.array([float(np.count_nonzero(p.body)) for p in phenotypes]), len(phenotypes)  # stand-in
+
+    search = NeatSearch(cfg, lambda g: decode(g, cfg.genome_config, "Walker-v0", DecoderSettings()),
+                        evaluate, seed=3)
+    total_bad = 0
+    for _ in range(3):
+        pop = dict(search.population)
+        bad = {k for k in pop if not is_valid_robot(search.phenotypes[k].body)}
+        total_bad += len(bad)
+        seen.clear()
+        row = search.step()
+        assert row["n_invalid"] == len(bad) and row["n_valid"] == len(pop) - len(bad)
+        assert len(seen) <= len(pop) - len(bad) and all(is_valid_robot(p.body) for p in seen)
+        assert not bad & set(search.population)  # not carried over as elites
+    assert total_bad > 0  # the random CPPNs do produce invalid bodies, so the check above bites
+
+
+def test_speciation_distance_adds_v_times_the_body_distance(neat_config, genomes):
+    cfg = neat_config()
+    gc = cfg.genome_config
+    a, b = genomes(cfg, 2, mutations=3)
+    base = neat.DefaultGenome.distance(a, b, gc)
+    gc.body_cache = {a.key: np.array([[1, 2], [3, 0]]), b.key: np.array([[2, 2], [0, 0]])}
+    gc.body_distance_weight = 0.25
+    assert a.distance(b, gc) == base + 0.25 * body_distance(gc.body_cache[a.key], gc.body_cache[b.key])
+    gc.body_distance_weight = 0.0
+    assert a.distance(b, gc) == base
+
+
+def test_ancestors_and_fitness_histories_stay_bounded_and_trimming_them_changes_nothing(neat_config):
+    """neat-python's reproduction records the parents of every genome ever made and each species
+    its whole fitness history; we keep neither (the history as its maximum), with the same run."""
+    from types import SimpleNamespace
+
+    def run(trim: bool) -> tuple:
+        cfg = neat_config(pop=30)
+        cfg.species_set_config.compatibility_threshold = 1.5  # many species, some stagnate
+
+        def evaluate(phenotypes):  # rounded: ties and plateaus, so species stagnate
+            return np.array([round(sum(c.weight for c in p.genome.connections.values() if c.enabled), 1)
+                             for p in phenotypes]), len(phenotypes)
+        search = NeatSearch(cfg, lambda g: SimpleNamespace(valid=True, body=np.zeros((5, 5)), genome=g),
+                            evaluate, seed=4)
+        if not trim:
+            search._trim_history = lambda: None
+        stagnant = []
+        search.reporters.add(SimpleNamespace(species_stagnant=lambda sid, s: stagnant.append(sid),
+                                             info=lambda msg: None))
+        rows = [search.step() for _ in range(45)]
+        longest = max(len(s.fitness_history) for s in search.species.species.values())
+        fitness = [(r["best"], r["mean"], r["n_species"]) for r in rows]
+        genomes = {k: sorted((c.key, c.weight) for c in g.connections.values())
+                   for k, g in search.population.items()}
+        return fitness, genomes, len(search.reproduction.ancestors), longest, stagnant
+
+    trimmed, untrimmed = run(True), run(False)
+    assert trimmed[:2] == untrimmed[:2]
+    assert trimmed[2] == 0 and untrimmed[2] > 300
+    assert trimmed[3] == 1 and untrimmed[3] > 20  # longer than max_stagnation: stagnation was decided
+    assert trimmed[4] == untrimmed[4] and len(trimmed[4]) >= 3  # the same species stagnated
