@@ -257,11 +257,10 @@ def run(task: str, body: np.ndarray, actions: np.ndarray, seed: int, delta: floa
     obs = [obs0]
     pos, vel = [u.pos_at_time(0)], [u.object_vel_at_time(0, "robot")]
     term_step = unstable_step = -1
-    truncated = False
     for t in range(S):
         t_before = u.get_time()
         with Quiet():
-            o, r, term, trunc, _ = env.step(actions[t] + delta)
+            o, r, term, _, _ = env.step(actions[t] + delta)
         rewards[t] = r
         now = u.get_time()
         if now == t_before and unstable_step < 0:
@@ -275,13 +274,12 @@ def run(task: str, body: np.ndarray, actions: np.ndarray, seed: int, delta: floa
             obs.append(np.asarray(o, dtype=np.float64))
             pos.append(u.pos_at_time(now))
             vel.append(u.object_vel_at_time(now, "robot"))
-        truncated = truncated or bool(trunc)
         if term:
             term_step = t
             break
     out = {"obs0": obs0, "drawn": drawn, "rewards": rewards, "term_step": term_step,
            "unstable_step": unstable_step, "steps_run": t + 1, "com": np.array(coms),
-           "ort": np.array(orts), "truncated": truncated,
+           "ort": np.array(orts),
            "n_points": u.object_pos_at_time(0, "robot").shape[1],
            "actuators": np.asarray(u.get_actuator_indices("robot")).astype(np.int64),
            "max_episode_steps": env.spec.max_episode_steps, "entry_point": env.spec.entry_point,
