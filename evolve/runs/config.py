@@ -11,9 +11,8 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from evolve.methods import METHODS
+from evolve.runs.files import read_yaml
 from tasks.specs import TASKS
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -101,24 +100,10 @@ def check_config(raw: dict, source: str = "config") -> dict:
     return cfg
 
 
-def yaml_problem(exc: yaml.YAMLError) -> str:
-    """One line for a YAML syntax error: what and where (PyYAML's own message spans several)."""
-    mark = getattr(exc, "problem_mark", None)
-    what = getattr(exc, "problem", None) or str(exc).splitlines()[0]
-    return f"{what} at line {mark.line + 1}, column {mark.column + 1}" if mark else what
-
-
 def load_config(path: str | Path, overrides: dict | None = None) -> dict:
     """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"config file not found: {path}")
-    try:
-        raw = yaml.safe_load(path.read_text()) or {}
-    except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text file") from None
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None
+    raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
         raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
     return config_from_dict({**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}},

@@ -21,44 +21,15 @@ import json
 import os
 import pickle
 import sys
-import tempfile
 from pathlib import Path
 
 import yaml
 
+from evolve.runs.files import atomic_write, read_yaml
+
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s"]
 KEEP_CHECKPOINTS = 2
-
-
-def _umask() -> int:
-    mask = os.umask(0)
-    os.umask(mask)
-    return mask
-
-
-def atomic_write(path: Path, data: bytes) -> None:
-    """Write all of `data` or nothing: temporary file, fsync, rename. The temporary file is made
-    0600 by `mkstemp`; it gets the umask's permissions before it takes the file's place."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.")
-    try:
-        os.fchmod(fd, 0o666 & ~_umask())
-        with os.fdopen(fd, "wb") as f:
-            f.write(data)
-            f.flush()
-            os.fsync(f.fileno())
-        os.replace(tmp, path)
-        dir_fd = os.open(path.parent, os.O_RDONLY)  # the rename itself survives a power cut
-        try:
-            os.fsync(dir_fd)
-        finally:
-            os.close(dir_fd)
-    except BaseException as exc:
-        Path(tmp).unlink(missing_ok=True)
-        if isinstance(exc, OSError) and exc.filename is None:  # name the file (a full disk)
-            raise OSError(exc.errno, exc.strerror, str(path)) from exc
-        raise
 
 
 def _ends_a_line(path: Path) -> bool:
@@ -126,10 +97,7 @@ class RunDir:
         f = self.path / "config.yaml"
         if not f.is_file():
             raise ValueError(f"{self.path} is not a run directory (no config.yaml)")
-        try:
-            cfg = yaml.safe_load(f.read_text())
-        except yaml.YAMLError as exc:
-            raise ValueError(f"{f}: not valid YAML: {exc}".replace("\n", " ")) from None
+        cfg = read_yaml(f)
         if not isinstance(cfg, dict) or "method" not in cfg:
             raise ValueError(f"{f}: not a run config (no 'method' key)")
         return cfg

@@ -33,7 +33,8 @@ import yaml
 
 from evolve.methods import METHODS
 from evolve.runs.config import configs_dir
-from evolve.runs.rundir import RunDir, atomic_write
+from evolve.runs.files import atomic_write, read_yaml
+from evolve.runs.rundir import RunDir
 from tasks.specs import TASKS
 
 SWEEP_FILE = "sweep.yaml"
@@ -58,13 +59,7 @@ def _fail(source: str, msg: str) -> ValueError:
 def load_sweep(path: str | Path) -> dict:
     """Read and check a sweep file; returns the resolved sweep (what sweep.yaml stores)."""
     path = Path(path)
-    if not path.is_file():
-        raise ValueError(f"sweep file not found: {path}")
-    try:
-        raw = yaml.safe_load(path.read_text())
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {exc}".replace("\n", " ")) from None
-    return check_sweep(raw, str(path), path.parent)
+    return check_sweep(read_yaml(path, "sweep file"), str(path), path.parent)
 
 
 def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
@@ -148,7 +143,7 @@ class Sweep:
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        return cls(out, check_sweep(yaml.safe_load(f.read_text()), str(f)))
+        return cls(out, check_sweep(read_yaml(f), str(f)))
 
     def run_dir(self, run: SweepRun) -> RunDir:
         return RunDir(self.path / "runs" / run.name)
