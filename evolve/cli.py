@@ -151,6 +151,8 @@ def _plot(args: argparse.Namespace) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The `sgr` command; returns the exit code. A ValueError from a command is printed as one
+    line, sgr: error: ..., on stderr with exit code 2 (argparse's own errors exit 2 as well)."""
     p = argparse.ArgumentParser(prog="sgr", description="Batched evogym-faithful soft-robot toolkit")
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("evolve", help="run an evolution experiment (default: a short SGR Walker-v0 run)")

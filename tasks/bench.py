@@ -12,6 +12,8 @@ from tsim.sampling import sample_robot
 
 
 def sinusoid(t: int, n_act: int, period: float = 20.0) -> np.ndarray:
+    """(n_act,) open-loop actions at step t: 1.1 + 0.5 sin(2 pi t / period + phase), phases spread
+    evenly over the actuators; always inside evogym's [0.6, 1.6], so nothing is clipped."""
     phase = 2 * np.pi * np.arange(n_act) / max(n_act, 1)
     return 1.1 + 0.5 * np.sin(2 * np.pi * t / period + phase)
 

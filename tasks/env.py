@@ -107,6 +107,9 @@ class BatchEnv:
         return int(self.elapsed.max())
 
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
+        """One env step of every world: (obs (B, max_obs_dim), reward, terminated, truncated (B,),
+        info with `unstable` and `t`). An unstable world gets -3 and terminates; a terminated one
+        earns 0 from then on. RuntimeError once any world reached `episode_steps`, until `reset`."""
         if np.any(self.elapsed >= self.episode_steps):
             raise RuntimeError("episode is over (truncated); call reset()")
         self.sim.set_actions(actions)

@@ -50,10 +50,14 @@ class SgrEnv(gym.Env):
         self.action_space = _action_space(int(self._env.n_actuators[0]))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """`seed` only seeds gymnasium's RNG: the simulation is deterministic, every episode starts
+        the same."""
         super().reset(seed=seed)  # the simulation itself is deterministic
         return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
 
     def step(self, action):
+        """`action` of shape (n_actuators,), else ValueError; values are clipped to [0.6, 1.6].
+        Truncates only with `episode_steps`, otherwise gymnasium's TimeLimit does."""
         a = np.asarray(action, dtype=np.float64)
         if a.shape != self.action_space.shape:
             raise ValueError(f"wrong action shape: expected {self.action_space.shape}, got {a.shape}")
@@ -71,6 +75,8 @@ class SgrEnv(gym.Env):
 
     @property
     def batch_env(self) -> BatchEnv:
+        """The underlying one-world `BatchEnv` (its `sim`, `spec`), for what gymnasium's API does
+        not expose."""
         return self._env
 
 
@@ -105,10 +111,13 @@ class SgrVectorEnv(VectorEnv):
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
+        """Reset every robot; `seed` only seeds gymnasium's RNG (the simulation is deterministic)."""
         super().reset(seed=seed)
         return self._env.reset(), {}
 
     def step(self, actions):
+        """`actions` (num_envs, max_actuators), padded as in the class docstring; robots whose
+        episode ended are reset within this call (same-step autoreset)."""
         obs, reward, term, trunc, info = self._env.step(np.asarray(actions, dtype=np.float64))
         done = term | trunc
         out = {"unstable": info["unstable"], "_unstable": np.ones(self.num_envs, dtype=bool)}
@@ -124,6 +133,8 @@ class SgrVectorEnv(VectorEnv):
 
     @property
     def batch_env(self) -> BatchEnv:
+        """The underlying `BatchEnv` of all robots (its `sim`, `spec`), for what gymnasium's API
+        does not expose."""
         return self._env
 
 

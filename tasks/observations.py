@@ -35,6 +35,8 @@ PI_EVOGYM = 3.1415926
 
 
 def com(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(B, 2) mean of each row's valid points (`mask` (B, N) bool): every point weighs the same, as
+    in evogym's centre of mass."""
     n = mask.sum(axis=1, keepdims=True)
     return (pos * mask[:, :, None]).sum(axis=1) / n
 
@@ -115,10 +117,12 @@ def _object_com(s: Scene, name: str, which: int) -> np.ndarray:
 
 
 def object_offset(name: str) -> Block:
+    """Block of 2: free object `name`'s COM minus the robot's COM, world units."""
     return Block(f"{name} COM relative to the robot COM", 2, lambda s: _object_com(s, name, 0) - s.com)
 
 
 def object_vcom(name: str) -> Block:
+    """Block of 2: free object `name`'s mean point velocity, absolute, not relative to the robot."""
     return Block(f"{name} velocity COM", 2, lambda s: _object_com(s, name, 1))
 
 

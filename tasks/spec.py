@@ -39,6 +39,8 @@ Reward = Callable[[Measure, Measure], np.ndarray]  # (before, after) -> (B,) rew
 
 @dataclass(frozen=True)
 class TaskSpec:
+    """Every fact of one evogym task (see the module docstring); one frozen instance per task,
+    registered in `tasks.specs.TASKS`."""
     name: str
     world: str  # evogym world file in tasks/worlds/
     origin: tuple[int, int]  # grid cell of the bottom-left of the robot's body matrix

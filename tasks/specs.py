@@ -18,6 +18,7 @@ TASKS: dict[str, TaskSpec] = {s.name: s for s in (
 
 
 def task_spec(name: str) -> TaskSpec:
+    """The spec of an evogym task id such as Walker-v0; ValueError listing the known ids otherwise."""
     try:
         return TASKS[name]
     except KeyError:

@@ -34,6 +34,9 @@ def _npz(path: Path):
 
 
 def validate_traces(folder: Path) -> dict:
+    """Replay every trace case of `folder` with evogym's recorded actions, one batch per task: per
+    case COM (world units), step-0 observation and return errors; per task the median COM errors
+    and, with chaos_floor.json, evogym's own spread under tiny perturbations (chaos_median)."""
     index = _json(folder / "index.json")
     chaos_file = folder / "chaos_floor.json"
     chaos = _json(chaos_file) if chaos_file.exists() else None
@@ -83,6 +86,8 @@ def validate_traces(folder: Path) -> dict:
 
 
 def validate_returns(folder: Path) -> dict:
+    """Replay the robots of each <task>.npz (files without `returns` are skipped) with their
+    recorded actions: Spearman and median absolute difference of our returns against evogym's."""
     tasks_out = {}
     summary = _json(folder / "summary.json") if (folder / "summary.json").exists() else {}
     for f in sorted(folder.glob("*.npz")):

@@ -59,6 +59,8 @@ def is_connected(matrix: np.ndarray) -> bool:
 
 
 def has_actuator(matrix: np.ndarray) -> bool:
+    """True when any cell is an actuator (3 = H_ACT, 4 = V_ACT): a robot without one cannot be
+    driven, so `check_robot` rejects it."""
     m = np.asarray(matrix)
     return bool(np.any((m == C.H_ACT) | (m == C.V_ACT)))
 
@@ -119,22 +121,28 @@ class Body:
 
     @property
     def n_edges(self) -> int:
+        """Spring count: each voxel's main edges (shared sides counted once) plus its two diagonals."""
         return len(self.edge_a)
 
     @property
     def n_voxels(self) -> int:
+        """Non-empty cells: the length of the voxel_* arrays (row-major order)."""
         return len(self.voxel_type)
 
     @property
     def n_actuators(self) -> int:
+        """Length of this body's action vector (its H_ACT and V_ACT voxels)."""
         return len(self.actuator_voxels)
 
     @property
     def voxel_is_surface(self) -> np.ndarray:
+        """(n_voxels,) bool: voxels with at least one unconnected side, the only ones collision
+        checks visit."""
         return self.voxel_open.any(axis=1)
 
     @property
     def edge_is_surface(self) -> np.ndarray:
+        """(n_edges,) bool: edges on an unconnected voxel side (the outline); diagonals never are."""
         surf = np.zeros(self.n_edges, dtype=bool)
         surf[self.voxel_edges[self.voxel_open]] = True
         return surf

@@ -182,6 +182,8 @@ class Camera:
         self.centre: np.ndarray | None = None
 
     def reset(self) -> None:
+        """Forget the position: the next `update` centres on its points at once instead of easing
+        toward them."""
         self.centre = None
 
     def update(self, tracked: np.ndarray) -> tuple[float, float]:

@@ -95,4 +95,6 @@ def _threads_env() -> int | None:
 
 
 def threads() -> int:
+    """CPU threads Taichi is given: $SGR_THREADS, else the CPU count (Taichi's own default);
+    ValueError when $SGR_THREADS is not a positive int."""
     return _threads_env() or os.cpu_count() or 1

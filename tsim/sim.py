@@ -143,6 +143,7 @@ class BatchSim:
     # ------------------------------------------------------------------ control
     @property
     def n_worlds(self) -> int:
+        """B, the batch size: one world per body."""
         return len(self.bodies)
 
     def reset(self, mask: np.ndarray | None = None) -> None:
@@ -221,6 +222,8 @@ class BatchSim:
     # ------------------------------------------------------------------ read-out
     @property
     def status(self) -> np.ndarray:
+        """(B,) copy of each world's status code (kernels.RUNNING, UNSTABLE, NONFINITE, INACTIVE);
+        only RUNNING worlds advance."""
         return self.counts[:, K.STATUS].copy()
 
     @property
@@ -234,14 +237,20 @@ class BatchSim:
         return self.state[w, :self.n_robot_points[w], 0:2].T.copy()
 
     def robot_vel(self, w: int) -> np.ndarray:
+        """(2, n) robot point velocities of world w, evogym point order, world units per unit of
+        simulated time (dt = 1e-4 per substep)."""
         return self.state[w, :self.n_robot_points[w], 2:4].T.copy()
 
     def object_pos(self, w: int, name: str) -> np.ndarray:
+        """(2, n) point positions of free object `name` in world w, world units; KeyError when the
+        world has no free object of that name (fixed objects are terrain, not simulated)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
         return self.state[w, off:off + obj.body.n_points, 0:2].T.copy()
 
     def object_vel(self, w: int, name: str) -> np.ndarray:
+        """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
+        as `object_pos`."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
         return self.state[w, off:off + obj.body.n_points, 2:4].T.copy()

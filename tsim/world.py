@@ -20,6 +20,8 @@ from tsim.body import Body, build_body
 
 @dataclass(frozen=True, eq=False)
 class WorldObject:
+    """One object of a world file: its body (FIXED voxels allowed), the grid cell of its bounding
+    box's bottom-left, and `pos0`, evogym's exact initial point positions (2, n)."""
     name: str
     body: Body
     cell: tuple[int, int]  # grid cell of the bottom-left of the object's bounding box
@@ -27,6 +29,8 @@ class WorldObject:
 
     @property
     def is_fixed(self) -> bool:
+        """True when every voxel is FIXED (material 5): such an object is static terrain, never
+        simulated."""
         return bool(np.all(self.body.voxel_type == C.FIXED))
 
 
@@ -48,6 +52,8 @@ class Terrain:
 
 @dataclass(frozen=True, eq=False)
 class World:
+    """A loaded evogym world file: grid size in cells, its objects in evogym's load order (sorted by
+    name) and the static terrain built from the fixed ones."""
     name: str
     grid_w: int
     grid_h: int
@@ -56,13 +62,16 @@ class World:
 
     @property
     def free_objects(self) -> tuple[WorldObject, ...]:
+        """Objects simulated as points after the robot's (e.g. Thrower's package), in load order."""
         return tuple(o for o in self.objects if not o.is_fixed)
 
     @property
     def fixed_objects(self) -> tuple[WorldObject, ...]:
+        """Objects that are static terrain (all voxels FIXED), in load order."""
         return tuple(o for o in self.objects if o.is_fixed)
 
     def object(self, name: str) -> WorldObject:
+        """The object called `name`, fixed or free; KeyError when the world has none."""
         for o in self.objects:
             if o.name == name:
                 return o

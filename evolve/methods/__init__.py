@@ -16,6 +16,8 @@ METHODS: dict[str, type[Problem]] = {p.name: p for p in (
 
 
 def method(name: str) -> type[Problem]:
+    """The Problem class registered as `name` (a config's `method`); ValueError listing the known
+    ones."""
     try:
         return METHODS[name]
     except KeyError:

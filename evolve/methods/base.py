@@ -30,6 +30,8 @@ class Phenotype(Protocol):
 
 
 class Problem:
+    """Base class of a method (see the module docstring): subclass it, set `name`, and add it to
+    evolve.methods.METHODS."""
     name: ClassVar[str]  # the config's `method`
     config_keys: ClassVar[Schema] = {}  # the method's keys beyond the common ones (evolve/runs/config.py)
     # keys holding files (relative to the YAML that names them) -> default file in configs/neat/
@@ -52,6 +54,8 @@ class Problem:
         return {}
 
     def decode(self, genome) -> Phenotype:
+        """One genome -> its phenotype, without simulating; must be deterministic and side-effect
+        free: the search caches it by genome key and decodes again after a resume."""
         raise NotImplementedError
 
     def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:

@@ -32,11 +32,15 @@ N_COORDS = 2
 
 
 def n_inputs(task: str, shape: tuple[int, int]) -> int:
+    """NEAT input count: 2 cell coordinates + the observation of the largest robot the shape allows
+    ((H+1)(W+1) points, every cell filled); smaller robots' observations are zero-padded."""
     return N_COORDS + obs_dim(task, (shape[0] + 1) * (shape[1] + 1))
 
 
 @dataclass
 class DirectPhenotype:
+    """A decoded direct genome: its body, whether it is a valid robot, and the genome itself, which
+    is also the controller."""
     body: np.ndarray
     valid: bool
     genome: object = None
@@ -70,18 +74,23 @@ class DirectProblem(Problem):
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
+        """`layout` must be per_output or per_cell."""
         if cfg["layout"] not in LAYOUTS:
             raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
                              f"got {cfg['layout']!r}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
+        """Inputs as `n_inputs`; outputs: 5 materials, then one per body cell (per_output) or one
+        action (per_cell)."""
         shape = tuple(cfg["robot_shape"])
         n_control = 1 if cfg.get("layout", "per_output") == "per_cell" else shape[0] * shape[1]
         return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
                                   "num_outputs": str(N_TYPES + n_control)}}
 
     def decode(self, genome) -> DirectPhenotype:
+        """Query the network at every cell's (x, y) with the observation inputs at 0; body = argmax
+        of the 5 material outputs (H, W), possibly invalid."""
         x = np.zeros((len(self.cells), len(self.gc.input_keys)))
         x[:, :N_COORDS] = self.cells
         out = CompiledCPPN(genome, self.gc)(x)[:, :N_TYPES]
@@ -89,6 +98,8 @@ class DirectProblem(Problem):
         return DirectPhenotype(body, is_valid_robot(body), genome)
 
     def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> tuple[np.ndarray, int]:
+        """One episode per phenotype, its genome's network as controller in the configured layout;
+        episodes = len(phenotypes)."""
         return self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
                              [p.genome for p in phenotypes],
                              partial(direct_policy, genome_config=self.gc,
@@ -96,6 +107,8 @@ class DirectProblem(Problem):
                              self.cfg["episode_steps"]), len(phenotypes)
 
     def champion(self, p: DirectPhenotype) -> dict:
+        """The body and the network as GraphController JSON (inputs from offset 2, actions from
+        output 5; per_cell also stores each actuator cell's (x, y))."""
         b = build_body(p.body)
         cell_inputs = self.cells[np.asarray(b.actuator_flat, dtype=np.int64)] if self.per_cell else None
         ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),

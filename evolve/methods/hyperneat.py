@@ -17,6 +17,8 @@ from evolve.methods.substrate import Substrate
 
 @dataclass(frozen=True)
 class Expression:
+    """HyperNEAT weight expression: CPPN outputs with |w| <= threshold become 0 (no link); the rest
+    keep their sign, shifted toward 0 by threshold and scaled so that |w| = 1 gives max_weight."""
     threshold: float = 0.2
     max_weight: float = 1.0
 

@@ -36,12 +36,15 @@ from tsim.body import build_body
 
 @dataclass
 class BodyPhenotype:
+    """A decoded body network: the body only; its controllers come from the body's inner population."""
     body: np.ndarray
     valid: bool
 
 
 @dataclass
 class ControllerPhenotype:
+    """An inner-search genome with the body it drives; always valid (only valid bodies get an inner
+    search)."""
     genome: object
     body: np.ndarray
     valid: bool = True
@@ -77,6 +80,7 @@ class NestedProblem(Problem):
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
+        """The outer body network: 2 inputs (a cell's x, y), 5 material outputs."""
         return {"DefaultGenome": {"num_inputs": "2", "num_outputs": str(N_TYPES)}}
 
     @classmethod
@@ -104,6 +108,8 @@ class NestedProblem(Problem):
         return self._configs[k]
 
     def decode(self, genome) -> BodyPhenotype:
+        """Body = argmax of the body network's 5 outputs at every cell (H, W), possibly invalid; the
+        controller is evolved later, in `evaluate`."""
         out = CompiledCPPN(genome, self.gc)(self.cells)
         body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
         return BodyPhenotype(body, is_valid_robot(body))
@@ -117,6 +123,10 @@ class NestedProblem(Problem):
         return self.inner[key]
 
     def evaluate(self, phenotypes: Sequence[BodyPhenotype]) -> tuple[np.ndarray, int]:
+        """Advance every distinct body's inner search `inner_generations` generations (all
+        controllers one batch per inner generation); fitness = that search's best ever, episodes =
+        controllers simulated. Has side effects: inner populations advance, stale ones are
+        forgotten."""
         bodies = {p.body.tobytes(): p.body for p in phenotypes}
         searches = [self._inner_for(b) for b in bodies.values()]
         episodes = 0
@@ -166,12 +176,16 @@ class NestedProblem(Problem):
 
     # checkpoint hooks: the inner populations are part of the run's state
     def state(self) -> dict:
+        """Every inner search's state with its input grid side k, keyed by body bytes, and the
+        forgetting bookkeeping (generation, last_seen, pinned)."""
         return {"inner": {key: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
                           for key, s in self.inner.items()},
                 "generation": self.generation, "last_seen": dict(self.last_seen), "pinned": self.pinned}
 
     def restore(self, state: dict) -> None:
         # checkpoints from before inner populations were forgotten: every body counts as just seen
+        """Rebuild the inner searches from `state`; in checkpoints from before forgetting existed
+        every body counts as just seen."""
         self.generation = state.get("generation", 0)
         self.last_seen = dict(state.get("last_seen", dict.fromkeys(state["inner"], self.generation)))
         self.pinned = state.get("pinned")

@@ -29,20 +29,27 @@ class SgrProblem(Problem):
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
+        """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller)."""
         if cfg["cppn_outputs"] not in (1, 2):
             raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
+        """The CPPN: 7 inputs (x1, y1, z1, x2, y2, z2, bias) and `cppn_outputs` outputs."""
         return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(cfg["cppn_outputs"])}}
 
     def decode(self, genome) -> Phenotype:
+        """Body and dense controller from the CPPN (`sgr_decoder.decode`); an invalid body gets no
+        controller."""
         return decode(genome, self.genome_config, self.cfg["task"], self.settings)
 
     def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:
+        """One episode per phenotype with its dense controller; fitness = return, episodes =
+        len(phenotypes)."""
         fitness = self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
                                 [p.controller for p in phenotypes], dense_policy, self.cfg["episode_steps"])
         return fitness, len(phenotypes)
 
     def champion(self, phenotype: Phenotype) -> dict:
+        """The body and the DenseController JSON (runnable with numpy alone)."""
         return {"body": phenotype.body.tolist(), "controller": phenotype.controller.to_json()}

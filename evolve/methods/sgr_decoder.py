@@ -23,6 +23,8 @@ from tsim.body import build_body, has_actuator, is_connected
 
 @dataclass(frozen=True)
 class DecoderSettings:
+    """What SGR decoding depends on, from the config: body grid shape (rows, cols), 1 or 2 CPPN
+    outputs, and the weight expression's threshold and max_weight."""
     shape: tuple[int, int] = (5, 5)
     cppn_outputs: int = 1
     threshold: float = 0.2
@@ -30,15 +32,19 @@ class DecoderSettings:
 
     @property
     def expression(self) -> Expression:
+        """The HyperNEAT weight expression built from `threshold` and `max_weight`."""
         return Expression(self.threshold, self.max_weight)
 
     @property
     def controller_output(self) -> int:
+        """CPPN output column the controller network reads: 0 when the one output is shared, else 1."""
         return 0 if self.cppn_outputs == 1 else 1
 
 
 @dataclass
 class Phenotype:
+    """A decoded SGR genome: `controller` is None exactly when the body is not a valid robot (such
+    genomes are never simulated)."""
     body: np.ndarray
     valid: bool
     controller: DenseController | None = None
@@ -55,6 +61,8 @@ def _controller_queries(k: int, shape: tuple[int, int]):
 
 
 def body_from_cppn(cppn: CompiledCPPN, s: DecoderSettings) -> np.ndarray:
+    """(H, W) int64 material codes 0-4, argmax of the body network's 5 outputs at each cell (CPPN
+    output 0); not checked: may be empty, disconnected or without an actuator."""
     q, slices = _body_queries()
     W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, s.expression)
     x = cell_coordinates(s.shape)
@@ -69,6 +77,8 @@ def is_valid_robot(body: np.ndarray) -> bool:
 
 def controller_from_cppn(cppn: CompiledCPPN, body: np.ndarray, task: str,
                          s: DecoderSettings) -> DenseController:
+    """The controller network for `body` on `task`: its k x k input grid fits the body's
+    observation, and its actions are the outputs at the body's actuator cells in evogym's order."""
     b = build_body(body)
     n_obs = obs_dim(task, b.n_points)
     q, slices = _controller_queries(controller_side(n_obs), s.shape)
@@ -78,6 +88,8 @@ def controller_from_cppn(cppn: CompiledCPPN, body: np.ndarray, task: str,
 
 
 def decode(genome, genome_config, task: str, s: DecoderSettings) -> Phenotype:
+    """Genome -> Phenotype; the controller is built only for a valid robot (valid=False and no
+    controller otherwise)."""
     cppn = CompiledCPPN(genome, genome_config)
     body = body_from_cppn(cppn, s)
     if not is_valid_robot(body):

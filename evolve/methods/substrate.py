@@ -17,6 +17,7 @@ N_TYPES = 5  # empty, rigid, soft, H actuator, V actuator
 
 
 def spread(n: int) -> np.ndarray:
+    """n coordinates evenly over [-1, 1]; a single node sits at 0 (linspace would put it at -1)."""
     return np.zeros(1) if n == 1 else np.linspace(-1.0, 1.0, n)
 
 

@@ -51,4 +51,6 @@ ACTION_CENTRE, ACTION_HALF_RANGE = 1.1, 0.5
 
 
 def to_action(y: np.ndarray) -> np.ndarray:
+    """Network output y -> actuator target 1.1 + 0.5 y: (-1, 1) maps onto evogym's (0.6, 1.6); not
+    clipped here (the simulator clips)."""
     return ACTION_CENTRE + ACTION_HALF_RANGE * y

@@ -70,6 +70,8 @@ class NetworkBatch:
         self._used = [sorted(set(np.unique(a).tolist())) for *_, a in self.blocks]
 
     def forward(self, x: np.ndarray) -> np.ndarray:
+        """x (B, Q, n_in) -> (B, Q, n_out), network b on its Q rows; ValueError for another B or
+        input width (pad narrower inputs with zeros first)."""
         B, Q, n = x.shape
         if n != self.n_in or B != len(self.out_slot):
             raise ValueError(f"expected inputs ({len(self.out_slot)}, Q, {self.n_in}), got {x.shape}")
@@ -110,6 +112,8 @@ class GraphPolicy:
                 self.query_xy[b, :len(cells)] = np.asarray(cell_xy)[np.asarray(cells, dtype=np.int64)]
 
     def act(self, obs: np.ndarray) -> np.ndarray:
+        """(B, D) padded observations -> (B, action_width) actions 1.1 + 0.5 y; observation entries
+        beyond the networks' inputs are dropped."""
         B, D = obs.shape
         w = min(D, self.nets.n_in - self.input_offset)
         if self.query_xy is None:

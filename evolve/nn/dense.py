@@ -28,6 +28,8 @@ class DenseController:
     action_cells: np.ndarray  # flat body-cell index of each actuator, evogym's action order
 
     def outputs(self, obs: np.ndarray) -> np.ndarray:
+        """The last layer's values (one per body cell) for one robot's unpadded observation (length
+        `input_size`)."""
         x = np.zeros(self.weights[0].shape[0])
         x[:self.input_size] = obs
         for W, b, a in zip(self.weights, self.biases, self.activations, strict=True):
@@ -39,6 +41,8 @@ class DenseController:
         return to_action(self.outputs(obs)[self.action_cells])
 
     def to_json(self) -> dict:
+        """Self-contained JSON (format sgr-dense-controller-1, with a `doc` of the semantics),
+        runnable with numpy alone."""
         return {"format": "sgr-dense-controller-1",
                 "input_size": self.input_size,
                 "input_padding": int(self.weights[0].shape[0]) - self.input_size,
@@ -51,6 +55,7 @@ class DenseController:
 
     @classmethod
     def from_json(cls, d: dict) -> DenseController:
+        """Inverse of `to_json`; the `format` key is not checked."""
         layers = d["layers"]
         return cls([np.asarray(L["weights"], dtype=np.float64) for L in layers],
                    [np.asarray(L["biases"], dtype=np.float64) for L in layers],

@@ -16,6 +16,8 @@ from neat.graphs import feed_forward_layers
 
 @dataclass(frozen=True)
 class Node:
+    """One compiled node: value = activation(bias + response * aggregation(w * value(src))) over
+    `links`."""
     key: int
     bias: float
     response: float
@@ -26,6 +28,8 @@ class Node:
 
 @dataclass(frozen=True)
 class FeedForward:
+    """A genome reduced to what evaluation uses: input and output keys and the nodes of
+    neat-python's feed-forward layers, by depth."""
     input_keys: tuple[int, ...]
     output_keys: tuple[int, ...]
     layers: tuple[tuple[Node, ...], ...]  # by depth, nodes sorted by key within a layer
@@ -37,6 +41,8 @@ class FeedForward:
 
 
 def compile_genome(genome, genome_config) -> FeedForward:
+    """Compile with neat-python's FeedForwardNetwork semantics (module docstring): enabled links
+    only, only the nodes of its feed-forward layers, grouped by depth."""
     inputs, outputs = tuple(genome_config.input_keys), tuple(genome_config.output_keys)
     conns = [c.key for c in genome.connections.values() if c.enabled]
     layers, required = feed_forward_layers(list(inputs), list(outputs), conns)

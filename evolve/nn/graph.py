@@ -18,6 +18,8 @@ FORMAT = "sgr-graph-controller-1"
 
 @dataclass
 class GraphController:
+    """A NEAT network as plain data (the baselines' champions): the one-robot, numpy-only
+    counterpart of `GraphPolicy`, with the same offsets and layouts."""
     input_keys: list[int]
     output_keys: list[int]
     nodes: list[dict]  # {"key", "bias", "response", "activation", "links": [[src, weight], ...]}
@@ -33,6 +35,8 @@ class GraphController:
     def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
                     output_offset: int, action_cells: np.ndarray,
                     cell_inputs: np.ndarray | None = None) -> GraphController:
+        """Compile a genome (`compile_genome`) into this plain form; offsets and action cells as in
+        `GraphPolicy` (direct: 2 and 5, nested: 0 and 0)."""
         net = compile_genome(genome, genome_config)
         inputs, outputs = list(net.input_keys), list(net.output_keys)
         nodes = [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
@@ -42,6 +46,8 @@ class GraphController:
                    None if cell_inputs is None else np.asarray(cell_inputs, dtype=np.float64))
 
     def outputs(self, obs: np.ndarray, xy: np.ndarray | None = None) -> np.ndarray:
+        """Every output for one observation (cut to `input_size`); `xy` fills inputs 0-1 (per_cell
+        layout); outputs no path reaches read 0."""
         x = np.zeros(len(self.input_keys))
         x[self.input_offset:self.input_offset + self.input_size] = obs[:self.input_size]
         if xy is not None:
@@ -53,6 +59,8 @@ class GraphController:
         return np.array([v.get(k, 0.0) for k in self.output_keys])
 
     def act(self, obs: np.ndarray) -> np.ndarray:
+        """(n_actuators,) actions 1.1 + 0.5 y in evogym's actuator order; with `cell_inputs` one
+        query per actuator."""
         if self.cell_inputs is None:
             y = self.outputs(obs)[self.output_offset + self.action_cells]
         else:
@@ -60,6 +68,8 @@ class GraphController:
         return to_action(y)
 
     def to_json(self) -> dict:
+        """Self-contained JSON (format sgr-graph-controller-1, with a `doc` of the semantics),
+        runnable with numpy alone."""
         return {"format": FORMAT, "input_keys": self.input_keys, "output_keys": self.output_keys,
                 "nodes": self.nodes, "input_size": self.input_size, "input_offset": self.input_offset,
                 "output_offset": self.output_offset, "action_cells": self.action_cells.tolist(),
@@ -72,6 +82,7 @@ class GraphController:
 
     @classmethod
     def from_json(cls, d: dict) -> GraphController:
+        """Inverse of `to_json`; a file without `cell_inputs` loads as the one-query layout."""
         cells = d.get("cell_inputs")
         return cls(list(d["input_keys"]), list(d["output_keys"]), list(d["nodes"]), int(d["input_size"]),
                    int(d["input_offset"]), int(d["output_offset"]), np.asarray(d["action_cells"]),

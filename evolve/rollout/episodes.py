@@ -15,6 +15,7 @@ from tasks.env import BatchEnv
 
 
 class BatchPolicy(Protocol):
+    """What a policy factory returns: one `act` call per env step drives the whole batch."""
     def act(self, obs: np.ndarray) -> np.ndarray:
         """(B, max_obs_dim) padded observations -> (B, max_actuators) padded actions."""
 

@@ -10,7 +10,7 @@ A batch is split into `workers` chunks balanced by voxel count; the split depend
 bodies, so a run's results do not depend on scheduling. Each chunk is simulated as its own batch.
 The physics of a world does not depend on its batch; observations and controllers are padded to
 the batch's widest robot, which tests show leaves the returns unchanged (see
-tests/evolve/test_rollout_pool.py).
+tests/evolve/rollout/test_pool.py).
 """
 
 from __future__ import annotations
@@ -77,6 +77,9 @@ class RolloutPool:
 
     def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
             episode_steps: int | str | None = None) -> np.ndarray:
+        """Episode return of each body driven by its item (`factory(env, items)` builds the policy),
+        in input order; a worker's exception is raised here, WorkerDied when a worker dies twice on
+        a chunk."""
         if len(bodies) != len(items):
             raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
         if len(bodies) == 0:

@@ -80,6 +80,9 @@ class RayRolloutPool:
 
     def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
             episode_steps: int | str | None = None) -> np.ndarray:
+        """As `RolloutPool.run`, over the actors; Python's `random` state is left as it was
+        (neat-python evolves with it). An actor's exception is raised here; RuntimeError when an
+        actor died more than ACTOR_RESTARTS times."""
         if len(bodies) != len(items):
             raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
         if len(bodies) == 0:

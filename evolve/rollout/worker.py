@@ -25,6 +25,8 @@ def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, epi
 
 
 def write_frame(stream: BinaryIO, obj) -> None:
+    """Pickle `obj` and write it as one frame (8-byte little-endian length, then the bytes),
+    flushed."""
     data = pickle.dumps(obj, protocol=pickle.HIGHEST_PROTOCOL)
     stream.write(struct.pack("<Q", len(data)) + data)
     stream.flush()
@@ -44,6 +46,8 @@ def read_frame(stream: BinaryIO) -> bytes:
 
 def main() -> None:
     # Ctrl-C reaches the whole process group: the pool's owner handles it and closes our input
+    """The worker loop: one reply per job until end of input; a job's exception is sent back, not
+    raised, so the worker lives on. The real stdout carries only frames (prints go to stderr)."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     # the protocol owns the real stdout; anything printed (e.g. by a library) goes to stderr
     replies = os.fdopen(os.dup(sys.stdout.fileno()), "wb")

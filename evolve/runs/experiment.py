@@ -17,6 +17,8 @@ from evolve.search.neat_search import NeatSearch
 
 
 def genome_json(genome) -> dict:
+    """The champion's genome as plain JSON (every node and connection, disabled ones included): a
+    record for reading; resuming uses the checkpoints, not this."""
     return {"key": genome.key,
             "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
                        "aggregation": n.aggregation} for n in genome.nodes.values()],
@@ -113,6 +115,7 @@ class Experiment:
             raise
 
     def state(self) -> dict:
+        """What a checkpoint holds: the NEAT search's state plus the method's own under `problem`."""
         return {**self.search.state(), "problem": self.problem.state()}
 
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:

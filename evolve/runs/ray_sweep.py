@@ -42,6 +42,8 @@ class RayBackend:
         self._logs: dict = {}  # SweepRun -> its log.txt
 
     def start(self, sweep, run) -> None:
+        """Submit `run` (already prepared) as one Ray task and return at once; `poll` reports its
+        end."""
         path = sweep.run_dir(run).path.resolve()  # the same path on every node
         self._logs[run] = path / "log.txt"
         self.procs[run] = self._task.remote(str(path), self.cpus_per_run)

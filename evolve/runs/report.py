@@ -59,6 +59,8 @@ def run_dirs_under(folder: str | Path) -> list[Path]:
 
 
 def best_so_far(run_dir: Path) -> np.ndarray:
+    """(G,) best fitness of generations 1..g for each g (non-finite bests count as -inf); empty when
+    the run has no rows."""
     cols = read_generations(run_dir)
     best = cols.get("best", np.zeros(0))
     best = np.where(np.isfinite(best), best, -np.inf)
@@ -92,6 +94,8 @@ def champion_robustness(run_dir: Path, replays: int = 10, eps: float = 1e-9) -> 
 
 
 def summarize(runs: list[Path], robustness: bool = True) -> list[dict]:
+    """One row per run (SUMMARY_COLUMNS): best so far at generations 1, 30, 100 and the end (NaN
+    when not reached); `robustness` also replays each champion (11 episodes per run)."""
     rows = []
     for d in runs:
         method, task = run_labels(d)
@@ -123,6 +127,8 @@ def _fmt(x: float | str | None) -> str:
 
 
 def report_markdown(rows: list[dict]) -> str:
+    """report.md's text: `summarize` rows grouped by (method, task), mean +- sd over seeds, with the
+    authors' figures beside."""
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in rows:
         groups[(r["method"], r["task"])].append(r)
@@ -150,6 +156,8 @@ def report_markdown(rows: list[dict]) -> str:
 
 
 def write_summary_csv(rows: list[dict], path: Path) -> None:
+    """Write `rows` to `path` (replaced) with SUMMARY_COLUMNS in order: missing values empty, other
+    keys dropped."""
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n", extrasaction="ignore")
     w.writeheader()

@@ -55,6 +55,8 @@ class _Unpickler(pickle.Unpickler):
 
 
 class RunDir:
+    """One run's directory (layout in the module docstring); only the process holding `lock` may
+    write it."""
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.ckpt_dir = self.path / "checkpoints"
@@ -76,6 +78,7 @@ class RunDir:
         self._lock_fd = fd
 
     def unlock(self) -> None:
+        """Release the lock taken by `lock`; nothing happens when it is not held."""
         fd = getattr(self, "_lock_fd", None)
         if fd is not None:
             os.close(fd)  # releases the flock
@@ -83,6 +86,8 @@ class RunDir:
 
     # ------------------------------------------------------------------ creation
     def create(self, cfg: dict, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
+        """Write a new run's config.yaml, neat.ini, any `extra_files` and an empty generations.csv;
+        ValueError when the directory already holds a run."""
         if (self.path / "generations.csv").exists():
             raise ValueError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                              "or another --out")
@@ -94,6 +99,7 @@ class RunDir:
         self._write_rows([])
 
     def config(self) -> dict:
+        """config.yaml as written (resolved); ValueError when missing, not YAML or not a run config."""
         f = self.path / "config.yaml"
         if not f.is_file():
             raise ValueError(f"{self.path} is not a run directory (no config.yaml)")
@@ -103,10 +109,13 @@ class RunDir:
         return cfg
 
     def update_config(self, cfg: dict) -> None:
+        """Replace config.yaml atomically (a resume that extends `generations` does)."""
         atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
+        """generations.csv as dicts of strings, whole lines only (a last line cut short is skipped);
+        [] without the file."""
         f = self.path / "generations.csv"
         if not f.is_file():
             return []
@@ -122,6 +131,8 @@ class RunDir:
         atomic_write(self.path / "generations.csv", buf.getvalue().encode())
 
     def append_row(self, row: dict) -> None:
+        """Append one generation's row (keys COLUMNS, floats written with repr so they read back
+        exactly), fsynced; a last line cut short is dropped by rewriting the file."""
         row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
         path = self.path / "generations.csv"
         if not _ends_a_line(path):  # no file, or a line cut short: rewrite it whole
@@ -145,15 +156,20 @@ class RunDir:
 
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:
+        """Replace champion.json atomically."""
         atomic_write(self.path / "champion.json", json.dumps(champion, indent=1).encode())
 
     def champion(self) -> dict:
+        """champion.json as a dict; ValueError when there is none yet or it is not valid JSON
+        (json.JSONDecodeError)."""
         f = self.path / "champion.json"
         if not f.is_file():
             raise ValueError(f"{self.path} has no champion.json yet")
         return json.loads(f.read_text())
 
     def save_checkpoint(self, generation: int, state: dict) -> Path:
+        """Write `state` atomically as checkpoints/gen-<generation>.pkl and delete all but the
+        newest KEEP_CHECKPOINTS; returns its path."""
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
         path = self.ckpt_dir / f"gen-{generation:05d}.pkl"
         atomic_write(path, pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL))

@@ -43,12 +43,14 @@ RETRIES = 2  # a run whose process dies is resumed from its checkpoints this man
 
 @dataclass(frozen=True)
 class SweepRun:
+    """One (method, task, seed) of a sweep; hashable, the key of the backends' process tables."""
     method: str
     task: str
     seed: int
 
     @property
     def name(self) -> str:
+        """Its run directory's name under runs/: <method>-<task>-s<seed>."""
         return f"{self.method}-{self.task}-s{self.seed}"
 
 
@@ -63,6 +65,9 @@ def load_sweep(path: str | Path) -> dict:
 
 
 def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
+    """Check a parsed sweep and resolve it (a seed count becomes a list, `configs` an absolute
+    folder, relative to `base` or the cwd); every run's config is loaded, so a bad one fails before
+    any run starts. ValueError naming `source`."""
     if not isinstance(raw, dict):
         raise _fail(source, "a sweep must be a mapping with methods, tasks and seeds")
     unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides"}
@@ -103,6 +108,7 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
 
 
 def runs_of(sweep: dict) -> list[SweepRun]:
+    """Every (method, task, seed) of a resolved sweep, methods outermost: the order runs start in."""
     return [SweepRun(m, t, s) for m in sweep["methods"] for t in sweep["tasks"] for s in sweep["seeds"]]
 
 
@@ -130,6 +136,8 @@ class Sweep:
 
     @classmethod
     def create(cls, sweep_file: str | Path, out: str | Path) -> Sweep:
+        """A new sweep directory from a sweep file (checked first); ValueError when `out` already
+        holds a sweep."""
         sweep = load_sweep(sweep_file)
         out = Path(out)
         if (out / SWEEP_FILE).exists():
@@ -140,12 +148,15 @@ class Sweep:
 
     @classmethod
     def open(cls, out: str | Path) -> Sweep:
+        """An existing sweep directory, to resume; its sweep.yaml is checked again (the configs must
+        still exist)."""
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
         return cls(out, check_sweep(read_yaml(f), str(f)))
 
     def run_dir(self, run: SweepRun) -> RunDir:
+        """The RunDir of `run` (runs/<name>), whether or not it exists yet."""
         return RunDir(self.path / "runs" / run.name)
 
     def status(self, run: SweepRun) -> tuple[int, int]:
@@ -169,6 +180,7 @@ class Sweep:
         Experiment.create(str(path), str(rd.path), overrides, quiet=True).close()
 
     def pending(self) -> list[SweepRun]:
+        """Runs not finished yet, including those not created yet, in sweep order."""
         out = []
         for run in self.runs:
             done, want = self.status(run)
@@ -194,6 +206,8 @@ class LocalBackend:
         self.procs: dict[SweepRun, subprocess.Popen] = {}
 
     def start(self, sweep: Sweep, run: SweepRun) -> None:
+        """Start `run` (already prepared) as `sgr evolve --resume` in a child process writing to its
+        log.txt, with CPUs / parallel rollout workers."""
         from evolve.rollout.pool import resolve_workers
 
         workers = max(1, resolve_workers("auto") // self.parallel)
@@ -212,6 +226,7 @@ class LocalBackend:
         return ended
 
     def stop(self) -> None:
+        """SIGINT every running run and wait: each stops as on Ctrl-C, keeping its last checkpoint."""
         for p in self.procs.values():
             p.send_signal(signal.SIGINT)
         for p in self.procs.values():

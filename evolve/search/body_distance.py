@@ -7,6 +7,7 @@ import numpy as np
 
 
 def body_distance(a: np.ndarray, b: np.ndarray) -> float:
+    """Eq. 2 distance between two bodies of the same shape (ValueError otherwise), from 0 to H * W."""
     a, b = np.asarray(a), np.asarray(b)
     if a.shape != b.shape:
         raise ValueError(f"bodies of different shapes {a.shape} and {b.shape}")

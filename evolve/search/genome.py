@@ -55,13 +55,18 @@ class GenomeConfig(DefaultGenomeConfig):
 
 
 class BodyAwareGenome(DefaultGenome):
+    """neat-python's DefaultGenome whose speciation distance adds body_distance_weight x body
+    distance (eq. 1), with the bodies from the config's body_cache."""
     @classmethod
     def parse_config(cls, param_dict):
+        """Default gene types, but a `GenomeConfig`, which pickles without consuming a node key."""
         param_dict["node_gene_type"] = DefaultNodeGene
         param_dict["connection_gene_type"] = DefaultConnectionGene
         return GenomeConfig(param_dict, cls.__name__)
 
     def distance(self, other, config) -> float:
+        """NEAT distance + body_distance_weight x body distance; with a non-zero weight both
+        genomes' bodies must be in config.body_cache (KeyError otherwise)."""
         d = super().distance(other, config)
         v = getattr(config, "body_distance_weight", 0.0)
         if v:

@@ -26,6 +26,9 @@ Evaluate = Callable[[Sequence[Any]], tuple[np.ndarray, int]]  # valid phenotypes
 
 
 class NeatSearch:
+    """One NEAT population over a method's decode/evaluate: `step` per generation, or `ask`/`tell`
+    when the caller simulates. It draws from the global `random` (seeding it when `seed` is given);
+    `state` checkpoints it exactly."""
     def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
                  body_distance_weight: float = 0.0, state: dict | None = None,
                  reevaluate: bool = False):
