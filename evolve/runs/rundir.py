@@ -7,8 +7,8 @@ a kill or a full disk leaves the previous version whole; generations.csv gets on
 generation appended and flushed to disk instead (rewriting it made every generation cost time in
 proportion to the run's length), and a last line cut short by a kill or a full disk, which lacks
 its newline, is no row: readers skip it and the next write or a resume drops it. The two newest
-checkpoints are kept: a
-damaged newest one (a disk that lied about fsync, a copy cut short) falls back to the one before.
+checkpoints are kept: a damaged newest one (a disk that lied about fsync, a copy cut short) falls
+back to the one before.
 Files get the permissions the user's umask gives, as `open()` would create them.
 """
 
