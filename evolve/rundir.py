@@ -3,13 +3,12 @@
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
 checkpoints/gen-XXXXX.pkl (state at the start of generation XXXXX). Every file that a crash could
 leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
-a kill or a full disk leaves the previous version whole; generations.csv gets one line per
-generation appended and flushed to disk instead (rewriting it made every generation cost time in
-proportion to the run's length), and a last line cut short by a kill or a full disk, which lacks
-its newline, is no row: readers skip it and the next write or a resume drops it. The two newest
-checkpoints are kept: a
-damaged newest one (a disk that lied about fsync, a copy cut short) falls back to the one before.
-Files get the permissions the user's umask gives, as `open()` would create them.
+a kill or a full disk leaves the previous version whole. generations.csv instead gets one line per
+generation appended and flushed to disk (rewriting it made every generation cost time in
+proportion to the run's length); a last line cut short by a kill or a full disk lacks its newline
+and is no row: readers skip it, and the next append or a resume drops it. The two newest
+checkpoints are kept: a damaged newest one (a disk that lied about fsync, a copy cut short) falls
+back to the one before. Files get the permissions the user's umask gives, as `open()` would create them.
 """
 
 from __future__ import annotations
