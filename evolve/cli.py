@@ -62,8 +62,7 @@ def _evolve(args: argparse.Namespace) -> int:
         print(f"sgr: error: {exc}; the run stopped at generation {exp.search.generation} and keeps its "
               f"last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
-    except OSError as exc:  # e.g. a full disk: every file of the run is still whole (atomic writes;
-        # a row of generations.csv cut short is skipped by readers and dropped on resume)
+    except OSError as exc:  # e.g. a full disk: every file is still whole (a cut CSV row is dropped)
         print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped at generation "
               f"{exp.search.generation} and keeps its last checkpoint: make room, then "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
