@@ -51,6 +51,8 @@ class SgrEnv(gym.Env):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)  # the simulation itself is deterministic
+        if seed is not None:  # per-episode task randomness (BidirectionalWalker's goals)
+            self._env.seed([seed])
         return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
 
     def step(self, action):
@@ -106,6 +108,8 @@ class SgrVectorEnv(VectorEnv):
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
+        if seed is not None:  # world i's task stream from seed + i
+            self._env.seed(seed)
         return self._env.reset(), {}
 
     def step(self, actions):
