@@ -120,6 +120,9 @@ def validate(folder: str | Path) -> dict:
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
     out: dict = {"cases": [], "tasks": {}}
+    if any(folder.glob("returns_*.npz")):  # tests/data/evogym32
+        out["tasks"] = validate_evogym32(folder)
+        return out
     found = False
     if (folder / "index.json").exists():
         found = True
@@ -132,6 +135,27 @@ def validate(folder: str | Path) -> dict:
             out["tasks"].setdefault(task, {}).update(vals)
     if not found:
         raise ValueError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
+    return out
+
+
+def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dict:
+    """Per task of tests/data/evogym32 that the registry knows (or `tasks`): the returns and
+    traces summaries of `evogym32_returns` and `evogym32_traces`."""
+    from tasks.specs import TASKS
+
+    folder = Path(folder)
+    index = _json(folder / "index.json")
+    out = {}
+    for task in tasks or [t for t in index["all_tasks"] if t in TASKS]:
+        r = evogym32_returns(folder, task)
+        t = evogym32_traces(folder, task)
+        out[task] = {"median_abs_diff": r["median_abs_diff"], "max_abs_diff": r["max_abs_diff"],
+                     "term_agree": f"{r['term_agree']}/{r['n_cases']}",
+                     "n_terminated": int((r["term_step_evogym"] >= 0).sum()),
+                     "obs_len_ok": r["obs_len_ok"],
+                     "obs_err_reset": max(r["obs_err"], r["obs_err_orientation"]),
+                     "com_err_max_returns": r["com_err_max"], "com_err_max_traces": t["com_err_max"],
+                     "trace_obs_err_max": max(c["obs_err_max"] for c in t["cases"])}
     return out
 
 

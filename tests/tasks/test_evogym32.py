@@ -133,3 +133,10 @@ def test_gymnasium_env_checker(task):
         env = gym.make(f"sgr/{task}", body=body)
         check_env(env.unwrapped, skip_render_check=True)
     env.close()
+
+
+def test_every_task_has_an_sgr_config_with_evogyms_episode_length(repo_root):
+    import yaml
+    for name in NEW_TASKS:
+        cfg = yaml.safe_load((repo_root / "configs" / "sgr" / f"{name}.yaml").read_text())
+        assert cfg["task"] == name and cfg["episode_steps"] == TASKS[name].evogym_steps
