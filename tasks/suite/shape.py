@@ -11,31 +11,44 @@ import numpy as np
 from tasks import observations as O
 from tasks.spec import Measure, TaskSpec
 
-HULL_EPS = 1e-12  # |cross| (world units^2) below which three points count as collinear
+
+def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
+    """One half of Andrew's monotone chain over the x-sorted points P (B, N, 2), all worlds at once
+    (the loop runs over point positions, not over worlds): returns the sum of the cross products
+    of consecutive chain vertices (twice the signed area under that half)."""
+    B, N = P.shape[:2]
+    rows = np.arange(B)
+    H = np.zeros((B, N + 1, 2))
+    L = np.zeros(B, dtype=np.int64)
+    for k in range(N):
+        active = k < n
+        idx = np.where(active, n - 1 - k if reverse else k, 0)
+        q = P[rows, idx]
+        while True:
+            a = H[rows, np.maximum(L - 2, 0)]
+            b = H[rows, np.maximum(L - 1, 0)]
+            turn = (b[:, 0] - a[:, 0]) * (q[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (q[:, 0] - a[:, 0])
+            pop = active & (L >= 2) & (turn <= 0)
+            if not pop.any():
+                break
+            L -= pop
+        H[rows[active], L[active]] = q[active]
+        L += active
+    k = np.arange(N)[None, :]
+    c = H[:, :-2, 0] * H[:, 1:-1, 1] - H[:, 1:-1, 0] * H[:, :-2, 1]
+    return np.where(k[:, :N - 1] < (L - 1)[:, None], c, 0.0).sum(axis=1)
 
 
 def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """(B,) area of the convex hull of each world's points (B, N, 2) where mask (B, N), batched.
-
-    Edge i -> j is on the hull (counter-clockwise) when no point lies right of it and none lies
-    strictly between i and j on it (so collinear boundary points split it into pieces); the area
-    is the shoelace sum over those edges. Exact for any point set without duplicate points; cost
-    O(B N^3) booleans (24 robots of 36 points: ~1 M).
-    """
-    p = np.where(mask[:, :, None], points, 0.0)
-    e = p[:, None, :, :] - p[:, :, None, :]  # (B, i, j, 2): p_j - p_i
-    r = p[:, None, None, :, :] - p[:, :, None, None, :]  # (B, i, 1, k, 2): p_k - p_i
-    cross = e[:, :, :, None, 0] * r[..., 1] - e[:, :, :, None, 1] * r[..., 0]  # (B, i, j, k)
-    dot = e[:, :, :, None, 0] * r[..., 0] + e[:, :, :, None, 1] * r[..., 1]
-    len2 = (e ** 2).sum(axis=3)[..., None]
-    k_real = mask[:, None, None, :]
-    right = (cross < -HULL_EPS) & k_real
-    between = (np.abs(cross) <= HULL_EPS) & (dot > 0) & (dot < len2) & k_real
-    edge = ~(right | between).any(axis=3)
-    edge &= mask[:, :, None] & mask[:, None, :] & (len2[..., 0] > 0)
-    xi, yi = p[:, :, None, 0], p[:, :, None, 1]
-    xj, yj = p[:, None, :, 0], p[:, None, :, 1]
-    return 0.5 * np.where(edge, xi * yj - xj * yi, 0.0).sum(axis=(1, 2))
+    """(B,) area of the convex hull of each world's points (B, N, 2) where mask (B, N), batched:
+    Andrew's monotone chain (collinear points dropped), lower and upper halves, shoelace area.
+    evogym uses gift wrapping; the hull and its area are the same up to rounding."""
+    x = np.where(mask, points[:, :, 0], np.inf)
+    y = np.where(mask, points[:, :, 1], np.inf)
+    order = np.lexsort((y, x), axis=1)
+    P = np.take_along_axis(points, order[:, :, None], axis=1)
+    n = mask.sum(axis=1)
+    return 0.5 * (_chain(P, n, reverse=False) + _chain(P, n, reverse=True))
 
 
 def _extent(m: Measure, axis: int) -> np.ndarray:
