@@ -16,6 +16,8 @@ from functools import cached_property
 
 import numpy as np
 
+from tasks.orientation import orientation
+
 
 @dataclass(frozen=True)
 class Measure:
@@ -34,7 +36,6 @@ class Measure:
     @cached_property
     def orientation(self) -> np.ndarray:
         """(B,) evogym's orientation of the robot (`object_orientation_at_time`)."""
-        from tasks.observations import orientation
         return orientation(self.points, self.pos0, self.mask)
 
 
