@@ -23,10 +23,14 @@ def reward(before: Measure, after: Measure):
     return (o1 + flips * 2 * math.pi) - (o0 + f0 * 2 * math.pi)
 
 
+def no_flips(rng) -> dict:
+    return {"flips": np.int64(0)}
+
+
 def termination(before: Measure, after: Measure):
     return np.zeros(len(after.com)), after.com[:, 0] < 0.1
 
 
 SPEC = TaskSpec(name="Flipper-v0", world="Flipper-v0.json", origin=(60, 1), paper_steps=600,
                 evogym_steps=600, observation=(O.ORIENTATION, O.POINTS), reward=reward,
-                termination=termination, state=lambda rng: {"flips": np.int64(0)})
+                termination=termination, state=no_flips)
