@@ -9,6 +9,7 @@ then on while the others go on.
 
 from __future__ import annotations
 
+import random
 from collections.abc import Sequence
 
 import numpy as np
@@ -34,7 +35,7 @@ class BatchEnv:
 
     def __init__(self, task: str, bodies: Sequence[Body | object],
                  episode_steps: int | str | None = None, *, arch: str | None = None,
-                 passive_ok: bool = False):
+                 passive_ok: bool = False, seeds: Sequence[int] | int | None = None):
         self.spec = task_spec(task)
         self.task = task
         if episode_steps is None:
@@ -58,6 +59,10 @@ class BatchEnv:
                          if world.fixed_objects else np.zeros((2, 0)))
         self._head = self.spec.head_width()
         self._rel_cols = self._relative_columns()
+        self._obj_index = {o.name: self._object_index(k) for k, o in enumerate(self.sim.free_objects)}
+        self.task_state: dict[str, np.ndarray] = {}
+        self._rngs: list[random.Random] = []
+        self.seed(seeds)
         self.reset()
 
     # ------------------------------------------------------------------ layout helpers
@@ -75,18 +80,59 @@ class BatchEnv:
         N = self.sim.max_robot_points
         return self.sim.state[:, :N, 0:2], self.sim.state[:, :N, 2:4]
 
+    def _object_index(self, k: int) -> tuple[np.ndarray, np.ndarray]:
+        """Row and point indices (B, n) of free object k's points in `sim.state`."""
+        n = self.sim.free_objects[k].body.n_points
+        off = np.array(self.sim._obj_offsets[k])
+        return np.arange(self.n_worlds)[:, None], off[:, None] + np.arange(n)[None, :]
+
     def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(B, n, 2) positions and velocities of free object `name` in every world."""
-        pos = np.stack([self.sim.object_pos(w, name).T for w in range(self.n_worlds)])
-        vel = np.stack([self.sim.object_vel(w, name).T for w in range(self.n_worlds)])
-        return pos, vel
+        try:
+            rows, pts = self._obj_index[name]
+        except KeyError:
+            raise KeyError(f"no free object {name!r} in world {self.sim.world.name}") from None
+        s = self.sim.state[rows, pts].transpose(0, 2, 1)
+        # (B, 2, n) contiguous, seen as (B, n, 2): numpy's sums over the points depend on the
+        # layout, and this one gives the COMs evogym's rewards were validated with, bit for bit
+        return (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
+                np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
+
+    def _object_pos0(self, name: str) -> np.ndarray:
+        """(B, n, 2) positions of free object `name` at reset (its orientation's reference)."""
+        rows, pts = self._obj_index[name]
+        return self.sim._pos0[rows, pts]
 
     def _measure(self, com: np.ndarray) -> Measure:
         objects = {}
         for name in self.spec.tracked:
             pos = self._object_points(name)[0]
             objects[name] = O.com(pos, np.ones(pos.shape[:2], dtype=bool))
-        return Measure(com, objects)
+        return Measure(com, objects, points=self._robot()[0].copy(), mask=self._mask,
+                       pos0=self._pos0, state=self.task_state)
+
+    # ------------------------------------------------------------------ task state
+    def seed(self, seeds: Sequence[int] | int | None = None) -> None:
+        """Restart the worlds' random streams (`random.Random`), from which a task with per-episode
+        randomness (`TaskSpec.state`) draws at every reset of a world: world w's stream is seeded
+        with `seeds[w]` (an int: seeds + w; None: w)."""
+        if seeds is None or np.isscalar(seeds):
+            base = 0 if seeds is None else int(seeds)
+            seeds = [base + w for w in range(self.n_worlds)]
+        if len(seeds) != self.n_worlds:
+            raise ValueError(f"{len(seeds)} seeds for {self.n_worlds} worlds")
+        self._rngs = [random.Random(int(s)) for s in seeds]
+
+    def _init_state(self, mask: np.ndarray | None) -> None:
+        if self.spec.state is None:
+            return
+        worlds = range(self.n_worlds) if mask is None else np.nonzero(mask)[0]
+        for w in worlds:
+            for key, value in self.spec.state(self._rngs[w]).items():
+                value = np.asarray(value)
+                if key not in self.task_state:
+                    self.task_state[key] = np.zeros((self.n_worlds, *value.shape), value.dtype)
+                self.task_state[key][w] = value
 
     # ------------------------------------------------------------------ API
     def reset(self, mask: np.ndarray | None = None) -> np.ndarray:
@@ -99,6 +145,7 @@ class BatchEnv:
         else:
             self.elapsed[mask] = 0
             self.terminated[mask] = False
+        self._init_state(mask)
         return self.observe()
 
     @property
@@ -119,7 +166,8 @@ class BatchEnv:
         self.elapsed += 1
         unstable = self.sim.unstable & active
         com_after, vcom_after = self._robot_coms()
-        reward = self.spec.reward(before, self._measure(com_after))
+        after = self._measure(com_after)
+        reward = self.spec.reward(before, after)
         reward = np.where(unstable, reward + UNSTABLE_PENALTY, reward)
         done = unstable.copy()
         if self.spec.goal is not None:
@@ -127,6 +175,11 @@ class BatchEnv:
             goal = active & (com_after[:, 0] > gx * 0.1)
             reward = np.where(goal, reward + bonus, reward)
             done |= goal
+        if self.spec.termination is not None:
+            extra, over = self.spec.termination(before, after)
+            over = active & over
+            reward = np.where(over, reward + extra, reward)
+            done |= over
         reward = np.where(active, reward, 0.0)
         self.terminated |= done
         self.sim.deactivate(self.terminated)
@@ -155,7 +208,8 @@ class BatchEnv:
         m = self._mask
         B = self.n_worlds
         scene = O.Scene(pos=pos, vel=vel, mask=m, n_points=self.n_points, com=com, vcom=vcom,
-                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points)
+                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
+                        object_pos0=self._object_pos0, state=self.task_state)
         obs = np.zeros((B, self.max_obs_dim + 1))
         col, after_points = 0, None  # blocks after the points start at head + 2 n per robot
         for block in self.spec.observation:

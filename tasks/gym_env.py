@@ -53,6 +53,8 @@ class SgrEnv(gym.Env):
         """`seed` only seeds gymnasium's RNG: the simulation is deterministic, every episode starts
         the same."""
         super().reset(seed=seed)  # the simulation itself is deterministic
+        if seed is not None:  # per-episode task randomness (BidirectionalWalker's goals)
+            self._env.seed([seed])
         return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
 
     def step(self, action):
@@ -113,6 +115,8 @@ class SgrVectorEnv(VectorEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Reset every robot; `seed` only seeds gymnasium's RNG (the simulation is deterministic)."""
         super().reset(seed=seed)
+        if seed is not None:  # world i's task stream from seed + i
+            self._env.seed(seed)
         return self._env.reset(), {}
 
     def step(self, actions):

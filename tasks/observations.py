@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tasks.orientation import PI_EVOGYM, orientation  # noqa: F401 (re-exported)
 from tasks.spec import Block
 from tsim import constants as C
 
@@ -30,8 +31,9 @@ class Scene:
     pos0: np.ndarray
     terrain: np.ndarray
     object_points: Callable[[str], tuple[np.ndarray, np.ndarray]]  # name -> (B, n, 2) pos, vel
+    object_pos0: Callable[[str], np.ndarray] | None = None  # name -> (B, n, 2) positions at reset
+    state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
 
-PI_EVOGYM = 3.1415926
 
 
 def com(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -44,33 +46,6 @@ def com(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
 def relative(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """Positions minus COM, zero on padding: (B, N, 2)."""
     return (pos - com(pos, mask)[:, None, :]) * mask[:, :, None]
-
-
-def _centred_sequential(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """Centre on the COM summed left to right (as Eigen's rowwise sum): the rounding of these
-    values decides which points of an undeformed body clamp to arccos(0.99999) at reset."""
-    n = mask.sum(axis=1)[:, None]
-    c = np.cumsum(pos * mask[:, :, None], axis=1)[:, -1] / n
-    return (pos - c[:, None, :]) * mask[:, :, None]
-
-
-def orientation(pos: np.ndarray, pos0: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """evogym's orientation: mass-weighted mean unsigned angle of the centred points against time 0,
-    with its clamps, pi = 3.1415926 and the sign taken from the summed cross products."""
-    new = _centred_sequential(pos, mask)
-    old = _centred_sequential(pos0, mask)
-    mag_new = np.linalg.norm(new, axis=2)
-    mag_old = np.linalg.norm(old, axis=2)
-    un = np.where(mag_new[:, :, None] > 0, new / np.where(mag_new > 0, mag_new, 1)[:, :, None], new)
-    uo = np.where(mag_old[:, :, None] > 0, old / np.where(mag_old > 0, mag_old, 1)[:, :, None], old)
-    cos = (un * uo).sum(axis=2)
-    cos = np.where(mag_new * mag_old < 1e-7, 0.99999, cos)
-    cos = np.where(cos > 1.0, 0.99999, cos)
-    cos = np.where(cos < -1.0, -0.99999, cos)
-    ang = np.arccos(cos) * mag_old * mask
-    avg = ang.sum(axis=1) / (mag_old * mask).sum(axis=1)
-    cross = ((un[:, :, 0] * uo[:, :, 1] - un[:, :, 1] * uo[:, :, 0]) * mask).sum(axis=1)
-    return np.where(cross > 0, 2 * PI_EVOGYM - avg, avg)
 
 
 def com_voxel_units(pos: np.ndarray, n_points: np.ndarray) -> np.ndarray:
@@ -124,6 +99,14 @@ def object_offset(name: str) -> Block:
 def object_vcom(name: str) -> Block:
     """Block of 2: free object `name`'s mean point velocity, absolute, not relative to the robot."""
     return Block(f"{name} velocity COM", 2, lambda s: _object_com(s, name, 1))
+
+
+def object_orientation(name: str) -> Block:
+    """evogym's orientation of free object `name` against its points at reset."""
+    def fn(s: Scene) -> np.ndarray:
+        pos = s.object_points(name)[0]
+        return orientation(pos, s.object_pos0(name), np.ones(pos.shape[:2], dtype=bool))[:, None]
+    return Block(f"{name} orientation", 1, fn)
 
 
 def floor_sight(dist: int) -> Block:

@@ -9,19 +9,34 @@ line in `tasks/specs.py`'s registry.
 
 from __future__ import annotations
 
+import random
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
+
+from tasks.orientation import orientation
 
 
 @dataclass(frozen=True)
 class Measure:
-    """What rewards see of the state at one instant: the robot's COM (B, 2) and the COMs of the
-    objects the spec tracks, by name."""
+    """What rewards and terminations see of the state at one instant: the robot's COM (B, 2), the
+    COMs of the objects the spec tracks, by name, and (computed only when read) the robot's points
+    and orientation. `state` is the task's per-world state (`TaskSpec.state`), the same dict in the
+    measures before and after a step: a reward may update it in place."""
 
     com: np.ndarray
     objects: dict[str, np.ndarray]
+    points: np.ndarray | None = None  # (B, N, 2) robot point positions, zero-padded
+    mask: np.ndarray | None = None  # (B, N) which of them are real
+    pos0: np.ndarray | None = None  # (B, N, 2) the robot's points at reset (orientation reference)
+    state: dict[str, np.ndarray] = field(default_factory=dict)
+
+    @cached_property
+    def orientation(self) -> np.ndarray:
+        """(B,) evogym's orientation of the robot (`object_orientation_at_time`)."""
+        return orientation(self.points, self.pos0, self.mask)
 
 
 @dataclass(frozen=True)
@@ -35,6 +50,10 @@ class Block:
 
 
 Reward = Callable[[Measure, Measure], np.ndarray]  # (before, after) -> (B,) reward of one step
+# (before, after) -> ((B,) reward added, (B,) bool episode over), e.g. -3 and over when upside down
+Termination = Callable[[Measure, Measure], tuple[np.ndarray, np.ndarray]]
+# one world's task state at the start of an episode, drawn from that world's random stream
+StateInit = Callable[[random.Random], dict[str, np.ndarray]]
 
 
 @dataclass(frozen=True)
@@ -50,6 +69,8 @@ class TaskSpec:
     reward: Reward
     tracked: tuple[str, ...] = ()  # objects whose COM the reward needs (Measure.objects)
     goal: tuple[int, float] | None = None  # (voxel x the robot's COM must pass, bonus); ends the episode
+    termination: Termination | None = None  # further task ends (after the goal); see `Termination`
+    state: StateInit | None = None  # per-world task state, drawn anew at each reset of that world
 
     def obs_dim(self, n_points: int) -> int:
         """evogym's observation length for a robot of n points."""

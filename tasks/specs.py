@@ -6,7 +6,22 @@ from functools import cache
 from importlib import resources
 
 from tasks.spec import TaskSpec
-from tasks.suite import climber, obstacle_traverser, thrower, walker
+from tasks.suite import (
+    balancer,
+    bidirectional_walker,
+    carry_push,
+    climber,
+    climber_v0,
+    flipper,
+    jumper,
+    jumpers,
+    obstacle_traverser,
+    rigid_objects,
+    shape,
+    steppers,
+    thrower,
+    walker,
+)
 from tsim.world import World, load_world
 
 TASKS: dict[str, TaskSpec] = {s.name: s for s in (
@@ -14,6 +29,29 @@ TASKS: dict[str, TaskSpec] = {s.name: s for s in (
     obstacle_traverser.SPEC,
     climber.SPEC,
     thrower.SPEC,
+    jumper.SPEC,
+    flipper.SPEC,
+    balancer.SPEC_V0,
+    balancer.SPEC_V1,
+    steppers.UP,
+    steppers.DOWN,
+    steppers.OBSTACLE_V0,
+    steppers.HURDLER,
+    jumpers.GAP,
+    jumpers.PLATFORM,
+    carry_push.CARRIER,
+    carry_push.PUSHER,
+    shape.AREA_MAX,
+    shape.AREA_MIN,
+    shape.WINGSPAN,
+    shape.HEIGHT,
+    climber_v0.SPEC,
+    bidirectional_walker.SPEC,
+    rigid_objects.LIFTER,
+    rigid_objects.CARRIER_V1,
+    rigid_objects.PUSHER_V1,
+    rigid_objects.BEAM_TOPPLER,
+    rigid_objects.BEAM_SLIDER,
 )}
 
 

@@ -125,6 +125,9 @@ def validate(folder: str | Path) -> dict:
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
     out: dict = {"cases": [], "tasks": {}}
+    if any(folder.glob("returns_*.npz")):  # tests/data/evogym32
+        out["tasks"] = validate_evogym32(folder)
+        return out
     found = False
     if (folder / "index.json").exists():
         found = True
@@ -138,3 +141,134 @@ def validate(folder: str | Path) -> dict:
     if not found:
         raise ValueError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
     return out
+
+
+def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dict:
+    """Per task of tests/data/evogym32 that the registry knows (or `tasks`): the returns and
+    traces summaries of `evogym32_returns` and `evogym32_traces`."""
+    from tasks.specs import TASKS
+
+    folder = Path(folder)
+    index = _json(folder / "index.json")
+    out = {}
+    for task in tasks or [t for t in index["all_tasks"] if t in TASKS]:
+        r = evogym32_returns(folder, task)
+        t = evogym32_traces(folder, task)
+        out[task] = {"median_abs_diff": r["median_abs_diff"], "max_abs_diff": r["max_abs_diff"],
+                     "term_agree": f"{r['term_agree']}/{r['n_cases']}",
+                     "n_terminated": int((r["term_step_evogym"] >= 0).sum()),
+                     "obs_len_ok": r["obs_len_ok"],
+                     "obs_err_reset": max(r["obs_err"], r["obs_err_orientation"]),
+                     "com_err_max_returns": r["com_err_max"], "com_err_max_traces": t["com_err_max"],
+                     "trace_obs_err_max": max(c["obs_err_max"] for c in t["cases"])}
+    return out
+
+
+# ---------------------------------------------------------------------- evogym32 (all 32 tasks)
+ORIENTATION_BLOCKS = ("orientation",)  # block names containing this hold an orientation
+
+
+def _orientation_columns(env: BatchEnv, w: int) -> np.ndarray:
+    """Observation columns of robot w that hold an orientation (evogym's reset value of an
+    undeformed body is a rounding artefact, see docs/VALIDATION.md)."""
+    cols, col = [], 0
+    for b in env.spec.observation:
+        width = 2 * int(env.n_points[w]) if b.width < 0 else b.width
+        if any(k in b.name for k in ORIENTATION_BLOCKS):
+            cols += range(col, col + width)
+        col += width
+    return np.array(cols, dtype=int)
+
+
+def _obs_errors(env: BatchEnv, ref: np.ndarray, dims: np.ndarray) -> tuple[list, list, list]:
+    same_len, err, err_ort = [], [], []
+    for w in range(env.n_worlds):
+        o = env.robot_obs(w)
+        r = ref[w, :int(dims[w])]
+        same_len.append(len(o) == len(r))
+        if len(o) != len(r):
+            err.append(float("inf"))
+            err_ort.append(float("inf"))
+            continue
+        d = np.abs(o - r)
+        keep = np.ones(len(d), bool)
+        oc = _orientation_columns(env, w)
+        keep[oc] = False
+        err.append(float(d[keep].max()))
+        err_ort.append(float(d[oc].max()) if len(oc) else 0.0)
+    return same_len, err, err_ort
+
+
+def evogym32_returns(folder: str | Path, task: str) -> dict:
+    """Replay `returns_<task>.npz` of tests/data/evogym32 (24 robots, 100 steps, one batch)."""
+    z = _npz(Path(folder) / f"returns_{task}.npz")
+    bodies, n_act, steps = list(z["body"]), z["n_act"], int(z["steps"])
+    seeds = [int(s) for s in z["reset_seed"]] if "reset_seed" in z.files else None
+    env = BatchEnv(task, bodies, episode_steps=steps, passive_ok=True, seeds=seeds)
+    same_len, obs_err, obs_err_ort = _obs_errors(env, z["obs0"], z["obs_dim"])
+    B = len(bodies)
+    rewards = np.full((B, steps), np.nan)
+    term_step = np.full(B, -1)
+    com = np.full((B, steps + 1, 2), np.nan)
+    com[:, 0] = env.sim.robot_com()
+    acts = z["actions"]
+    for t in range(steps):
+        live = ~env.terminated
+        _, r, term, _, _ = env.step([acts[i, t, :n_act[i]] for i in range(B)])
+        rewards[live, t] = r[live]
+        com[live, t + 1] = env.sim.robot_com()[live]
+        term_step[live & term] = t
+        if term.all():
+            break
+    ret = np.nansum(rewards, axis=1)
+    d = np.abs(ret - z["returns"])
+    run = z["steps_run"]
+    com_err = [float(np.nanmax(np.linalg.norm(com[i, :run[i] + 1] - z["com"][i, :run[i] + 1], axis=1)))
+               for i in range(B)]
+    return {"task": task, "n_cases": B, "returns": ret, "returns_evogym": z["returns"],
+            "abs_diff": d, "median_abs_diff": float(np.median(d)), "max_abs_diff": float(d.max()),
+            "term_step": term_step, "term_step_evogym": z["term_step"],
+            "term_agree": int((term_step == z["term_step"]).sum()),
+            "obs_len_ok": all(same_len), "obs_err": float(max(obs_err)),
+            "obs_err_orientation": float(max(obs_err_ort)), "com_err_max": float(max(com_err)),
+            "com_err_median": float(np.median(com_err))}
+
+
+def evogym32_traces(folder: str | Path, task: str) -> dict:
+    """Replay the 3 `trace_<task>_*.npz` cases of tests/data/evogym32 (50 steps, one batch):
+    robot COM error and every point's error per step, observation errors at every step."""
+    files = sorted(Path(folder).glob(f"trace_{task}_*.npz"))
+    data = [_npz(f) for f in files]
+    steps = int(data[0]["steps"])
+    seeds = [int(z["reset_seed"]) for z in data] if "reset_seed" in data[0].files else None
+    env = BatchEnv(task, [z["body"] for z in data], episode_steps=steps, passive_ok=True,
+                   seeds=seeds)
+    B = len(data)
+    obs = [[env.robot_obs(w)] for w in range(B)]
+    com = [[env.sim.robot_com()[w].copy()] for w in range(B)]
+    rew = [[] for _ in range(B)]
+    for t in range(steps):
+        live = ~env.terminated
+        acts = [z["actions"][min(t, len(z["actions"]) - 1)] for z in data]
+        _, r, _, _, _ = env.step(acts)
+        for w in np.nonzero(live)[0]:
+            obs[w].append(env.robot_obs(w))
+            com[w].append(env.sim.robot_com()[w].copy())
+            rew[w].append(r[w])
+    cases = []
+    for w, (f, z) in enumerate(zip(files, data, strict=True)):
+        n = int(z["steps_run"]) + 1
+        c = np.array(com[w][:n])
+        o, ro = np.array(obs[w][:n]), z["obs"][:n]
+        oc = _orientation_columns(env, w)
+        keep = np.ones(ro.shape[1], bool)
+        keep[oc] = False
+        same = o.shape == ro.shape
+        cases.append({"file": f.name, "steps_run": n - 1, "steps_run_ours": len(com[w]) - 1,
+                      "com_err_max": float(np.linalg.norm(c - z["com"][:len(c)], axis=1).max()),
+                      "obs_err_max": float(np.abs(o - ro)[:, keep].max()) if same else float("inf"),
+                      "obs_err_step0": float(np.abs(o[0] - ro[0])[keep].max()) if same else float("inf"),
+                      "obs_err_orientation": (float(np.abs(o - ro)[:, oc].max()) if same and len(oc)
+                                              else 0.0),
+                      "reward_err_max": float(np.abs(np.array(rew[w][:n - 1]) - z["reward"][:n - 1]).max())})
+    return {"task": task, "cases": cases, "com_err_max": max(c["com_err_max"] for c in cases)}

@@ -1,0 +1,83 @@
+"""The shape-change tasks in a walled 20 x 10 box (ShapeChange.json, robot at cell (7, 1)); the
+robot observes only its points relative to its COM.
+
+AreaMaximizer-v0 / AreaMinimizer-v0: grow / shrink the area of the convex hull of the robot's
+points (reward +-10 x its change); WingspanMazimizer-v0 (evogym's spelling): grow the x extent of
+the points; HeightMaximizer-v0: grow their y extent.
+"""
+
+import numpy as np
+
+from tasks import observations as O
+from tasks.spec import Measure, TaskSpec
+
+
+def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
+    """One half of Andrew's monotone chain over the x-sorted points P (B, N, 2), all worlds at once
+    (the loop runs over point positions, not over worlds): returns the sum of the cross products
+    of consecutive chain vertices (twice the signed area under that half)."""
+    B, N = P.shape[:2]
+    rows = np.arange(B)
+    H = np.zeros((B, N + 1, 2))
+    L = np.zeros(B, dtype=np.int64)
+    for k in range(N):
+        active = k < n
+        idx = np.where(active, n - 1 - k if reverse else k, 0)
+        q = P[rows, idx]
+        while True:
+            a = H[rows, np.maximum(L - 2, 0)]
+            b = H[rows, np.maximum(L - 1, 0)]
+            turn = (b[:, 0] - a[:, 0]) * (q[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (q[:, 0] - a[:, 0])
+            pop = active & (L >= 2) & (turn <= 0)
+            if not pop.any():
+                break
+            L -= pop
+        H[rows[active], L[active]] = q[active]
+        L += active
+    k = np.arange(N)[None, :]
+    c = H[:, :-2, 0] * H[:, 1:-1, 1] - H[:, 1:-1, 0] * H[:, :-2, 1]
+    return np.where(k[:, :N - 1] < (L - 1)[:, None], c, 0.0).sum(axis=1)
+
+
+def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
+    """(B,) area of the convex hull of each world's points (B, N, 2) where mask (B, N), batched:
+    Andrew's monotone chain (collinear points dropped), lower and upper halves, shoelace area.
+    evogym uses gift wrapping; the hull and its area are the same up to rounding."""
+    x = np.where(mask, points[:, :, 0], np.inf)
+    y = np.where(mask, points[:, :, 1], np.inf)
+    order = np.lexsort((y, x), axis=1)
+    P = np.take_along_axis(points, order[:, :, None], axis=1)
+    n = mask.sum(axis=1)
+    return 0.5 * (_chain(P, n, reverse=False) + _chain(P, n, reverse=True))
+
+
+def _extent(m: Measure, axis: int) -> np.ndarray:
+    v = m.points[:, :, axis]
+    return np.where(m.mask, v, -np.inf).max(axis=1) - np.where(m.mask, v, np.inf).min(axis=1)
+
+
+def area_max(before: Measure, after: Measure):
+    return (hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
+
+
+def area_min(before: Measure, after: Measure):
+    return -(hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
+
+
+def wingspan(before: Measure, after: Measure):
+    return _extent(after, 0) - _extent(before, 0)
+
+
+def height(before: Measure, after: Measure):
+    return _extent(after, 1) - _extent(before, 1)
+
+
+def _spec(name: str, reward, steps: int) -> TaskSpec:
+    return TaskSpec(name=name, world="ShapeChange.json", origin=(7, 1), paper_steps=steps,
+                    evogym_steps=steps, observation=(O.POINTS,), reward=reward)
+
+
+AREA_MAX = _spec("AreaMaximizer-v0", area_max, 600)
+AREA_MIN = _spec("AreaMinimizer-v0", area_min, 600)
+WINGSPAN = _spec("WingspanMazimizer-v0", wingspan, 600)
+HEIGHT = _spec("HeightMaximizer-v0", height, 500)
