@@ -24,6 +24,8 @@ MAX_GOALS = 128  # goals beyond are dropped (the draw would need > 100 steps of 
 
 
 def draw_goals(rng: random.Random) -> dict[str, np.ndarray]:
+    """A world's goals, drawn as evogym draws them (``randrange(20, 50)`` until 100 voxels of walking are
+    planned), padded to MAX_GOALS; redrawn at every reset of the world."""
     pos, dist, goals = 35, 0, []
     while dist < 100:
         g = rng.randrange(20, 50)
@@ -43,6 +45,8 @@ def _goal_x(state: dict, index: np.ndarray) -> np.ndarray:
 
 
 def reward(before: Measure, after: Measure):
+    """Progress towards the current goal; a goal within 0.2 of the COM after the step is done and the
+    next one counts in the same step (evogym's loop); updates the goal index in the task state."""
     s = after.state
     s["goal_seen"][:] = s["goal"]
     out = np.zeros(len(after.com))
@@ -58,6 +62,7 @@ def reward(before: Measure, after: Measure):
 
 
 def all_goals_reached(before: Measure, after: Measure):
+    """The episode ends (no bonus) once every goal is done."""
     return np.ones(len(after.com)), after.state["goal"] >= after.state["n_goals"]
 
 

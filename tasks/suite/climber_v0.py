@@ -13,6 +13,7 @@ def reward(before: Measure, after: Measure):
 
 
 def termination(before: Measure, after: Measure):
+    """+1 and the end once the COM is above y = 8.6 (the top of the pipe)."""
     return np.ones(len(after.com)), after.com[:, 1] > 8.6
 
 

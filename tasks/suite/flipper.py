@@ -15,6 +15,8 @@ from tasks.spec import Measure, TaskSpec
 
 
 def reward(before: Measure, after: Measure):
+    """Change of the orientation unwrapped by a flip counter: crossing 0 / 2 pi counts a whole turn,
+    so the return measures how far the robot rolled, not its final angle."""
     o0, o1 = before.orientation, after.orientation
     flips = after.state["flips"]
     f0 = flips.copy()
@@ -24,10 +26,12 @@ def reward(before: Measure, after: Measure):
 
 
 def no_flips(rng) -> dict:
+    """Task state at reset: no flips counted yet."""
     return {"flips": np.int64(0)}
 
 
 def termination(before: Measure, after: Measure):
+    """The episode ends (no penalty) when the COM leaves the ground's left end (x < 0.1)."""
     return np.zeros(len(after.com)), after.com[:, 0] < 0.1
 
 

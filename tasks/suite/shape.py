@@ -57,18 +57,22 @@ def _extent(m: Measure, axis: int) -> np.ndarray:
 
 
 def area_max(before: Measure, after: Measure):
+    """10 x the growth of the robot's convex hull area."""
     return (hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
 
 
 def area_min(before: Measure, after: Measure):
+    """10 x the shrinking of the robot's convex hull area."""
     return -(hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
 
 
 def wingspan(before: Measure, after: Measure):
+    """Growth of the robot's horizontal extent (max x - min x of its points)."""
     return _extent(after, 0) - _extent(before, 0)
 
 
 def height(before: Measure, after: Measure):
+    """Growth of the robot's vertical extent (max y - min y of its points)."""
     return _extent(after, 1) - _extent(before, 1)
 
 
