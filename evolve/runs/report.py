@@ -194,6 +194,11 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
             g = np.arange(1, n + 1)
             (line,) = ax.plot(g, mean, label=f"{method} ({len(curves)} seeds)")
             ax.fill_between(g, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, linewidth=0)
+        for method in sorted(by_task[task]):  # the authors' figures at generations 1, 30, 100
+            known = [(g, v) for g, v in zip(CHECKPOINTS, AUTHORS.get((method, task), ())[:3], strict=False)
+                     if isinstance(v, float)]
+            if known and method == "sgr":  # their other methods' logs are doubtful (docs/RESULTS.md)
+                ax.plot(*zip(*known, strict=True), "kx", label="sgr, authors' logs")
         ax.set_title(task)
         ax.set_xlabel("generation")
         ax.set_ylabel("best fitness")
