@@ -12,13 +12,9 @@ from tasks.env import BatchEnv
 from tasks.specs import TASKS
 
 STEPS = 5
-# BUG (reported, not skipped): BidirectionalWalker-v0 draws its goals from world w's stream seeded
-# with w, and evolve.rollout.episodes.rollout_policy builds its BatchEnv with the default seeds, so a
-# body's fitness depends on its slot in the batch and champion.json (replayed in world 0) does not
-# reproduce it; seeding every world alike there (`seeds=[0] * len(bodies)`) makes this case pass.
-SLOT_SEEDED = pytest.mark.xfail(strict=True, reason="fitness of a random-goal task depends on the "
-                                "body's slot in the rollout batch")
-NAMES = [pytest.param(n, marks=SLOT_SEEDED) if n == "BidirectionalWalker-v0" else n for n in TASKS]
+# every task, BidirectionalWalker-v0 (random goals) too: rollouts seed every world alike, so a
+# body's fitness does not depend on its slot in the batch and champion.json replays to it
+NAMES = list(TASKS)
 
 
 @pytest.mark.parametrize("name", NAMES)
