@@ -37,6 +37,13 @@ class DenseController:
         return x
 
     def act(self, obs: np.ndarray) -> np.ndarray:
+        """One robot's actions, computed exactly as evolution computed them (`ControllerBatch`,
+        bit for bit): a champion's episode is often chaotic, and the ~1e-16 rounding difference of
+        another summation order (`reference_act`) can change its return completely."""
+        obs = np.asarray(obs, dtype=np.float64)
+        return ControllerBatch([self], len(obs), len(self.action_cells)).act(obs[None, :])[0]
+
+    def reference_act(self, obs: np.ndarray) -> np.ndarray:
         """The slow, obvious forward pass for one robot (the test oracle of `ControllerBatch`)."""
         return to_action(self.outputs(obs)[self.action_cells])
 
