@@ -41,6 +41,9 @@ class DenseController:
         bit for bit): a champion's episode is often chaotic, and the ~1e-16 rounding difference of
         another summation order (`reference_act`) can change its return completely."""
         obs = np.asarray(obs, dtype=np.float64)
+        if obs.shape != (self.input_size,):
+            raise ValueError(f"controller expects an observation of length {self.input_size}, "
+                             f"got {obs.shape}")
         return ControllerBatch([self], len(obs), len(self.action_cells)).act(obs[None, :])[0]
 
     def reference_act(self, obs: np.ndarray) -> np.ndarray:
