@@ -66,3 +66,26 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     frames = render_episode(champ["task"], body, lambda t, obs: ctrl.act(obs), champ["episode_steps"],
                             width, height, indexed=True)
     return write_gif(frames, out or Path(run_dir) / "champion.gif", fps=fps)
+
+
+def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0) -> np.ndarray:
+    """Episode returns of champion.json's robot in its task, from the JSON alone: element 0
+    unperturbed (it must equal the recorded fitness), then `replays` episodes with uniform(-eps,
+    eps) added to every action, all simulated as one batch."""
+    from tasks.env import BatchEnv
+
+    champ, body, ctrl = load_champion(run_dir)
+    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"])
+    obs = env.reset()
+    n = env.obs_dims[0]
+    rng = np.random.default_rng(seed)
+    total = np.zeros(replays + 1)
+    for _ in range(env.episode_steps):
+        act = np.stack([ctrl.act(o[:n]) for o in obs])
+        noise = rng.uniform(-eps, eps, act.shape)
+        noise[0] = 0.0
+        obs, r, term, trunc, _ = env.step(act + noise)
+        total += r
+        if np.all(term | trunc):
+            break
+    return total

@@ -70,23 +70,11 @@ def best_so_far(run_dir: Path) -> np.ndarray:
 def champion_robustness(run_dir: Path, replays: int = 10, eps: float = 1e-9) -> dict:
     """Returns of the champion replayed with uniform(-eps, eps) added to every action, all replays
     simulated as one batch; replay 0 is unperturbed (it must give the recorded fitness)."""
-    from evolve.runs.champion import load_champion
-    from tasks.env import BatchEnv
+    from evolve.runs.champion import replay_champion
+    from evolve.runs.rundir import RunDir
 
-    champ, body, ctrl = load_champion(run_dir)
-    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"])
-    obs = env.reset()
-    n = env.obs_dims[0]
-    rng = np.random.default_rng(0)
-    total = np.zeros(replays + 1)
-    for _ in range(env.episode_steps):
-        act = np.stack([ctrl.act(o[:n]) for o in obs])
-        noise = rng.uniform(-eps, eps, act.shape)
-        noise[0] = 0.0
-        obs, r, term, trunc, _ = env.step(act + noise)
-        total += r
-        if np.all(term | trunc):
-            break
+    total = replay_champion(run_dir, replays, eps)
+    champ = RunDir(run_dir).champion()
     perturbed = total[1:]
     return {"champion_fitness": float(champ["fitness"]), "replay": float(total[0]),
             "robust_mean": float(perturbed.mean()), "robust_sd": float(perturbed.std()),

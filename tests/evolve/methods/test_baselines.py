@@ -7,11 +7,10 @@ import numpy as np
 import pytest
 
 from evolve.cli import main
-from evolve.runs.champion import load_champion
+from evolve.runs.champion import load_champion, replay_champion
 from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_search import NeatSearch
-from tasks.env import BatchEnv
 
 TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 
@@ -72,14 +71,7 @@ def _run_and_replay(tmp_path, repo_root, monkeypatch, method, task, **extra) -> 
     assert champ["method"] == method and champ["task"] == task
     assert champ["controller"]["format"] == "sgr-graph-controller-1"
     # the JSON controller alone reproduces the champion's recorded fitness
-    env = BatchEnv(task, [body], episode_steps=8)
-    obs, total = env.reset(), 0.0
-    for _ in range(8):
-        obs, r, term, trunc, _ = env.step([ctrl.act(obs[0, :env.obs_dims[0]])])
-        total += r[0]
-        if term[0]:
-            break
-    assert total == pytest.approx(champ["fitness"], abs=1e-9)
+    assert replay_champion(out)[0] == pytest.approx(champ["fitness"], abs=1e-9)
     if method == "nested":  # inner episodes: at most bodies x inner_pop_size x inner_generations
         assert all(0 < int(r["episodes"]) <= int(r["n_valid"]) * 4 * 2 for r in rows)
     return champ
@@ -138,14 +130,7 @@ def test_nested_inner_populations_stay_bounded_and_the_champion_keeps_its_contro
     assert len(set().union(*seen)) > len(exp.problem.inner), "no inner population was forgotten"
     champ, body, ctrl = load_champion(tmp_path / "run")
     assert exp.problem.pinned == np.array(champ["body"], dtype=np.int64).tobytes()
-    env = BatchEnv("Walker-v0", [body], episode_steps=8)
-    obs, total = env.reset(), 0.0
-    for _ in range(8):
-        obs, r, term, _, _ = env.step([ctrl.act(obs[0, :env.obs_dims[0]])])
-        total += r[0]
-        if term[0]:
-            break
-    assert total == pytest.approx(champ["fitness"], abs=1e-9)
+    assert replay_champion(tmp_path / "run")[0] == pytest.approx(champ["fitness"], abs=1e-9)
 
 
 def test_nested_champion_body_is_pinned_while_absent_bodies_are_forgotten(repo_root):

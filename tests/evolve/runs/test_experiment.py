@@ -6,10 +6,9 @@ import pytest
 import yaml
 
 from evolve.cli import main
-from evolve.runs.champion import load_champion
+from evolve.runs.champion import replay_champion
 from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
-from tasks.env import BatchEnv
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
         "episode_steps": 15, "checkpoint_every": 2, "render_champion": False}
@@ -89,13 +88,7 @@ def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
     assert ca == cb and ca["controller"]["layers"][0]["activation"] == "tanh"
     assert len(ca["body"]) == 5 and ca["fitness"] == max(float(r[1]) for r in a)
     # the JSON champion alone (dense layers, no neat-python) reproduces its recorded fitness
-    _, body, ctrl = load_champion(tmp_path / "full")
-    env = BatchEnv("Walker-v0", [body], episode_steps=TINY["episode_steps"])
-    obs, total = env.reset(), 0.0
-    for _ in range(TINY["episode_steps"]):
-        obs, r, term, _, _ = env.step([ctrl.act(obs[0, :env.obs_dims[0]])])
-        total += r[0]
-    assert total == pytest.approx(ca["fitness"], abs=1e-9)
+    assert replay_champion(tmp_path / "full")[0] == pytest.approx(ca["fitness"], abs=1e-9)
 
 
 def test_a_run_directory_is_not_overwritten(tmp_path, repo_root, capsys):
