@@ -20,7 +20,7 @@ state copied into local arrays (see the note above `capacity`).
 
 
 from tsim import constants as C
-from tsim.runtime import ti  # imported there with its banner sent to stderr
+from tsim.runtime import PROFILE_SKIP, ti  # ti imported there with its banner sent to stderr
 
 # counts columns
 N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS = range(8)
@@ -322,7 +322,7 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
             bx1 = box[4 * i + 1]
             by0 = box[4 * i + 2]
             by1 = box[4 * i + 3]
-            for j in range(i + 1, n_surf):
+            for j in range(i + 1, n_surf if ti.static("pairs" not in PROFILE_SKIP) else 0):
                 if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
                         or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
                     same = sm[4 * i] == sm[4 * j]
@@ -343,7 +343,7 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
             gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
             gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
             gy1 = ti.min(gh - 1, ti.cast(ti.floor(by1 / C.CELL + 1e-6), ti.i32))
-            for gx in range(gx0, gx1 + 1):
+            for gx in range(gx0, gx1 + 1 if ti.static("terrain" not in PROFILE_SKIP) else gx0):
                 for gy in range(gy0, gy1 + 1):
                     t = ter_grid[gx, gy]
                     if t >= 0:
@@ -373,7 +373,8 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
 def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
          pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
          vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
-         leq: ti.template()):
+         leq: ti.template(), ea: ti.template(), eb: ti.template(), ek: ti.template(),
+         egoal: ti.template(), sfx: ti.template(), sfy: ti.template()):
     """Rest-length update, then classical RK4 on (pos, vel) with dt = 1e-4 (springs, drag,
     gravity, ground plane, contact forces frozen across the stages); x, y interleaved. The 4
     stages are unrolled; stage 0 (stage state = substep state) also sets the current rest lengths,
@@ -384,22 +385,26 @@ def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
     for stage in ti.static(range(4)):
         for i in range(2 * n_pts):
             frc[i] = 0.0
+        # the springs' forces in a loop without stores to shared points, which LLVM vectorises
+        # (square roots and divisions 4 at a time), then their scatter in edge order
         for e in range(n_edges):
-            a = edge_i[eio + 4 * e]
-            q = edge_i[eio + 4 * e + 1]
-            ef = efo + N_EDGE_F * e
+            a = ea[e]
+            q = eb[e]
             dx = xs[2 * a] - xs[2 * q]
             dy = xs[2 * a + 1] - xs[2 * q + 1]
             dist = ti.sqrt(dx * dx + dy * dy)
             if ti.static(stage == 0):
-                leq[e] = dist + (edge_f[ef + E_GOAL] - dist) * C.REST_CONVERGENCE
-            mag = (dist - leq[e]) * edge_f[ef + E_K] / dist
-            dx *= mag
-            dy *= mag
-            frc[2 * a] -= dx
-            frc[2 * a + 1] -= dy
-            frc[2 * q] += dx
-            frc[2 * q + 1] += dy
+                leq[e] = dist + (egoal[e] - dist) * C.REST_CONVERGENCE
+            mag = (dist - leq[e]) * ek[e] / dist
+            sfx[e] = dx * mag
+            sfy[e] = dy * mag
+        for e in range(n_edges):
+            a = ea[e]
+            q = eb[e]
+            frc[2 * a] -= sfx[e]
+            frc[2 * a + 1] -= sfy[e]
+            frc[2 * q] += sfx[e]
+            frc[2 * q + 1] += sfy[e]
         for p in range(n_pts):
             vx = vs[2 * p]
             vy = vs[2 * p + 1]
@@ -437,18 +442,17 @@ def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
 
 
 @ti.func
-def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
-                 edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
+def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.template(),
+                 erest: ti.template(), vox_i: ti.template(), lists: ti.template(),
                  pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
     """Pass 1: Jacobi projection of every edge into +-25 %; pass 2: rigid voxels into +-3 %."""
     for e in range(n_edges):
-        a = edge_i[eio + 4 * e]
-        q = edge_i[eio + 4 * e + 1]
-        ef = efo + N_EDGE_F * e
+        a = ea[e]
+        q = eb[e]
         dx = pos[2 * a] - pos[2 * q]
         dy = pos[2 * a + 1] - pos[2 * q + 1]
         dist = ti.sqrt(dx * dx + dy * dy)
-        rest = edge_f[ef + E_REST]
+        rest = erest[e]
         stress = dist / rest
         cx = 0.0
         cy = 0.0
@@ -466,8 +470,8 @@ def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templat
         cx = ccx[e]
         cy = ccy[e]
         if cx != 0.0 or cy != 0.0:
-            a = edge_i[eio + 4 * e]
-            q = edge_i[eio + 4 * e + 1]
+            a = ea[e]
+            q = eb[e]
             pos[2 * a] -= cx
             pos[2 * a + 1] -= cy
             pos[2 * q] += cx
@@ -532,6 +536,17 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         adx = ti.Vector.zero(ti.f64, 2 * pc)
         adv = ti.Vector.zero(ti.f64, 2 * pc)
         leq = ti.Vector.zero(ti.f64, ec)
+        ea = ti.Vector.zero(ti.i32, ec)  # the springs' ends, stiffness and goal, contiguous
+        eb = ti.Vector.zero(ti.i32, ec)
+        ek = ti.Vector.zero(ti.f64, ec)
+        egoal = ti.Vector.zero(ti.f64, ec)
+        erest = ti.Vector.zero(ti.f64, ec)
+        for e in range(n_edges):
+            ea[e] = edge_i[eio + 4 * e]
+            eb[e] = edge_i[eio + 4 * e + 1]
+            ek[e] = edge_f[efo + N_EDGE_F * e + E_K]
+            egoal[e] = edge_f[efo + N_EDGE_F * e + E_GOAL]
+            erest[e] = edge_f[efo + N_EDGE_F * e + E_REST]
         ccx = ti.Vector.zero(ti.f64, ec)
         ccy = ti.Vector.zero(ti.f64, ec)
         box = ti.Vector.zero(ti.f64, 4 * sc)
@@ -554,15 +569,18 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         status = RUNNING
         for _ in range(n_sub):
             if status == RUNNING:
-                count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
-                                    ter_i, ter_grid)
+                count = 0
+                if ti.static("contacts" not in PROFILE_SKIP):
+                    count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
+                                      ter_i, ter_grid)
                 if count < 0:
                     status = NONFINITE
                 else:
                     _rk4(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
-                           frc, adx, adv, leq)
-                    _constraints(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
-                                   pos, ccx, ccy)
+                           frc, adx, adv, leq, ea, eb, ek, egoal, ccx, ccy)
+                    if ti.static("constraints" not in PROFILE_SKIP):
+                        _constraints(b, n_edges, counts, ea, eb, erest, vox_i, lists, pos, ccx,
+                                     ccy)
                     for i in range(2 * n_pts):
                         vt[i] = (pos[i] - pl[i]) / C.DT
                         pl[i] = pos[i]

@@ -17,6 +17,9 @@ with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
 ARCHS = ("cpu", "gpu", "cuda", "vulkan", "metal")
+# profiling only (bench/profile_parts.py): kernel parts left out at compile time, e.g. "pairs,terrain";
+# results are then wrong, so such a process neither reads nor writes Taichi's offline cache
+PROFILE_SKIP = tuple(p for p in os.environ.get("SGR_PROFILE_SKIP", "").split(",") if p)
 _ARCH: str | None = None
 
 
@@ -52,6 +55,8 @@ def init(arch: str | None = None) -> str:
         return _ARCH
     threads = _threads_env()
     kwargs = {"cpu_max_num_threads": threads} if threads else {}
+    if PROFILE_SKIP:
+        kwargs["offline_cache"] = False
     # fast_math off: IEEE semantics like evogym's C++ build (no reassociation), so results do not
     # depend on how a kernel is written or optimised (the parallel and serial kernels and every
     # capacity tier agree bit for bit) and the parity with evogym's traces is as good or better
