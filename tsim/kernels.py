@@ -439,21 +439,23 @@ def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
 
 @ti.func
 def _hold_fixed(b, counts: ti.template(), lists: ti.template(), pos: ti.template(),
-                pl: ti.template()):
-    """Put the fixed points back where they were at the start of the substep (pos_last): the
-    same bits as evogym's discarded update (its RK4 increment and edge corrections of fixed
+                vel: ti.template(), pl: ti.template()):
+    """Put the fixed points back where they were at the start of the substep (pos_last), at rest:
+    the same bits as evogym's discarded update (its RK4 increment and edge corrections of fixed
     points are zeroed). Their forces and intermediate RK4 stages are computed as for any point,
     as in evogym, since the stages feed the springs of their free neighbours."""
     for i in range(counts[b, N_FIXED]):
         p = lists[b, i, 2]
-        pos[2 * p] = pl[2 * p]
-        pos[2 * p + 1] = pl[2 * p + 1]
+        for d in ti.static(range(2)):
+            pos[2 * p + d] = pl[2 * p + d]
+            vel[2 * p + d] = 0.0
 
 
 @ti.func
 def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.template(),
                  edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
-                 pos: ti.template(), pl: ti.template(), ccx: ti.template(), ccy: ti.template()):
+                 pos: ti.template(), vel: ti.template(), pl: ti.template(), ccx: ti.template(),
+                 ccy: ti.template()):
     """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
     this substep is still pos_last); pass 2: rigid voxels into +-3 % (evogym's rigid pass ignores
     the fixed flag)."""
@@ -488,7 +490,7 @@ def _constraints(b, n_edges, eio, efo, counts: ti.template(), edge_i: ti.templat
             pos[2 * a + 1] -= cy
             pos[2 * q] += cx
             pos[2 * q + 1] += cy
-    _hold_fixed(b, counts, lists, pos, pl)
+    _hold_fixed(b, counts, lists, pos, vel, pl)
     for i in range(counts[b, N_RIGID]):
         v = lists[b, i, 1]
         for k in ti.static(range(4)):
@@ -578,13 +580,9 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 else:
                     _rk4(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
                            frc, adx, adv, leq)
-                    _hold_fixed(b, counts, lists, pos, pl)
-                    for i in range(counts[b, N_FIXED]):
-                        p = lists[b, i, 2]
-                        vel[2 * p] = 0.0
-                        vel[2 * p + 1] = 0.0
+                    _hold_fixed(b, counts, lists, pos, vel, pl)
                     _constraints(b, n_edges, eio, efo, counts, edge_i, edge_f, vox_i, lists,
-                                   pos, pl, ccx, ccy)
+                                   pos, vel, pl, ccx, ccy)
                     for i in range(2 * n_pts):
                         vt[i] = (pos[i] - pl[i]) / C.DT
                         pl[i] = pos[i]
