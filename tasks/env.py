@@ -98,6 +98,15 @@ class BatchEnv:
         return (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
                 np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
 
+    def _object_now(self, name: str) -> np.ndarray:
+        """(B, 2, n) current points of world object `name`: a simulated one's state, a static
+        one's (all-fixed terrain) initial points in every world."""
+        if name in self._obj_index:
+            rows, pts = self._obj_index[name]
+            return self.sim.state[rows, pts, 0:2].transpose(0, 2, 1)
+        p0 = self.sim.world.object(name).pos0
+        return np.broadcast_to(p0, (self.n_worlds, *p0.shape))
+
     def _object_pos0(self, name: str) -> np.ndarray:
         """(B, n, 2) positions of free object `name` at reset (its orientation's reference)."""
         rows, pts = self._obj_index[name]
@@ -134,9 +143,23 @@ class BatchEnv:
                     self.task_state[key] = np.zeros((self.n_worlds, *value.shape), value.dtype)
                 self.task_state[key][w] = value
 
+    def _place_objects(self, mask: np.ndarray | None) -> None:
+        """Objects placed per episode (`TaskSpec.placement`) go where this episode's task state
+        puts them, in the worlds being reset (before the simulator's reset, which starts from
+        there)."""
+        if self.spec.placement is None:
+            return
+        worlds = range(self.n_worlds) if mask is None else np.nonzero(mask)[0]
+        for w in worlds:
+            one = {k: v[w] for k, v in self.task_state.items()}
+            for name, cell in self.spec.placement(one).items():
+                self.sim.place_object(w, name, cell)
+
     # ------------------------------------------------------------------ API
     def reset(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Start new episodes: all worlds, or only those where `mask` (B,) is True."""
+        self._init_state(mask)
+        self._place_objects(mask)
         self.sim.reset(mask)
         if mask is None:
             self.elapsed = np.zeros(self.n_worlds, dtype=np.int64)
@@ -145,7 +168,6 @@ class BatchEnv:
         else:
             self.elapsed[mask] = 0
             self.terminated[mask] = False
-        self._init_state(mask)
         return self.observe()
 
     @property
@@ -209,7 +231,8 @@ class BatchEnv:
         B = self.n_worlds
         scene = O.Scene(pos=pos, vel=vel, mask=m, n_points=self.n_points, com=com, vcom=vcom,
                         pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
-                        object_pos0=self._object_pos0, state=self.task_state)
+                        object_pos0=self._object_pos0, state=self.task_state,
+                        object_now=self._object_now)
         obs = np.zeros((B, self.max_obs_dim + 1))
         col, after_points = 0, None  # blocks after the points start at head + 2 n per robot
         for block in self.spec.observation:

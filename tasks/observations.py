@@ -33,6 +33,8 @@ class Scene:
     object_points: Callable[[str], tuple[np.ndarray, np.ndarray]]  # name -> (B, n, 2) pos, vel
     object_pos0: Callable[[str], np.ndarray] | None = None  # name -> (B, n, 2) positions at reset
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
+    # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
+    object_now: Callable[[str], np.ndarray] | None = None
 
 
 
@@ -57,12 +59,13 @@ def terrain_sight(com_vox: np.ndarray, terrain: np.ndarray, sight_dist: int, *, 
                   sight_range: float = 5.0) -> np.ndarray:
     """Floor (below=True) or ceiling distances of `get_floor_obs` / `get_ceil_obs`, world units.
 
+    `terrain` is (2, M), shared by every world, or (B, 2, M), per world (objects that move).
     Computed in voxel units, as evogym does, so the open windows on lattice lines behave the same
     (the half-integer COM quirk of spec section 6).
     """
     c = com_vox  # (B, 2)
-    t = terrain / C.CELL  # (2, M)
-    tx, ty = t[0][None, :], t[1][None, :]
+    t = terrain / C.CELL  # (2, M) or (B, 2, M)
+    tx, ty = (t[0][None, :], t[1][None, :]) if t.ndim == 2 else (t[:, 0], t[:, 1])
     cx, cy = c[:, 0:1], c[:, 1:2]
     keep = (tx > cx - (sight_dist + 0.5)) & (tx < cx + (sight_dist + 0.5))
     keep &= (ty < cy) if below else (ty > cy)
@@ -109,13 +112,23 @@ def object_orientation(name: str) -> Block:
     return Block(f"{name} orientation", 1, fn)
 
 
-def floor_sight(dist: int) -> Block:
-    """evogym's get_floor_obs: terrain height below the COM in 2 * dist + 1 columns."""
+def _sight_points(s: Scene, objects: tuple[str, ...] | None) -> np.ndarray:
+    """The points a sight block looks at: the static terrain (2, M), or the named objects' current
+    points (B, 2, M), fixed or simulated (their order does not matter: only max/min are taken)."""
+    if objects is None:
+        return s.terrain
+    return np.concatenate([s.object_now(n) for n in objects], axis=2)
+
+
+def floor_sight(dist: int, objects: tuple[str, ...] | None = None) -> Block:
+    """evogym's get_floor_obs: terrain height below the COM in 2 * dist + 1 columns, over the
+    static terrain or over the named objects (evogym's `terrain_list`, which may move)."""
     return Block(f"floor sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
-        com_voxel_units(s.pos, s.n_points), s.terrain, dist, below=True))
+        com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=True))
 
 
-def ceiling_sight(dist: int) -> Block:
-    """evogym's get_ceil_obs: terrain above the COM in 2 * dist + 1 columns."""
+def ceiling_sight(dist: int, objects: tuple[str, ...] | None = None) -> Block:
+    """evogym's get_ceil_obs: terrain above the COM in 2 * dist + 1 columns (objects as in
+    `floor_sight`)."""
     return Block(f"ceiling sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
-        com_voxel_units(s.pos, s.n_points), s.terrain, dist, below=False))
+        com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=False))

@@ -54,6 +54,20 @@ Reward = Callable[[Measure, Measure], np.ndarray]  # (before, after) -> (B,) rew
 Termination = Callable[[Measure, Measure], tuple[np.ndarray, np.ndarray]]
 # one world's task state at the start of an episode, drawn from that world's random stream
 StateInit = Callable[[random.Random], dict[str, np.ndarray]]
+# one world's task state -> grid cell of each object placed per episode (AddedObject.per_world)
+Placement = Callable[[dict[str, np.ndarray]], dict[str, tuple[int, int]]]
+
+
+@dataclass(frozen=True)
+class AddedObject:
+    """An object evogym's task code adds to the world (not in the world file): the one object of
+    `file` (in tasks/worlds/), renamed `name`, with its bounding box's bottom-left at grid cell
+    `cell`. `per_world`: placed anew at every reset of each world by `TaskSpec.placement` (then
+    simulated even when all its voxels are fixed)."""
+    name: str
+    file: str
+    cell: tuple[int, int]
+    per_world: bool = False
 
 
 @dataclass(frozen=True)
@@ -71,6 +85,8 @@ class TaskSpec:
     goal: tuple[int, float] | None = None  # (voxel x the robot's COM must pass, bonus); ends the episode
     termination: Termination | None = None  # further task ends (after the goal); see `Termination`
     state: StateInit | None = None  # per-world task state, drawn anew at each reset of that world
+    objects: tuple[AddedObject, ...] = ()  # objects added in code, in the order evogym adds them
+    placement: Placement | None = None  # cells of the per_world objects from a world's state
 
     def obs_dim(self, n_points: int) -> int:
         """evogym's observation length for a robot of n points."""

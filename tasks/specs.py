@@ -10,19 +10,22 @@ from tasks.suite import (
     balancer,
     bidirectional_walker,
     carry_push,
+    catcher,
     climber,
     climber_v0,
     flipper,
     jumper,
     jumpers,
+    mixed_terrain,
     obstacle_traverser,
     rigid_objects,
     shape,
     steppers,
     thrower,
+    traverser,
     walker,
 )
-from tsim.world import World, load_world
+from tsim.world import World, load_object, load_world
 
 TASKS: dict[str, TaskSpec] = {s.name: s for s in (
     walker.SPEC,
@@ -52,6 +55,11 @@ TASKS: dict[str, TaskSpec] = {s.name: s for s in (
     rigid_objects.PUSHER_V1,
     rigid_objects.BEAM_TOPPLER,
     rigid_objects.BEAM_SLIDER,
+    mixed_terrain.BRIDGE_WALKER,
+    mixed_terrain.CAVE_CRAWLER,
+    mixed_terrain.CLIMBER_V1,
+    traverser.SPEC,
+    catcher.SPEC,
 )}
 
 
@@ -65,7 +73,16 @@ def task_spec(name: str) -> TaskSpec:
 
 @cache
 def task_world(name: str) -> World:
-    """The task's evogym world (files in tasks/worlds, MIT licence, see LICENSE-evogym there)."""
+    """The task's evogym world (files in tasks/worlds, MIT licence, see LICENSE-evogym there),
+    with the objects its task code adds (`TaskSpec.objects`)."""
     spec = task_spec(name)
-    with resources.as_file(resources.files("tasks") / "worlds" / spec.world) as p:
-        return load_world(p)
+    worlds = resources.files("tasks") / "worlds"
+    with resources.as_file(worlds / spec.world) as p:
+        world = load_world(p)
+    if not spec.objects:
+        return world
+    extra = []
+    for a in spec.objects:
+        with resources.as_file(worlds / a.file) as p:
+            extra.append(load_object(p).placed(a.name, a.cell, per_world=a.per_world))
+    return world.with_objects(tuple(extra))

@@ -9,7 +9,8 @@ Layout (all arrays are Taichi ndarrays, so the kernels compile once per process 
   rest length (the kernel keeps the current one in a local array).
 - `vox_i[b, v, :]` int: corner points (TL, TR, BR, BL), open sides (top, right, bottom, left),
   material, object id, row, col; `lists[b, i, 0]` surface voxels (robot first),
-  `lists[b, i, 1]` rigid voxels.
+  `lists[b, i, 1]` rigid voxels, `lists[b, i, 2]` fixed points (corners of a simulated object's
+  material-5 voxels: evogym discards their RK4 increment and their edge-constraint moves).
 - terrain (shared by the batch, static): `ter_f[t, :]` corners TL, TR, BR, BL as x, y pairs then
   the AABB; `ter_i[t, :]` open sides; `ter_grid[gx, gy]` the surface voxel in that cell or -1.
 
@@ -23,8 +24,8 @@ from tsim import constants as C
 from tsim.runtime import PROFILE_SKIP, ti  # ti imported there with its banner sent to stderr
 
 # counts columns
-N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS = range(8)
-N_COUNTS = 8
+N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS, N_FIXED = range(9)
+N_COUNTS = 9
 # STATUS values: a world is simulated only while its status is RUNNING
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = 0, 1, 2, 3
 
@@ -442,10 +443,27 @@ def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
 
 
 @ti.func
+def _hold_fixed(b, counts: ti.template(), lists: ti.template(), pos: ti.template(),
+                vel: ti.template(), pl: ti.template()):
+    """Put the fixed points back where they were at the start of the substep (pos_last), at rest:
+    the same bits as evogym's discarded update (its RK4 increment and edge corrections of fixed
+    points are zeroed). Their forces and intermediate RK4 stages are computed as for any point,
+    as in evogym, since the stages feed the springs of their free neighbours."""
+    for i in range(counts[b, N_FIXED]):
+        p = lists[b, i, 2]
+        for d in ti.static(range(2)):
+            pos[2 * p + d] = pl[2 * p + d]
+            vel[2 * p + d] = 0.0
+
+
+@ti.func
 def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.template(),
                  erest: ti.template(), vox_i: ti.template(), lists: ti.template(),
-                 pos: ti.template(), ccx: ti.template(), ccy: ti.template()):
-    """Pass 1: Jacobi projection of every edge into +-25 %; pass 2: rigid voxels into +-3 %."""
+                 pos: ti.template(), vel: ti.template(), pl: ti.template(), ccx: ti.template(),
+                 ccy: ti.template()):
+    """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
+    this substep is still pos_last); pass 2: rigid voxels into +-3 % (evogym's rigid pass ignores
+    the fixed flag)."""
     for e in range(n_edges):
         a = ea[e]
         q = eb[e]
@@ -476,6 +494,7 @@ def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.te
             pos[2 * a + 1] -= cy
             pos[2 * q] += cx
             pos[2 * q + 1] += cy
+    _hold_fixed(b, counts, lists, pos, vel, pl)
     for i in range(counts[b, N_RIGID]):
         v = lists[b, i, 1]
         for k in ti.static(range(4)):
@@ -578,9 +597,10 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 else:
                     _rk4(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
                            frc, adx, adv, leq, ea, eb, ek, egoal, ccx, ccy)
+                    _hold_fixed(b, counts, lists, pos, vel, pl)
                     if ti.static("constraints" not in PROFILE_SKIP):
-                        _constraints(b, n_edges, counts, ea, eb, erest, vox_i, lists, pos, ccx,
-                                     ccy)
+                        _constraints(b, n_edges, counts, ea, eb, erest, vox_i, lists, pos, vel,
+                                     pl, ccx, ccy)
                     for i in range(2 * n_pts):
                         vt[i] = (pos[i] - pl[i]) / C.DT
                         pl[i] = pos[i]

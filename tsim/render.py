@@ -228,6 +228,10 @@ class Renderer:
                                              + [np.zeros(0, np.uint8)])
         self._static_seg = np.concatenate([p.outline(x) for p, x in fixed] + [np.zeros((0, 2, 4))])
         self._objects = {o.name: (_Part(o.body), o.pos0) for o in self.world.free_objects}
+        # the camera follows loose objects only: one with fixed voxels is terrain that happens to
+        # be simulated (BridgeWalker-v0's soft bridge, Catcher-v0's pegs)
+        self._loose = {o.name for o in self.world.free_objects
+                       if not np.any(o.body.voxel_type == C.FIXED)}
         self._robot = _Part(self.body)
         self.view: tuple[float, float] | None = None  # (left x, top y) of the last frame, world units
 
@@ -273,7 +277,8 @@ class Renderer:
         robot_points = np.asarray(robot_points, dtype=np.float64)
         objs = [(part, np.asarray(object_points.get(name, pos0), dtype=np.float64))
                 for name, (part, pos0) in self._objects.items()]
-        tracked = [robot_points] + ([p for _, p in objs] if self.track_objects else [])
+        tracked = [robot_points] + ([p for name, (_, p) in zip(self._objects, objs, strict=True)
+                                     if name in self._loose] if self.track_objects else [])
         x0, y1 = self.view = self.camera.update(np.concatenate(tracked, axis=1))
         x_lo, x_hi = x0 - C.CELL, x0 + self.width / self.scale + C.CELL
         y_lo, y_hi = y1 - self.height / self.scale - C.CELL, y1 + C.CELL

@@ -65,11 +65,14 @@ class BatchSim:
         edge_i = np.zeros((B, E, 4), dtype=np.int32)
         edge_f = np.zeros((B, E, K.N_EDGE_F))
         vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
-        lists = np.zeros((B, V, 2), dtype=np.int32)
+        # fixed points: corners of material-5 voxels of simulated objects (never the robot's)
+        fixed = [np.unique(o.body.voxel_points[o.body.voxel_type == C.FIXED]) for o in objs]
+        n_fix = sum(len(f) for f in fixed)
+        lists = np.zeros((B, max(V, n_fix), 3), dtype=np.int32)
         counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
         for w, ps in enumerate(parts):
             p_off = e_off = v_off = 0
-            surf, surf_robot, rigid = [], 0, []
+            surf, surf_robot, rigid, fix = [], 0, [], []
             for obj_id, part in enumerate(ps):
                 place = (self.origin if obj_id == 0 else objs[obj_id - 1].cell)
                 pts = part.place(*place)
@@ -94,11 +97,15 @@ class BatchSim:
                 if obj_id == 0:
                     surf_robot = len(s_idx)
                 rigid += list(np.nonzero(part.voxel_type == C.RIGID)[0] + v_off)
+                if obj_id > 0:
+                    fix += list(fixed[obj_id - 1] + p_off)
                 p_off += part.n_points
                 e_off += part.n_edges
                 v_off += part.n_voxels
             lists[w, :len(surf), 0] = surf
             lists[w, :len(rigid), 1] = rigid
+            lists[w, :len(fix), 2] = fix
+            counts[w, K.N_FIXED] = len(fix)
             counts[w, K.N_PTS] = p_off
             counts[w, K.N_EDGES] = e_off
             counts[w, K.N_VOX] = v_off
@@ -163,6 +170,14 @@ class BatchSim:
         self.edge_f[sel] = self._edge_f0[sel]
         self.actions[sel] = 1.0
         self.time[sel] = 0
+
+    def place_object(self, w: int, name: str, cell: tuple[int, int]) -> None:
+        """Start free object `name` of world w with its bounding box's bottom-left at grid cell
+        `cell` from the next `reset` of that world on (objects placed anew each episode, e.g.
+        Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
+        k, obj = self._free_object(name)
+        off = self._obj_offsets[k][w]
+        self._pos0[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
 
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].

@@ -3,7 +3,9 @@ belong to the tasks that use them; see tasks/worlds).
 
 Fixed terrain never moves in evogym (material 5: every corner point is fixed), so it is kept as
 static geometry with a dense cell grid for contact look-ups, not as simulated points. Free objects
-(Thrower's package) are simulated like the robot.
+(Thrower's package) are simulated like the robot; so are objects that mix fixed and free voxels
+(their material-5 corners are the simulator's fixed points) and all-fixed objects placed anew in
+each world and episode (`per_world`: Catcher-v0's pegs), whose points are then all fixed.
 """
 
 from __future__ import annotations
@@ -26,12 +28,24 @@ class WorldObject:
     body: Body
     cell: tuple[int, int]  # grid cell of the bottom-left of the object's bounding box
     pos0: np.ndarray  # (2, n) exact initial positions
+    per_world: bool = False  # placed per world and episode (BatchSim.place_object): never terrain
 
     @property
     def is_fixed(self) -> bool:
-        """True when every voxel is FIXED (material 5): such an object is static terrain, never
-        simulated."""
+        """True when every voxel is FIXED (material 5)."""
         return bool(np.all(self.body.voxel_type == C.FIXED))
+
+    @property
+    def is_terrain(self) -> bool:
+        """All fixed and in the same place in every world: static terrain, never simulated."""
+        return self.is_fixed and not self.per_world
+
+    def placed(self, name: str, cell: tuple[int, int], per_world: bool = False) -> WorldObject:
+        """This object renamed and moved with its bounding box's bottom-left at grid cell `cell`
+        (evogym's `WorldObject.rename` and `set_pos`)."""
+        cell = (int(cell[0]), int(cell[1]))
+        return WorldObject(name=name, body=self.body, cell=cell, pos0=self.body.place(*cell),
+                           per_world=per_world)
 
 
 @dataclass(frozen=True)
@@ -63,12 +77,25 @@ class World:
     @property
     def free_objects(self) -> tuple[WorldObject, ...]:
         """Objects simulated as points after the robot's (e.g. Thrower's package), in load order."""
-        return tuple(o for o in self.objects if not o.is_fixed)
+        return tuple(o for o in self.objects if not o.is_terrain)
 
     @property
     def fixed_objects(self) -> tuple[WorldObject, ...]:
-        """Objects that are static terrain (all voxels FIXED), in load order."""
-        return tuple(o for o in self.objects if o.is_fixed)
+        """Objects that are static terrain (all voxels FIXED, same place in every world), in load
+        order."""
+        return tuple(o for o in self.objects if o.is_terrain)
+
+    def with_objects(self, extra: tuple[WorldObject, ...]) -> World:
+        """This world plus objects added in code (evogym's `EvoWorld.add_object`), all in load
+        order again (sorted by name as strings); the grid grows to hold them, as evogym's does."""
+        names = [o.name for o in self.objects] + [o.name for o in extra]
+        if len(set(names)) != len(names):
+            raise ValueError(f"world {self.name}: duplicate object names in {names}")
+        objects = tuple(sorted(self.objects + tuple(extra), key=lambda o: o.name))
+        grid_w = max([self.grid_w] + [o.cell[0] + o.body.matrix.shape[1] for o in extra])
+        grid_h = max([self.grid_h] + [o.cell[1] + o.body.matrix.shape[0] for o in extra])
+        return World(name=self.name, grid_w=grid_w, grid_h=grid_h, objects=objects,
+                     terrain=_build_terrain(objects, grid_w, grid_h))
 
     def object(self, name: str) -> WorldObject:
         """The object called `name`, fixed or free; KeyError when the world has none."""
@@ -98,18 +125,33 @@ def _object_from_json(name: str, data: dict, grid_w: int) -> WorldObject:
     return WorldObject(name=name, body=body, cell=(x0, y0), pos0=body.place(x0, y0))
 
 
-def load_world(path: str | Path) -> World:
-    """Read an evogym world JSON file (grid size, objects with indices, types, neighbours)."""
-    path = Path(path)
+def _read(path: Path) -> tuple[int, int, list]:
     try:
         data = json.loads(path.read_text())
         grid_w, grid_h = int(data["grid_width"]), int(data["grid_height"])
-        items = data["objects"].items()
+        items = sorted(data["objects"].items())
     except (OSError, ValueError, KeyError, AttributeError) as exc:
         raise ValueError(f"bad world file {path}: {exc}") from None
-    objects = tuple(_object_from_json(n, d, grid_w) for n, d in sorted(items))
+    return grid_w, grid_h, items
+
+
+def load_world(path: str | Path) -> World:
+    """Read an evogym world JSON file (grid size, objects with indices, types, neighbours)."""
+    path = Path(path)
+    grid_w, grid_h, items = _read(path)
+    objects = tuple(_object_from_json(n, d, grid_w) for n, d in items)
     terrain = _build_terrain(objects, grid_w, grid_h)
     return World(name=path.stem, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
+
+
+def load_object(path: str | Path) -> WorldObject:
+    """The one object of an evogym object file (e.g. `rigid_2x2.json`), as it sits in that file;
+    `WorldObject.placed` renames and moves it (evogym's `WorldObject.from_json`)."""
+    path = Path(path)
+    grid_w, _, items = _read(path)
+    if len(items) != 1:
+        raise ValueError(f"bad object file {path}: {len(items)} objects, expected 1")
+    return _object_from_json(items[0][0], items[0][1], grid_w)
 
 
 # evogym edge orientation of a voxel's sides in corner slots (TL=0, TR=1, BR=2, BL=3):
@@ -122,7 +164,7 @@ _INNER_SIDES = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
 def _build_terrain(objects: tuple[WorldObject, ...], grid_w: int, grid_h: int) -> Terrain:
     corners, opens, sides, cells = [], [], [], []
     n_points = 0
-    for obj in (o for o in objects if o.is_fixed):
+    for obj in (o for o in objects if o.is_terrain):
         b = obj.body
         n_points += b.n_points
         surface = b.voxel_is_surface

@@ -21,6 +21,7 @@ from gymnasium.utils.env_checker import check_env
 from tasks.env import BatchEnv
 from tasks.specs import TASKS
 from tasks.suite.bidirectional_walker import draw_goals
+from tasks.suite.catcher import placement
 from tasks.suite.shape import hull_area
 from tasks.validate import evogym32_returns, evogym32_traces
 
@@ -31,8 +32,12 @@ NEW_TASKS = [
     "HeightMaximizer-v0", "Climber-v0", "BidirectionalWalker-v0",
     # rigid free objects (the simulator's rigid pass already covers every object's rigid voxels)
     "Lifter-v0", "Carrier-v1", "Pusher-v1", "BeamToppler-v0", "BeamSlider-v0",
+    # one terrain object mixing fixed and soft voxels (tsim's fixed points)
+    "BridgeWalker-v0", "CaveCrawler-v0", "Climber-v1",
+    # objects added in code: 27 loose rigid blocks; a package and pegs placed anew each reset
+    "Traverser-v0", "Catcher-v0",
 ]
-LEFT = ["BridgeWalker-v0", "CaveCrawler-v0", "Climber-v1", "Traverser-v0", "Catcher-v0"]
+LEFT: list[str] = []
 
 
 @pytest.fixture(scope="module")
@@ -92,6 +97,36 @@ def test_bidirectional_goals_are_evogyms_draws(folder):
         assert list(d["goals"][:d["n_goals"]]) == [g for g in goals if g >= 0]
 
 
+def test_catcher_placement_is_evogyms_draw(folder):
+    """Each recorded Catcher-v0 case's drawn offset and the resulting cells of the package and
+    both pegs (evogym's world_objects of the trace cases) come out of the world's seeded stream."""
+    import json
+
+    z = np.load(folder / "returns_Catcher-v0.npz")
+    env = BatchEnv("Catcher-v0", list(z["body"]), seeds=[int(s) for s in z["reset_seed"]])
+    assert np.array_equal(env.task_state["offset"], z["offset_xy"])
+    for f in sorted(folder.glob("trace_Catcher-v0_*.npz")):
+        t = np.load(f)
+        e = BatchEnv("Catcher-v0", [t["body"]], seeds=[int(t["reset_seed"])])
+        for o in json.loads(str(t["world_objects"]))[1:]:
+            if o["name"] == "ground":
+                continue
+            assert tuple(placement({k: v[0] for k, v in e.task_state.items()})[o["name"]]) == tuple(o["cell"])
+            first = o["first_point"]
+            ref = t["pos"][0][:, first:first + o["n_points"]]  # evogym's doubles to <= 1 ulp
+            assert np.abs(e.sim.object_pos(0, o["name"]) - ref).max() <= 1e-15, (f.name, o["name"])
+    # a reset of one world draws its next placement and moves only that world's objects
+    before = env.sim.object_pos(1, "peg2")
+    env.reset(np.eye(len(z["body"]), dtype=bool)[0])
+    rng = random.Random(int(z["reset_seed"][0]))
+    rng.randint(-6, 4), rng.randint(0, 5)
+    ox, oy = rng.randint(-6, 4), rng.randint(0, 5)
+    assert list(env.task_state["offset"][0]) == [ox, oy]
+    assert env.sim.object_pos(0, "peg2").min(axis=1) == pytest.approx([(19 + ox) * 0.1,
+                                                                       (25 + oy) * 0.1], abs=1e-12)
+    assert np.array_equal(env.sim.object_pos(1, "peg2"), before)
+
+
 def test_task_state_is_reset_per_world(folder):
     z = np.load(folder / "returns_BidirectionalWalker-v0.npz")
     bodies, seeds = list(z["body"][:3]), [int(s) for s in z["reset_seed"][:3]]
@@ -140,3 +175,39 @@ def test_every_task_has_an_sgr_config_with_evogyms_episode_length(repo_root):
     for name in NEW_TASKS:
         cfg = yaml.safe_load((repo_root / "configs" / "sgr" / f"{name}.yaml").read_text())
         assert cfg["task"] == name and cfg["episode_steps"] == TASKS[name].evogym_steps
+
+
+# BridgeWalker-v0's soft span sags onto the fixed base at step 26: its middle point lands exactly on
+# the shared corner of two base voxels in evogym (x = 3.8 to the last bit, by symmetry), inside both;
+# ours is 1-2 ulps off it, inside one (docs/VALIDATION.md). The robot is far away: returns agree.
+SOFT_STEPS = {"BridgeWalker-v0": 25, "CaveCrawler-v0": 50, "Climber-v1": 50}
+
+
+@pytest.mark.parametrize("task", list(SOFT_STEPS))
+def test_mixed_object_points_follow_evogym(folder, task):
+    """Every point of the terrain object that mixes fixed and soft voxels, in all 3 traces, against
+    evogym's recorded positions: the fixed ones (material-5 corners) never move, for 50 steps; the
+    soft ones follow evogym to rounding (for SOFT_STEPS steps)."""
+    import json
+
+    files = sorted(folder.glob(f"trace_{task}_*.npz"))
+    data = [np.load(f) for f in files]
+    env = BatchEnv(task, [z["body"] for z in data], episode_steps=50, passive_ok=True)
+    (obj,) = json.loads(str(data[0]["world_objects"]))[1:]
+    world_obj = env.sim.world.object(obj["name"])
+    b = world_obj.body
+    fixed = np.unique(b.voxel_points[b.voxel_type == 5])
+    assert 0 < len(fixed) < b.n_points
+    worst_soft = 0.0
+    for t in range(51):
+        if t:
+            env.step([z["actions"][t - 1] for z in data])
+        for w, z in enumerate(data):
+            first = json.loads(str(z["world_objects"]))[1]["first_point"]
+            ref = z["pos"][t][:, first:first + obj["n_points"]]
+            ours = env.sim.object_pos(w, obj["name"])
+            assert np.array_equal(ours[:, fixed], world_obj.pos0[:, fixed])
+            assert np.abs(ours[:, fixed] - ref[:, fixed]).max() <= 1e-15
+            if t <= SOFT_STEPS[task]:
+                worst_soft = max(worst_soft, float(np.abs(ours - ref).max()))
+    assert worst_soft <= 1e-12

@@ -56,3 +56,58 @@ def test_deactivated_world_stops_moving(sim):
     for w in (1, 2):
         assert np.abs(sim.robot_pos(w) - before[w]).max() > 1e-6
     assert sim.time.tolist() == [1, 4, 4]
+
+
+def _cantilever_world(tmp_path):
+    """A fixed post (x = 10, y = 0..3) carrying a soft arm 4 voxels long at its top, one object."""
+    import json
+
+    from tsim.world import load_world
+
+    w = 20
+    cells = {(10, y): 5 for y in range(4)} | {(x, 3): 2 for x in range(11, 15)}
+    idx = {x + y * w: t for (x, y), t in cells.items()}
+    nbs = {str(i): [j for j in idx if j in (i - 1, i + 1, i - w, i + w)
+                    and abs(j % w - i % w) <= 1] for i in idx}
+    obj = {"indices": list(idx), "types": list(idx.values()), "neighbors": nbs}
+    p = tmp_path / "cantilever.json"
+    p.write_text(json.dumps({"grid_width": w, "grid_height": 5, "objects": {"arm": obj}}))
+    return load_world(p)
+
+
+def test_fixed_corners_of_a_simulated_object_never_move(tmp_path):
+    """An object mixing fixed and soft voxels is simulated as one object: its fixed corners keep
+    their initial bits and stay at rest (evogym discards their updates) while the soft arm sags."""
+    from tsim.body import build_body
+
+    world = _cantilever_world(tmp_path)
+    (arm,) = world.free_objects
+    fixed = np.unique(arm.body.voxel_points[arm.body.voxel_type == 5])
+    soft = np.setdiff1d(np.arange(arm.body.n_points), fixed)
+    sim = BatchSim(world, [build_body(np.array([[3, 3]]))] * 2, (1, 1))
+    sim.step(20)
+    for w in range(2):
+        pos, vel = sim.object_pos(w, "arm"), sim.object_vel(w, "arm")
+        assert np.array_equal(pos[:, fixed], arm.pos0[:, fixed])
+        assert not vel[:, fixed].any()
+        assert pos[1, soft].min() < arm.pos0[1, soft].min() - 0.01  # the tip sags
+
+
+def test_an_all_fixed_object_placed_per_world_is_simulated_where_it_is_put(tmp_path):
+    """An all-fixed object marked per_world is not shared terrain: each world puts it elsewhere
+    (from its next reset on) and it stays there, every point fixed."""
+    from tsim.body import build_body
+    from tsim.world import WorldObject
+
+    base = _cantilever_world(tmp_path)
+    bar = build_body(np.full((1, 3), 5), allow_fixed=True)
+    peg = WorldObject("bar", bar, (0, 0), bar.place(0, 0)).placed("peg", (2, 6), per_world=True)
+    assert peg.is_fixed and not peg.is_terrain
+    world = base.with_objects((peg,))
+    assert [o.name for o in world.free_objects] == ["arm", "peg"]
+    sim = BatchSim(world, [build_body(np.array([[3, 3]]))] * 2, (1, 1))
+    sim.place_object(1, "peg", (5, 8))
+    sim.reset(np.array([False, True]))
+    sim.step(10)
+    assert np.array_equal(sim.object_pos(0, "peg"), peg.body.place(2, 6))
+    assert np.array_equal(sim.object_pos(1, "peg"), peg.body.place(5, 8))
