@@ -121,6 +121,7 @@ def _in_box(x, y, x0, x1, y0, y1):
 # compiled kernel, and results do not depend on the tier (tests/tsim/test_kernels.py).
 # ------------------------------------------------------------------------------------------------
 
+GPU_BLOCK = 64  # worlds per thread block on a GPU (each world is one thread)
 PC, EC, SC = 64, 160, 32  # tier 0: points, edges, surface voxels (a 5x5 robot and Thrower's box)
 NS = 8  # state columns
 
@@ -630,12 +631,14 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
 def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                 lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
                 n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
-                sc: ti.template()):
-    """One env step (n_sub substeps) of every running world, worlds in parallel. state, edge_i
+                sc: ti.template(), block: ti.template()):
+    """One env step (n_sub substeps) of every running world, worlds in parallel (`block` worlds
+    per thread block: 1 on a CPU, where Taichi deals blocks to its threads, a warp's multiple on
+    a GPU). state, edge_i
     and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays; every world fits
     the capacity (pc points, ec edges, sc surface voxels). The current rest lengths live in a
     local array (edge_f's column E_LEQ keeps its initial value)."""
-    ti.loop_config(block_dim=1)
+    ti.loop_config(block_dim=block)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
                           ter_grid, n_sub, P, E, pc, ec, sc)

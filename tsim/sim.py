@@ -221,11 +221,14 @@ class BatchSim:
         """Advance every running world by n env steps (30 substeps each)."""
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
-            kernel = K.step_kernel_serial if self._serial else K.step_kernel
-            kernel(self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
-                   self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
-                   self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
-                   self.edge_i.shape[1], *K.capacity(self.capacity_tier))
+            args = (self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
+                    self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
+                    self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
+                    self.edge_i.shape[1], *K.capacity(self.capacity_tier))
+            if self._serial:
+                K.step_kernel_serial(*args)
+            else:
+                K.step_kernel(*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:
