@@ -50,9 +50,10 @@ class SgrEnv(gym.Env):
         self.action_space = _action_space(int(self._env.n_actuators[0]))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """`seed` only seeds gymnasium's RNG: the simulation is deterministic, every episode starts
-        the same."""
-        super().reset(seed=seed)  # the simulation itself is deterministic
+        """The physics is deterministic; a task with per-episode randomness (Catcher-v0's placement,
+        BidirectionalWalker-v0's goals) draws from the env's stream at every reset, restarted from
+        `seed` when one is given (evogym's draw after `random.seed(seed); env.reset()`)."""
+        super().reset(seed=seed)
         if seed is not None:  # per-episode task randomness (BidirectionalWalker's goals)
             self._env.seed([seed])
         return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
@@ -113,7 +114,8 @@ class SgrVectorEnv(VectorEnv):
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Reset every robot; `seed` only seeds gymnasium's RNG (the simulation is deterministic)."""
+        """Reset every robot; with `seed`, robot i's task stream restarts from seed + i (see
+        `SgrEnv.reset`)."""
         super().reset(seed=seed)
         if seed is not None:  # world i's task stream from seed + i
             self._env.seed(seed)

@@ -32,7 +32,7 @@ def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callabl
         return np.zeros(0)
     env = BatchEnv(task, list(bodies), episode_steps=episode_steps, seeds=[0] * len(bodies))
     policy = make_policy(env)
-    obs = env.reset()
+    obs = env.observe()  # the constructed env's episode: its stream's first draw, as in a replay
     total = np.zeros(env.n_worlds)
     for _ in range(env.episode_steps):
         obs, r, term, trunc, _ = env.step(policy.act(obs))

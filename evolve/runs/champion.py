@@ -75,8 +75,11 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
     from tasks.env import BatchEnv
 
     champ, body, ctrl = load_champion(run_dir)
-    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"])
-    obs = env.reset()
+    # every world replays evolution's episode (`rollout_policy`: seed 0, the constructed env's
+    # episode), so the perturbed runs differ from it by the action noise alone
+    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"],
+                   seeds=[0] * (replays + 1))
+    obs = env.observe()
     n = env.obs_dims[0]
     rng = np.random.default_rng(seed)
     total = np.zeros(replays + 1)

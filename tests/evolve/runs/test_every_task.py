@@ -33,3 +33,21 @@ def test_a_short_sgr_run_on_every_task(tmp_path, name):
     champ, body, ctrl = load_champion(out)
     assert champ["task"] == name
     assert replay_champion(out)[0] == pytest.approx(champ["fitness"], abs=1e-9)
+
+
+@pytest.mark.parametrize("name", ["Catcher-v0", "BidirectionalWalker-v0"])
+def test_a_randomised_task_champion_replays_evolutions_episode_in_every_world(tmp_path, name):
+    """Evolution, the champion's replays (report's robustness column) and its GIF all use the
+    episode of a constructed env seeded 0: noise-free replays in every world of the batch score
+    the champion's fitness, so perturbed ones differ from it by their action noise alone."""
+    out = tmp_path / name
+    exp = Experiment.from_config({"method": "sgr", "task": name, "generations": 1, "pop_size": 4,
+                                  "episode_steps": 40, "workers": 1, "render_champion": False},
+                                 out, quiet=True)
+    try:
+        exp.run_all()
+    finally:
+        exp.close()
+    champ = load_champion(out)[0]
+    returns = replay_champion(out, replays=3, eps=0.0)
+    assert returns == pytest.approx([champ["fitness"]] * 4, abs=1e-9)
