@@ -72,14 +72,27 @@ def test_reset_observation_and_returns_match_evogym(returns, task):
     assert np.array_equal(r["term_step"], r["term_step_evogym"])
 
 
+# sight windows whose edge falls within ulps of a voxel boundary (a symmetric test body's COM on a
+# half voxel): one trace case of each of these tasks sees a different column later in the episode
+# (docs/VALIDATION.md); its sight values differ by up to a quarter, everything else to rounding
+HALF_VOXEL_SIGHT = {"CaveCrawler-v0", "DownStepper-v0", "Hurdler-v0"}
+
+
 @pytest.mark.parametrize("task", NEW_TASKS)
 def test_traced_com_matches_evogym(folder, task):
+    """Bounds near what is achieved (worst over the 28 tasks: COM 1.7e-14, reward 3.3e-13,
+    observations 8.5e-13 over all 50 steps)."""
     t = evogym32_traces(folder, task)
+    late_sight = 0
     for c in t["cases"]:
         assert c["steps_run_ours"] == c["steps_run"], c["file"]
-        assert c["com_err_max"] <= 1e-9, c["file"]
+        assert c["com_err_max"] <= 1e-13, c["file"]
         assert c["obs_err_step0"] <= 1e-12, c["file"]
-        assert c["reward_err_max"] <= 1e-9, c["file"]
+        assert c["reward_err_max"] <= 1e-12, c["file"]
+        if c["obs_err_max"] > 1e-11:
+            late_sight += 1
+            assert task in HALF_VOXEL_SIGHT and c["obs_err_max"] <= 0.3, c["file"]
+    assert late_sight <= 1
 
 
 def test_recorded_terminations_are_reproduced(returns):
@@ -210,4 +223,6 @@ def test_mixed_object_points_follow_evogym(folder, task):
             assert np.abs(ours[:, fixed] - ref[:, fixed]).max() <= 1e-15
             if t <= SOFT_STEPS[task]:
                 worst_soft = max(worst_soft, float(np.abs(ours - ref).max()))
+            else:  # after the corner case: the span still rests on the base (measured <= 5e-3)
+                assert np.abs(ours - ref).max() <= 1e-2
     assert worst_soft <= 1e-12
