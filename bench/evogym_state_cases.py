@@ -1,7 +1,7 @@
 """Record evogym 2.0.0 episodes that start from a moved state, for the task branches the random
 robots of `evogym_reference.py` never reach: a robot's COM just past / just short of a goal
-(BridgeWalker-v0, CaveCrawler-v0, Climber-v1, Traverser-v0), a robot standing on Traverser-v0's
-loose blocks (floor sight over moving objects), Catcher-v0's package falling through y = 0.5.
+(BridgeWalker-v0, CaveCrawler-v0, Climber-v0, Climber-v1, Traverser-v0), a robot standing on
+Traverser-v0's loose blocks (floor sight over moving objects), Catcher-v0's package falling through y = 0.5.
 
 Run under the evogym venv (sgr never imports evogym):
 
@@ -33,7 +33,7 @@ DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "evogym32"
 # p (2, n): ("com_x", x, bottom_y) puts its COM x at x and its lowest point at bottom_y;
 # ("com_y", y) puts its COM y at y; ("beside_robot", gap, bottom_y) puts its left edge gap right
 # of the robot's right edge and its lowest point at bottom_y.
-# Climber-v1's cases but "climber_squeezed" use NARROW_BODY: 3 voxels wide in the 5-wide pipe, it
+# The climbers' cases but "climber_squeezed" use NARROW_BODY: 3 voxels wide in the 5-wide pipe, it
 # touches no wall and falls freely (slowly at first), so a COM put 0.005 above the top stays above
 # it for step 0; the trace body fills the pipe's width and is thrown down by the soft wall patches.
 CASES: list[tuple[str, str, int, list[tuple[str, tuple]]]] = [
@@ -44,6 +44,8 @@ CASES: list[tuple[str, str, int, list[tuple[str, tuple]]]] = [
     ("climber_past_top", "Climber-v1", 30, [("robot", ("com_y", 6.505))]),
     ("climber_short_of_top", "Climber-v1", 30, [("robot", ("com_y", 6.495))]),
     ("climber_squeezed", "Climber-v1", 30, [("robot", ("com_y", 6.3))]),
+    ("climber_v0_past_top", "Climber-v0", 30, [("robot", ("com_y", 8.605))]),
+    ("climber_v0_short_of_top", "Climber-v0", 30, [("robot", ("com_y", 8.595))]),
     ("traverser_past_goal", "Traverser-v0", 30, [("robot", ("com_x", 5.905, 0.72))]),
     ("traverser_short_of_goal", "Traverser-v0", 30, [("robot", ("com_x", 5.895, 0.72))]),
     ("traverser_on_blocks", "Traverser-v0", 50, [("robot", ("com_x", 3.2, 0.95))]),
@@ -57,11 +59,11 @@ NARROW_BODY = np.array([[0, 0, 0, 0, 0], [0, 0, 0, 0, 0], [0, 3, 3, 3, 0], [0, 4
 
 def trace_case(task: str, name: str) -> dict:
     """Body, seed and actions of the task's trace case 1 (= returns case 0); NARROW_BODY with the
-    program of the same seed for Climber-v1's free-fall cases."""
+    program of the same seed for the climbers' free-fall cases."""
     (f,) = sorted(DATA.glob(f"trace_{task}_1_*.npz"))
     z = np.load(f)
     out = {"body": z["body"], "seed": int(z["seed"]), "actions": z["actions"], "file": f.name}
-    if task == "Climber-v1" and name != "climber_squeezed":
+    if task.startswith("Climber") and name != "climber_squeezed":
         n_act = int(np.isin(NARROW_BODY, (3, 4)).sum())
         out.update(body=NARROW_BODY, actions=R.program(out["seed"], n_act, 50)[3],
                    file="NARROW_BODY")

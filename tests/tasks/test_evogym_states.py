@@ -1,12 +1,14 @@
-"""Task branches the random robots of tests/data/evogym32 never reach, against evogym 2.0.0 episodes
-that start from a moved state (`state_cases.npz`, recorded by bench/evogym_state_cases.py; README
-there): evogym's own `Sim.translate_object` moved the robot (or Catcher-v0's package) right after
-reset, and we move ours by the same (dx, dy) in `env.sim.state`, then replay the same actions.
+"""Task branches the random robots of tests/data/evogym32 never reach (goals of BridgeWalker-v0,
+CaveCrawler-v0, Climber-v0/-v1 and Traverser-v0, Traverser-v0's floor sight over its blocks,
+Catcher-v0's package below y = 0.5), against evogym 2.0.0 episodes that start from a moved state
+(`state_cases.npz`, recorded by bench/evogym_state_cases.py; README there): evogym's own
+`Sim.translate_object` moved the robot (or Catcher-v0's package) right after reset, and we move ours
+by the same (dx, dy) in `env.sim.state`, then replay the same actions.
 
 Per case: the moved points equal evogym's, and every step's reward, observation (floor and ceiling
-sight included), robot COM and the termination step match evogym. The goal cases come in pairs, the
-COM put 0.005 (a twentieth of a voxel) past and short of the goal line, so a goal or top-of-pipe
-threshold off by a voxel in either direction fails one of them.
+sight included), robot COM (and package COM) and the termination step match evogym. The goal cases
+come in pairs, the COM put 0.005 (a twentieth of a voxel) past and short of the goal line, so a goal
+or top-of-pipe threshold off by a voxel in either direction fails one of them.
 """
 
 from __future__ import annotations
@@ -118,10 +120,11 @@ def test_moved_state_matches_evogym(data, data_dir, name):
 def test_cases_reach_the_branches(data, data_dir):
     """The recordings do reach what they are for (so the comparisons above test those branches)."""
     cases = {c["name"]: c for c in meta(data_dir)}
-    for task in ("bridge", "cave", "climber", "traverser"):
-        past = cases[f"{task}_past_goal" if task != "climber" else "climber_past_top"]
-        assert past["term_step"] == 0
+    for name in ("bridge_past_goal", "cave_past_goal", "climber_past_top", "climber_v0_past_top",
+                 "traverser_past_goal"):
+        assert cases[name]["term_step"] == 0
     assert cases["climber_short_of_top"]["term_step"] == -1
+    assert cases["climber_v0_short_of_top"]["term_step"] == -1
     for name in ("bridge_short_of_goal", "cave_short_of_goal", "traverser_short_of_goal"):
         assert cases[name]["term_step"] > 0  # walks or tips over the line later
     # Catcher-v0: the package falls through y = 0.5 mid-episode, so both reward branches run
