@@ -152,7 +152,9 @@ class BatchEnv:
         worlds = range(self.n_worlds) if mask is None else np.nonzero(mask)[0]
         for w in worlds:
             one = {k: v[w] for k, v in self.task_state.items()}
-            for name, cell in self.spec.placement(one).items():
+            cells = self.spec.placement(one)
+            self.spec.check_placement(cells)
+            for name, cell in cells.items():
                 self.sim.place_object(w, name, cell)
 
     # ------------------------------------------------------------------ API

@@ -88,6 +88,32 @@ class TaskSpec:
     objects: tuple[AddedObject, ...] = ()  # objects added in code, in the order evogym adds them
     placement: Placement | None = None  # cells of the per_world objects from a world's state
 
+    def __post_init__(self) -> None:
+        """A per_world object with no placement function (or a placement with no per_world object
+        to place) would otherwise fail only at the first reset, far from the spec: fail here, at
+        registration, naming the task and the object."""
+        per_world = [o.name for o in self.objects if o.per_world]
+        if per_world and self.placement is None:
+            raise ValueError(f"task {self.name}: per_world object {per_world[0]!r} has no placement "
+                             "(TaskSpec.placement is None)")
+        if self.placement is not None and not per_world:
+            raise ValueError(f"task {self.name}: placement given but no object is per_world")
+
+    def check_placement(self, cells: dict[str, tuple[int, int]]) -> None:
+        """ValueError (one line, naming the task and the object) unless `cells`, what `placement`
+        returned, places exactly the per_world objects: a name outside them would move a shared
+        object or none at all, and a per_world object left out would silently keep the last
+        episode's cell."""
+        per_world = [o.name for o in self.objects if o.per_world]
+        for name in cells:
+            if name not in per_world:
+                raise ValueError(f"task {self.name}: placement names {name!r}, which is not a "
+                                 f"per_world object (per_world objects: {', '.join(per_world)})")
+        for name in per_world:
+            if name not in cells:
+                raise ValueError(f"task {self.name}: per_world object {name!r} has no placement "
+                                 "(missing from what TaskSpec.placement returned)")
+
     def obs_dim(self, n_points: int) -> int:
         """evogym's observation length for a robot of n points."""
         return sum(2 * n_points if b.width < 0 else b.width for b in self.observation)

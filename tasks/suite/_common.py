@@ -16,6 +16,20 @@ def dx(before: Measure, after: Measure) -> np.ndarray:
     return (after.com - before.com)[:, 0]
 
 
+def dy(before: Measure, after: Measure) -> np.ndarray:
+    """Upward progress of the robot's COM (the climbers' reward)."""
+    return (after.com - before.com)[:, 1]
+
+
+def reached_height(y: float, bonus: float = 1.0):
+    """Termination: +bonus and the episode ends once the robot's COM is above height y (world
+    units), e.g. the top of a climber's pipe. Pass y as evogym writes it (e.g. 65 * 0.1) to get
+    its double bit for bit."""
+    def termination(before: Measure, after: Measure):
+        return np.full(len(after.com), bonus), after.com[:, 1] > y
+    return termination
+
+
 def upside_down(lo: float = math.pi / 2, hi: float = 3 * math.pi / 2):
     """Termination: -3 and the episode ends while the robot's orientation is in (lo, hi)."""
     def termination(before: Measure, after: Measure):

@@ -51,3 +51,43 @@ def _scene_of(env: BatchEnv) -> O.Scene:
     com, vcom = env._robot_coms()
     return O.Scene(pos=pos, vel=vel, mask=env._mask, n_points=env.n_points, com=com, vcom=vcom,
                    pos0=env._pos0, terrain=env._terrain, object_points=env._object_points)
+
+
+def test_placement_and_per_world_objects_must_agree(monkeypatch):
+    """A spec whose placement and per_world objects disagree fails with one ValueError line naming
+    the task and the object: at registration (spec construction) where the spec alone shows it, at
+    env construction (the first placement) where only the placement's result does."""
+    import dataclasses
+
+    from tasks.spec import AddedObject
+    from tasks.suite import catcher
+
+    base = catcher.SPEC
+    shared = AddedObject("peg3", "peg.json", (30, 30))
+    with pytest.raises(ValueError, match=r"^task Catcher-v0: per_world object 'package' has no "
+                                         r"placement \(TaskSpec.placement is None\)$"):
+        dataclasses.replace(base, placement=None)
+    with pytest.raises(ValueError, match=r"^task Catcher-v0: placement given but no object is "
+                                         r"per_world$"):
+        dataclasses.replace(base, objects=(shared,))
+
+    def build(placement):
+        spec = dataclasses.replace(base, objects=base.objects + (shared,), placement=placement)
+        monkeypatch.setitem(TASKS, spec.name, spec)
+        task_world.cache_clear()
+        try:
+            return BatchEnv(spec.name, [np.array([[3, 3, 3], [3, 0, 3]])])
+        finally:
+            task_world.cache_clear()
+
+    body_err = r"^task Catcher-v0: placement names 'peg3', which is not a per_world object " \
+               r"\(per_world objects: package, peg1, peg2\)$"
+    with pytest.raises(ValueError, match=body_err):
+        build(lambda state: {**catcher.placement(state), "peg3": (31, 30)})
+    with pytest.raises(ValueError, match=r"^task Catcher-v0: placement names 'ground'"):
+        build(lambda state: {**catcher.placement(state), "ground": (0, 0)})
+    with pytest.raises(ValueError, match=r"^task Catcher-v0: per_world object 'peg2' has no "
+                                         r"placement \(missing from what TaskSpec.placement "
+                                         r"returned\)$"):
+        build(lambda state: {k: v for k, v in catcher.placement(state).items() if k != "peg2"})
+    assert build(catcher.placement).n_worlds == 1  # the real placement passes
