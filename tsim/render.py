@@ -240,6 +240,15 @@ class Renderer:
         self.camera.reset()
         self.view = None
 
+    def _fits(self, points: np.ndarray) -> bool:
+        """Whether points (2, K) fit in 90 % of the view: the camera follows the robot and the
+        loose objects together only then, so the robot never leaves the picture."""
+        pts = points[:, np.isfinite(points).all(axis=0)]
+        if pts.shape[1] == 0:
+            return True
+        span = pts.max(axis=1) - pts.min(axis=1)
+        return bool(span[0] <= 0.9 * self.width / self.scale and span[1] <= 0.9 * self.height / self.scale)
+
     def to_pixels(self, xy: np.ndarray) -> np.ndarray:
         """Pixel (column, row) coordinates (..., 2) of world points (..., 2) in the last frame."""
         if self.view is None:
@@ -279,7 +288,10 @@ class Renderer:
                 for name, (part, pos0) in self._objects.items()]
         tracked = [robot_points] + ([p for name, (_, p) in zip(self._objects, objs, strict=True)
                                      if name in self._loose] if self.track_objects else [])
-        x0, y1 = self.view = self.camera.update(np.concatenate(tracked, axis=1))
+        followed = np.concatenate(tracked, axis=1)
+        if not self._fits(followed):  # e.g. Catcher-v0's package high above, Traverser's blocks
+            followed = robot_points
+        x0, y1 = self.view = self.camera.update(followed)
         x_lo, x_hi = x0 - C.CELL, x0 + self.width / self.scale + C.CELL
         y_lo, y_hi = y1 - self.height / self.scale - C.CELL, y1 + C.CELL
 

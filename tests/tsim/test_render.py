@@ -106,6 +106,29 @@ def test_camera_follows_robot_smoothly():
     assert abs(r.view[0] - (x0 + 0.25)) <= 1 / 160
 
 
+def test_camera_keeps_the_robot_when_an_object_is_too_far_to_share_the_view():
+    """Catcher-v0's package starts ~4 units above the robot, more than the view's 2 units: the
+    camera follows the robot alone until both fit, then both."""
+    from tsim.sampling import sample_robot
+
+    world = task_world("Catcher-v0")
+    body = build_body(sample_robot((5, 5), np.random.default_rng(0)))
+    r = Renderer(world, body, 640, 320)
+    pts = body.place(22, 1)
+    package = world.object("package").body.place(21, 41)
+    r.frame(pts, {"package": package})
+    px = r.to_pixels(pts.T)
+    assert px[:, 0].min() >= 0 and px[:, 0].max() <= 640 and px[:, 1].min() >= 0 and px[:, 1].max() <= 320
+    robot_centre = (pts[0].min() + pts[0].max()) / 2
+    assert abs(r.view[0] + 2.0 - robot_centre) <= 1 / 160  # view 4 units wide, centred on it
+    # beside the robot, within the view's width: both are followed
+    near = package + np.array([[2.0], [pts[1].min() - package[1].min()]])
+    r.reset()
+    r.frame(pts, {"package": near})
+    both = np.concatenate([pts, near], axis=1)
+    assert abs(r.view[0] + 2.0 - (both[0].min() + both[0].max()) / 2) <= 1 / 160
+
+
 def test_non_finite_points_do_not_break_a_frame():
     """A blown-up robot (NaN points) is skipped; terrain still renders and the camera stays put."""
     body = build_body(BODY)
