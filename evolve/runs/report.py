@@ -140,6 +140,12 @@ def report_markdown(rows: list[dict]) -> str:
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
                   + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
                   + f" | {_ms([r['best_final'] for r in rs])} | {a} | {champ} | {pert} | {worst} |\n")
+    off = [r for r in rows if "replay" in r and abs(r["replay"] - r["champion_fitness"]) > 1e-9]
+    if off:  # champion.json alone must reproduce the fitness; say plainly where it does not
+        out.write(f"\n**{len(off)} of {sum('replay' in r for r in rows)} champions do not replay to "
+                  "their recorded fitness** from champion.json (unperturbed, > 1e-9): "
+                  + "; ".join(f"{r['run']} {r['champion_fitness']:.6g} -> {r['replay']:.6g}"
+                              for r in off) + ".\n")
     return out.getvalue()
 
 

@@ -113,3 +113,19 @@ def test_a_sweep_file_that_is_not_a_mapping_and_a_folder_that_is_not_a_sweep(tmp
     assert "is not a sweep directory" in capsys.readouterr().err
     assert main(["report", str(tmp_path)]) == 2
     assert "holds no run directories" in capsys.readouterr().err
+
+
+def test_report_names_champions_that_do_not_replay_to_their_fitness():
+    """champion.json alone must reproduce a run's fitness; where the unperturbed replay differs,
+    report.md says so with both numbers, and says nothing when every replay agrees."""
+    from evolve.runs.report import report_markdown
+
+    base = {"method": "direct", "task": "Walker-v0", "generations": 100, "best_final": 2.0,
+            "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "robust_mean": 2.0,
+            "robust_sd": 0.0, "robust_min": 2.0, "champion_fitness": 2.0}
+    rows = [{**base, "seed": 0, "run": "direct-Walker-v0-s0", "replay": 2.0},
+            {**base, "seed": 1, "run": "direct-Walker-v0-s1", "replay": 1.5}]
+    text = report_markdown(rows)
+    assert "1 of 2 champions do not replay" in text and "direct-Walker-v0-s1 2 -> 1.5" in text
+    rows[1]["replay"] = 2.0
+    assert "do not replay" not in report_markdown(rows)
