@@ -1,8 +1,9 @@
 """Many arbitrary-topology neat-python networks evaluated together.
 
 Each genome is compiled to layers by depth (neat-python's feed-forward layering); layer d of every
-genome is padded to the widest layer d in the batch, so one layer is one einsum over the whole
-batch: values[:, slots_d] = act(bias + response * (values @ W_d)). Slots: the inputs, then each
+genome is padded to the widest layer d in the batch, so one layer is one pass over the whole
+batch: values[:, slots_d] = act(bias + response * (values @ W_d)), the products summed in slot
+order (see `forward`). Slots: the inputs, then each
 depth's padded block, then one slot that stays 0 (outputs no enabled path reaches read it, as in
 neat-python).
 """
@@ -68,6 +69,8 @@ class NetworkBatch:
                 if k in slot:
                     self.out_slot[b, o] = slot[k]
         self._used = [sorted(set(np.unique(a).tolist())) for *_, a in self.blocks]
+        # source slots with a weight in some network of the batch, per depth, in slot order
+        self._sources = [np.nonzero(np.any(W != 0.0, axis=(0, 2)))[0].tolist() for _, W, *_ in self.blocks]
 
     def forward(self, x: np.ndarray) -> np.ndarray:
         """x (B, Q, n_in) -> (B, Q, n_out), network b on its Q rows; ValueError for another B or
@@ -77,8 +80,16 @@ class NetworkBatch:
             raise ValueError(f"expected inputs ({len(self.out_slot)}, Q, {self.n_in}), got {x.shape}")
         v = np.zeros((B, Q, self.n_slots))
         v[:, :, :n] = x
-        for (start, W, bias, resp, act), used in zip(self.blocks, self._used, strict=True):
-            z = bias[:, None, :] + resp[:, None, :] * np.einsum("bqs,bsw->bqw", v, W)
+        for (start, W, bias, resp, act), used, srcs in zip(self.blocks, self._used, self._sources,
+                                                          strict=True):
+            # each node's weighted inputs summed one by one in slot order (inputs, then earlier
+            # nodes by depth and key): the order of `GraphController`, whatever the batch's
+            # padding; einsum's grouping of the terms moved with the padding, so a network's
+            # outputs depended in the last bits on the batch it was in
+            acc = np.zeros((B, Q, W.shape[2]))
+            for s in srcs:
+                acc += v[:, :, s, None] * W[:, None, s, :]
+            z = bias[:, None, :] + resp[:, None, :] * acc
             out = np.zeros_like(z)
             for a in used:
                 m = (act == a)[:, None, :]

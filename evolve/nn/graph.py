@@ -31,6 +31,12 @@ class GraphController:
     # action is output[output_offset]
     cell_inputs: np.ndarray | None = None
 
+    def __post_init__(self) -> None:
+        # the slot of each value in `NetworkBatch`: inputs, then nodes in evaluation order (by
+        # depth, then key); a node's inputs are summed in this order
+        keys = [*self.input_keys, *(n["key"] for n in self.nodes)]
+        self._slot = {k: j for j, k in enumerate(keys)}
+
     @classmethod
     def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
                     output_offset: int, action_cells: np.ndarray,
@@ -54,7 +60,9 @@ class GraphController:
             x[0:2] = xy
         v = dict(zip(self.input_keys, x, strict=True))
         for n in self.nodes:
-            s = sum(w * v[i] for i, w in n["links"])
+            s = 0.0
+            for i, w in sorted(n["links"], key=lambda link: self._slot[link[0]]):
+                s += v[i] * w  # one by one in slot order: `NetworkBatch`'s arithmetic to the bit
             v[n["key"]] = float(NEAT_ACTIVATIONS[n["activation"]](np.float64(n["bias"] + n["response"] * s)))
         return np.array([v.get(k, 0.0) for k in self.output_keys])
 
@@ -75,8 +83,10 @@ class GraphController:
                 "output_offset": self.output_offset, "action_cells": self.action_cells.tolist(),
                 "cell_inputs": None if self.cell_inputs is None else self.cell_inputs.tolist(),
                 "doc": "inputs: zeros with the observation at [input_offset, +input_size); nodes in "
-                       "order: value = activation(bias + response * sum(w * value[src])), neat-python "
-                       "activations; action = 1.1 + 0.5 * output[output_offset + action_cells]; when "
+                       "order: value = activation(bias + response * s), s = 0 plus value[src] * w added one "
+                       "link at a time, sources ordered inputs first (by index) then nodes (by list "
+                       "position), neat-python activations; action = 1.1 + 0.5 * "
+                       "output[output_offset + action_cells]; when "
                        "cell_inputs is given, actuator i is a query of its own with cell_inputs[i] "
                        "in inputs 0-1 and action 1.1 + 0.5 * output[output_offset]"}
 

@@ -38,3 +38,22 @@ def test_per_cell_queries_match_the_json_controller(neat_config, genomes):
         want = ctrl.act(obs[b])
         assert np.max(np.abs(got[b, :len(cells[b])] - want)) <= 1e-12
     assert np.ptp(got[0]) > 1e-6  # actuators at different cells get different actions
+
+
+def test_a_network_computes_the_same_bits_alone_in_any_batch_and_from_its_json(neat_config, genomes):
+    """A champion's JSON must replay its evolution episode exactly: a network's outputs may not
+    depend on the batch it was evaluated in (padding), and the JSON controller's arithmetic is the
+    batch's (each node's inputs summed one by one in slot order). With einsum, 3 of these 40
+    networks differed alone and 6 from their JSON (by last bits)."""
+    from evolve.nn.graph import GraphController
+
+    cfg = neat_config(outputs=6)
+    gs = genomes(cfg, 40, mutations=40, seed=5)
+    for q in (1, 3):
+        x = np.random.default_rng(q).uniform(-3, 3, (len(gs), q, 7))
+        batch = NetworkBatch(gs, cfg.genome_config).forward(x)
+        for b, g in enumerate(gs):
+            assert np.array_equal(NetworkBatch([g], cfg.genome_config).forward(x[b:b + 1])[0], batch[b])
+            ctrl = GraphController.from_json(GraphController.from_genome(
+                g, cfg.genome_config, 7, 0, 0, np.arange(6)).to_json())
+            assert np.array_equal(np.array([ctrl.outputs(row) for row in x[b]]), batch[b])
