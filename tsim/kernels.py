@@ -372,11 +372,10 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
 
 
 @ti.func
-def _rk4(n_pts, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
-         pos: ti.template(), vel: ti.template(), fcol: ti.template(), xs: ti.template(),
-         vs: ti.template(), frc: ti.template(), adx: ti.template(), adv: ti.template(),
-         leq: ti.template(), ea: ti.template(), eb: ti.template(), ek: ti.template(),
-         egoal: ti.template(), sfx: ti.template(), sfy: ti.template()):
+def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.template(),
+         xs: ti.template(), vs: ti.template(), frc: ti.template(), adx: ti.template(),
+         adv: ti.template(), leq: ti.template(), ea: ti.template(), eb: ti.template(),
+         ek: ti.template(), egoal: ti.template(), sfx: ti.template(), sfy: ti.template()):
     """Rest-length update, then classical RK4 on (pos, vel) with dt = 1e-4 (springs, drag,
     gravity, ground plane, contact forces frozen across the stages); x, y interleaved. The 4
     stages are unrolled; stage 0 (stage state = substep state) also sets the current rest lengths,
@@ -596,8 +595,8 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 if count < 0:
                     status = NONFINITE
                 else:
-                    _rk4(n_pts, n_edges, eio, efo, edge_i, edge_f, pos, vel, fcol, xs, vs,
-                           frc, adx, adv, leq, ea, eb, ek, egoal, ccx, ccy)
+                    _rk4(n_pts, n_edges, pos, vel, fcol, xs, vs, frc, adx, adv, leq, ea, eb, ek,
+                         egoal, ccx, ccy)
                     _hold_fixed(b, counts, lists, pos, vel, pl)
                     if ti.static("constraints" not in PROFILE_SKIP):
                         _constraints(b, n_edges, counts, ea, eb, erest, vox_i, lists, pos, vel,
@@ -634,10 +633,9 @@ def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i
                 sc: ti.template(), block: ti.template()):
     """One env step (n_sub substeps) of every running world, worlds in parallel (`block` worlds
     per thread block: 1 on a CPU, where Taichi deals blocks to its threads, a warp's multiple on
-    a GPU). state, edge_i
-    and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6) arrays; every world fits
-    the capacity (pc points, ec edges, sc surface voxels). The current rest lengths live in a
-    local array (edge_f's column E_LEQ keeps its initial value)."""
+    a GPU). state, edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6)
+    arrays; every world fits the capacity (pc points, ec edges, sc surface voxels). The current
+    rest lengths live in a local array (edge_f's column E_LEQ keeps its initial value)."""
     ti.loop_config(block_dim=block)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
