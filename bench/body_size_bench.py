@@ -22,7 +22,6 @@ import os
 import subprocess
 import sys
 import tempfile
-import time
 from pathlib import Path
 
 
@@ -36,8 +35,7 @@ os.environ["SGR_THREADS"] = _threads_arg()
 
 import numpy as np  # noqa: E402
 
-from tasks.bench import sinusoid  # noqa: E402
-from tasks.env import BatchEnv  # noqa: E402
+from tasks.bench import bench_bodies  # noqa: E402
 from tsim.sampling import sample_robot  # noqa: E402
 
 EVOGYM_PY = Path.home() / ".cache/evogym-venv/bin/python"
@@ -53,17 +51,6 @@ def bodies_of_size(n: int, count: int, seed: int = 0) -> tuple[list[np.ndarray],
             return [sample_robot((n, n), rng, pd=pd, max_tries=100_000) for _ in range(count)], empty
         except RuntimeError:
             empty -= 0.05
-
-
-def sgr_speed(bodies: list[np.ndarray], task: str, steps: int) -> float:
-    """Robot-steps/s of one BatchEnv over all bodies (compile and first step excluded)."""
-    env = BatchEnv(task, bodies, episode_steps=steps + 2)
-    A = env.sim.max_actuators
-    env.step(np.ones((len(bodies), A)))
-    t0 = time.perf_counter()
-    for t in range(steps):
-        env.step(sinusoid(t, A)[None, :].repeat(len(bodies), 0))
-    return len(bodies) * steps / (time.perf_counter() - t0)
 
 
 def evogym_speed(bodies: list[np.ndarray], task: str, steps: int, python: Path) -> float | None:
@@ -92,7 +79,7 @@ def main() -> None:
     rows = []
     for n in args.sizes:
         bodies, empty = bodies_of_size(n, args.robots)
-        ours = sgr_speed(bodies, args.task, args.steps)
+        ours = bench_bodies(args.task, bodies, args.steps, physics=False)["robot_steps_per_s"]
         theirs = evogym_speed(bodies, args.task, args.steps, args.evogym_python)
         per_core = ours / args.threads
         rows.append({"size": n, "robots": args.robots, "empty_weight": empty,

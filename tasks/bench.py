@@ -19,11 +19,17 @@ def sinusoid(t: int, n_act: int, period: float = 20.0) -> np.ndarray:
 
 
 def bench(task: str = "Walker-v0", robots: int = 128, steps: int = 100, seed: int = 0) -> dict:
-    """Time `steps` env steps of `robots` robots; compilation and the first step are excluded."""
+    """Time `steps` env steps of `robots` random 5x5 robots; compilation and the first step are
+    excluded."""
     if robots < 1 or steps < 1:
         raise ValueError("robots and steps must be >= 1")
     rng = np.random.default_rng(seed)
-    bodies = [sample_robot((5, 5), rng) for _ in range(robots)]
+    return bench_bodies(task, [sample_robot((5, 5), rng) for _ in range(robots)], steps)
+
+
+def bench_bodies(task: str, bodies: list[np.ndarray], steps: int, physics: bool = True) -> dict:
+    """`bench` on given bodies (any sizes); `physics` also times `BatchSim.step` alone."""
+    robots = len(bodies)
     t0 = time.perf_counter()
     env = BatchEnv(task, bodies, episode_steps=steps + 1)
     A = env.sim.max_actuators
@@ -34,14 +40,13 @@ def bench(task: str = "Walker-v0", robots: int = 128, steps: int = 100, seed: in
     for t in range(steps):
         env.step(acts[t])
     wall = time.perf_counter() - t0
-    # physics alone, no observations or rewards
-    env.reset()
-    t1 = time.perf_counter()
-    for t in range(steps):
-        env.sim.set_actions(acts[t])
-        env.sim.step()
-    sim_s = time.perf_counter() - t1
-    return {"robot_steps_per_s": robots * steps / wall,
-            "physics_robot_steps_per_s": robots * steps / sim_s,
-            "compile_s": compile_s, "threads": runtime.threads(), "robots": robots,
-            "steps": steps, "task": task}
+    out = {"robot_steps_per_s": robots * steps / wall, "compile_s": compile_s,
+           "threads": runtime.threads(), "robots": robots, "steps": steps, "task": task}
+    if physics:  # no observations or rewards
+        env.reset()
+        t1 = time.perf_counter()
+        for t in range(steps):
+            env.sim.set_actions(acts[t])
+            env.sim.step()
+        out["physics_robot_steps_per_s"] = robots * steps / (time.perf_counter() - t1)
+    return out
