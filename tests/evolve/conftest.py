@@ -2,6 +2,7 @@ import random
 
 import neat
 import pytest
+import yaml
 
 from evolve.search.neat_ini import load_neat_config, neat_ini_text
 
@@ -16,6 +17,22 @@ def neat_config(tmp_path, repo_root):
         p = tmp_path / f"neat-{pop}-{outputs}.ini"
         p.write_text(ini)
         return load_neat_config(p)
+    return make
+
+
+@pytest.fixture()
+def shipped_config(tmp_path, repo_root):
+    """A shipped `configs/<method>/<task>.yaml` with `changes`, its neat ini paths made absolute,
+    written to tmp_path (a tiny run of the real config)."""
+    def make(method: str, task: str = "Walker-v0", **changes):
+        cfg = yaml.safe_load((repo_root / f"configs/{method}/{task}.yaml").read_text())
+        cfg.update(changes)
+        for key in ("neat_config", "controller_neat_config"):
+            if key in cfg:
+                cfg[key] = str((repo_root / f"configs/{method}" / cfg[key]).resolve())
+        p = tmp_path / f"{method}-{task}.yaml"
+        p.write_text(yaml.safe_dump(cfg))
+        return p
     return make
 
 

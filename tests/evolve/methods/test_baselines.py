@@ -15,36 +15,27 @@ from evolve.search.neat_search import NeatSearch
 TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 
 
-def _tiny(tmp_path, repo_root, method, task, **extra):
-    import yaml
-
-    cfg = yaml.safe_load((repo_root / f"configs/{method}/{task}.yaml").read_text())
-    cfg.update({"generations": 2, "pop_size": 6, "episode_steps": 8, "render_champion": False, **extra})
-    for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str((repo_root / f"configs/{method}" / cfg[key]).resolve())
-    if method == "nested":
-        cfg.update(inner_pop_size=4, inner_generations=2)
-    p = tmp_path / f"{method}-{task}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
-    return p
+def _tiny(shipped_config, method, task, **extra):
+    nested = {"inner_pop_size": 4, "inner_generations": 2} if method == "nested" else {}
+    return shipped_config(method, task, **{"generations": 2, "pop_size": 6, "episode_steps": 8,
+                                           "render_champion": False, **extra, **nested})
 
 
 @pytest.mark.parametrize("method", ["direct", "nested"])
 @pytest.mark.parametrize("task", TASKS)
-def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, repo_root, monkeypatch, method,
-                                                          task):
-    _run_and_replay(tmp_path, repo_root, monkeypatch, method, task)
+def test_baseline_runs_end_to_end_and_its_champion_replays(tmp_path, shipped_config, monkeypatch,
+                                                          method, task):
+    _run_and_replay(tmp_path, shipped_config, monkeypatch, method, task)
 
 
-def test_direct_per_cell_layout_runs_and_its_champion_replays(tmp_path, repo_root, monkeypatch):
-    champ = _run_and_replay(tmp_path, repo_root, monkeypatch, "direct", "ObstacleTraverser-v1",
+def test_direct_per_cell_layout_runs_and_its_champion_replays(tmp_path, shipped_config, monkeypatch):
+    champ = _run_and_replay(tmp_path, shipped_config, monkeypatch, "direct", "ObstacleTraverser-v1",
                             layout="per_cell")
     cells = champ["controller"]["cell_inputs"]
     assert cells is not None and len(cells) == len(champ["controller"]["action_cells"])
 
 
-def _run_and_replay(tmp_path, repo_root, monkeypatch, method, task, **extra) -> dict:
+def _run_and_replay(tmp_path, shipped_config, monkeypatch, method, task, **extra) -> dict:
     # size of the outer population each generation is told about (the outer search is the one with
     # an evaluate callable; the nested baseline's inner controller searches have none)
     sizes = []
@@ -57,7 +48,7 @@ def _run_and_replay(tmp_path, repo_root, monkeypatch, method, task, **extra) -> 
 
     monkeypatch.setattr(NeatSearch, "tell", spy)
     out = tmp_path / "run"
-    assert main(["evolve", "--config", str(_tiny(tmp_path, repo_root, method, task, **extra)),
+    assert main(["evolve", "--config", str(_tiny(shipped_config, method, task, **extra)),
                  "--out", str(out), "--quiet"]) == 0
     rows = RunDir(out).rows()
     assert [int(r["generation"]) for r in rows] == [0, 1]
@@ -77,8 +68,8 @@ def _run_and_replay(tmp_path, repo_root, monkeypatch, method, task, **extra) -> 
     return champ
 
 
-def test_nested_run_resumes_with_identical_numbers(tmp_path, repo_root):
-    p = _tiny(tmp_path, repo_root, "nested", "Walker-v0", generations=3, checkpoint_every=1)
+def test_nested_run_resumes_with_identical_numbers(tmp_path, shipped_config):
+    p = _tiny(shipped_config, "nested", "Walker-v0", generations=3, checkpoint_every=1)
     full = Experiment.create(str(p), str(tmp_path / "full"), {}, quiet=True)
     full.run_all()
     part = Experiment.create(str(p), str(tmp_path / "part"), {}, quiet=True)
@@ -107,11 +98,12 @@ def _die_after(step, n):
     return dying
 
 
-def test_nested_inner_populations_stay_bounded_and_the_champion_keeps_its_controller(tmp_path, repo_root):
+def test_nested_inner_populations_stay_bounded_and_the_champion_keeps_its_controller(tmp_path,
+                                                                                    shipped_config):
     """With inner_keep_generations K, only the bodies of the last K outer generations and the
     champion's body keep an inner population; the champion JSON still replays to its fitness."""
     keep = 2
-    p = _tiny(tmp_path, repo_root, "nested", "Walker-v0", generations=8, inner_keep_generations=keep)
+    p = _tiny(shipped_config, "nested", "Walker-v0", generations=8, inner_keep_generations=keep)
     exp = Experiment.create(str(p), str(tmp_path / "run"), {}, quiet=True)
     seen: list[set[bytes]] = []
     evaluate = exp.problem.evaluate

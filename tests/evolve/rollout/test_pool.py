@@ -116,20 +116,12 @@ def test_worker_counts_are_checked():
 
 
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
-def test_runs_give_the_same_results_with_one_or_two_worker_processes(tmp_path, repo_root, method):
-    import yaml
-
+def test_runs_give_the_same_results_with_one_or_two_worker_processes(tmp_path, shipped_config, method):
     from evolve.runs.experiment import Experiment
 
-    cfg = yaml.safe_load((repo_root / f"configs/{method}/Walker-v0.yaml").read_text())
-    cfg.update({"generations": 2, "pop_size": 8, "episode_steps": 30, "render_champion": False})
-    for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str((repo_root / f"configs/{method}" / cfg[key]).resolve())
-    if method == "nested":
-        cfg.update(inner_pop_size=4, inner_generations=1)
-    p = tmp_path / "cfg.yaml"
-    p.write_text(yaml.safe_dump(cfg))
+    nested = {"inner_pop_size": 4, "inner_generations": 1} if method == "nested" else {}
+    p = shipped_config(method, generations=2, pop_size=8, episode_steps=30, render_champion=False,
+                       **nested)
     rows = {}
     for workers in (1, 2):
         exp = Experiment.create(str(p), str(tmp_path / f"w{workers}"), {"workers": workers}, quiet=True)

@@ -82,17 +82,10 @@ def _write(path, data):
 
 
 # ---------------------------------------------------------------------------------- rollout pool
-def _config(tmp_path, repo_root, method: str):
-    cfg = yaml.safe_load((repo_root / f"configs/{method}/Walker-v0.yaml").read_text())
-    cfg.update({"generations": 3, "pop_size": 8, "episode_steps": 10, "render_champion": False})
-    for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str((repo_root / f"configs/{method}" / cfg[key]).resolve())
-    if method == "nested":
-        cfg.update(pop_size=4, inner_pop_size=4, inner_generations=1)
-    p = tmp_path / f"{method}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
-    return p
+def _config(shipped_config, method: str):
+    nested = {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1} if method == "nested" else {}
+    return shipped_config(method, **{"generations": 3, "pop_size": 8, "episode_steps": 10,
+                                     "render_champion": False, **nested})
 
 
 def _run(config, out, workers, during=None) -> list[tuple]:
@@ -109,21 +102,21 @@ def _run(config, out, workers, during=None) -> list[tuple]:
 _LOCAL: dict[str, list[tuple]] = {}
 
 
-def _local(tmp_path, repo_root, method):
+def _local(tmp_path, shipped_config, method):
     if method not in _LOCAL:
-        _LOCAL[method] = _run(_config(tmp_path, repo_root, method), tmp_path / f"{method}-w1", 1)
+        _LOCAL[method] = _run(_config(shipped_config, method), tmp_path / f"{method}-w1", 1)
     return _LOCAL[method]
 
 
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
-def test_workers_ray_gives_the_results_of_one_local_worker(tmp_path, repo_root, method):
-    on_ray = _run(_config(tmp_path, repo_root, method), tmp_path / "ray", "ray")
-    assert on_ray == _local(tmp_path, repo_root, method)
+def test_workers_ray_gives_the_results_of_one_local_worker(tmp_path, shipped_config, method):
+    on_ray = _run(_config(shipped_config, method), tmp_path / "ray", "ray")
+    assert on_ray == _local(tmp_path, shipped_config, method)
     assert len(on_ray) == 3
 
 
-def test_an_actor_killed_mid_generation_is_replaced_and_the_run_unchanged(tmp_path, repo_root):
-    exp = Experiment.create(str(_config(tmp_path, repo_root, "sgr")), str(tmp_path / "ray"),
+def test_an_actor_killed_mid_generation_is_replaced_and_the_run_unchanged(tmp_path, shipped_config):
+    exp = Experiment.create(str(_config(shipped_config, "sgr")), str(tmp_path / "ray"),
                             {"workers": "ray"}, quiet=True)
     pool = exp.pool
     try:
@@ -158,14 +151,14 @@ def test_an_actor_killed_mid_generation_is_replaced_and_the_run_unchanged(tmp_pa
         exp.close()
     assert seen["killed"] < seen["returned"], "the actor was killed after its chunk"
     assert after[0] != before[0] and after[1] == before[1]  # replaced; the other one kept
-    assert fitness(tmp_path / "ray") == _local(tmp_path, repo_root, "sgr")
+    assert fitness(tmp_path / "ray") == _local(tmp_path, shipped_config, "sgr")
 
 
-def test_workers_ray_starts_ray_when_none_runs_and_stops_it_after(tmp_path, repo_root, monkeypatch):
+def test_workers_ray_starts_ray_when_none_runs_and_stops_it_after(tmp_path, shipped_config, monkeypatch):
     """`sgr evolve --workers ray` outside a cluster: the pool starts a local Ray in the middle of
     generation 0, which must not change the run (Ray's start-up draws from Python's `random`)."""
     ray.shutdown()  # the module's Ray: the last test of the module
     monkeypatch.delenv("RAY_ADDRESS", raising=False)
-    rows = _run(_config(tmp_path, repo_root, "sgr"), tmp_path / "ray", "ray")
+    rows = _run(_config(shipped_config, "sgr"), tmp_path / "ray", "ray")
     assert not ray.is_initialized()
-    assert rows == _local(tmp_path, repo_root, "sgr")
+    assert rows == _local(tmp_path, shipped_config, "sgr")
