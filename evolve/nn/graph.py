@@ -32,10 +32,11 @@ class GraphController:
     cell_inputs: np.ndarray | None = None
 
     def __post_init__(self) -> None:
-        # the slot of each value in `NetworkBatch`: inputs, then nodes in evaluation order (by
-        # depth, then key); a node's inputs are summed in this order
+        # each node's links sorted by their source's slot in `NetworkBatch` (inputs, then nodes in
+        # evaluation order: by depth, then key), the order its inputs are summed in; sorted once
         keys = [*self.input_keys, *(n["key"] for n in self.nodes)]
-        self._slot = {k: j for j, k in enumerate(keys)}
+        slot = {k: j for j, k in enumerate(keys)}
+        self._links = [sorted(n["links"], key=lambda link: slot[link[0]]) for n in self.nodes]
 
     @classmethod
     def from_genome(cls, genome, genome_config, input_size: int, input_offset: int,
@@ -59,9 +60,9 @@ class GraphController:
         if xy is not None:
             x[0:2] = xy
         v = dict(zip(self.input_keys, x, strict=True))
-        for n in self.nodes:
+        for n, links in zip(self.nodes, self._links, strict=True):
             s = 0.0
-            for i, w in sorted(n["links"], key=lambda link: self._slot[link[0]]):
+            for i, w in links:
                 s += v[i] * w  # one by one in slot order: `NetworkBatch`'s arithmetic to the bit
             v[n["key"]] = float(NEAT_ACTIVATIONS[n["activation"]](np.float64(n["bias"] + n["response"] * s)))
         return np.array([v.get(k, 0.0) for k in self.output_keys])
