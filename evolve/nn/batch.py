@@ -3,9 +3,8 @@
 Each genome is compiled to layers by depth (neat-python's feed-forward layering); layer d of every
 genome is padded to the widest layer d in the batch, so one layer is one pass over the whole
 batch: values[:, slots_d] = act(bias + response * (values @ W_d)), the products summed in slot
-order (see `forward`). Slots: the inputs, then each
-depth's padded block, then one slot that stays 0 (outputs no enabled path reaches read it, as in
-neat-python).
+order (see `forward`). Slots: the inputs, then each depth's padded block, then one slot that stays
+0 (outputs no enabled path reaches read it, as in neat-python).
 """
 
 from __future__ import annotations
