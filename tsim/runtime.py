@@ -1,11 +1,10 @@
 """Taichi start-up: one `ti.init` per process, f64, CPU unless a GPU is asked for."""
 
-from __future__ import annotations
-
 import contextlib
 import io
 import os
 import sys
+import threading
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
 # warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0
@@ -82,7 +81,76 @@ def init(arch: str | None = None) -> str:
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
     _ARCH = arch
+    if arch == "cpu":
+        pin_threads()
     return _ARCH
+
+
+PINNED: dict[int, int] = {}  # Taichi worker thread id -> the CPU it is pinned to
+
+
+def pin_threads() -> dict[int, int]:
+    """Pin each of Taichi's CPU worker threads to its own CPU when they are as many as the CPUs
+    this process may use (the `sgr bench` / one-process case); $SGR_PIN=0 turns it off.
+
+    Why: Taichi's master thread wakes its workers at every launch. On the 2-vCPU VM, when the
+    Python thread had just been busy (observations, rewards), Linux often woke both workers on the
+    same CPU and moved one only after milliseconds: a 2-thread step kernel then took 6.5 ms
+    instead of 4.8 ms (BatchEnv 18k instead of 24k robot-steps/s, docs/BENCHMARKS.md). Where the
+    process has more CPUs than workers the scheduler has room and nothing is pinned. The workers
+    are found by their CPU time during a short parallel busy loop; if that does not single out
+    one thread per worker, nothing is pinned. Results do not depend on it (worlds are independent).
+    """
+    if PINNED or os.environ.get("SGR_PIN", "1") == "0" or not hasattr(os, "sched_setaffinity"):
+        return PINNED
+    n = threads()
+    try:
+        cpus = sorted(os.sched_getaffinity(0))
+    except OSError:
+        return PINNED
+    if n < 2 or n != len(cpus) or not os.path.isdir("/proc/self/task"):
+        return PINNED
+    out = ti.ndarray(ti.f64, 16 * n)
+    _busy(out, 100_000)  # compiles, and starts the pool
+    before = _thread_cpu_ns()
+    _busy(out, 200_000)
+    after = _thread_cpu_ns()
+    me = threading.get_native_id()
+    used = sorted(((after[t] - before.get(t, 0), t) for t in after if t != me), reverse=True)
+    workers = used[:n]
+    # each worker ran some of the 16 n tasks; the next busiest thread ran none of them
+    if len(workers) < n or workers[-1][0] < 4 * (used[n][0] if len(used) > n else 0) + 500_000:
+        return PINNED
+    for (_, tid), cpu in zip(workers, cpus, strict=True):
+        try:
+            os.sched_setaffinity(tid, {cpu})
+            PINNED[tid] = cpu
+        except OSError:
+            pass
+    return PINNED
+
+
+def _thread_cpu_ns() -> dict[int, int]:
+    """CPU time (ns) of each thread of this process, from /proc/self/task/<tid>/schedstat."""
+    times = {}
+    for name in os.listdir("/proc/self/task"):
+        try:
+            with open(f"/proc/self/task/{name}/schedstat") as f:
+                times[int(name)] = int(f.read().split()[0])
+        except (OSError, ValueError, IndexError):
+            pass
+    return times
+
+
+@ti.kernel
+def _busy(out: ti.types.ndarray(dtype=ti.f64, ndim=1), work: ti.i32):
+    """A parallel loop of len(out) tasks of `work` dependent multiply-adds (~0.1 ms per 100k)."""
+    ti.loop_config(block_dim=1)
+    for i in range(out.shape[0]):
+        x = 1.0 + i
+        for _ in range(work):
+            x = x * 0.999999 + 1e-7
+        out[i] = x
 
 
 def _threads_env() -> int | None:
