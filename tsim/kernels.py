@@ -121,6 +121,14 @@ def _in_box(x, y, x0, x1, y0, y1):
 # compiled kernel, and results do not depend on the tier (tests/tsim/test_kernels.py).
 # ------------------------------------------------------------------------------------------------
 
+# Contact pairs by sweep and prune along x or y: the same pairs in the same order as the plain
+# loop, so results do not depend on it. A kernel's `sweep_mode` (compile time): SWEEP_OFF the plain
+# loop only (compact bodies, where the sweep's code alone cost ~5 % at 16x16); SWEEP_AUTO per world
+# and env step, where it has at least SWEEP_MIN surface voxels and `_choose_sweep` finds an axis
+# that pays (long worlds such as BridgeWalker's: +40 %); SWEEP_ALWAYS everywhere (tests)
+SWEEP_OFF, SWEEP_AUTO, SWEEP_ALWAYS = 0, 1, 2
+SWEEP_MIN = 24
+SWEEP_RATIO = 8
 GPU_BLOCK = 64  # worlds per thread block on a GPU (each world is one thread)
 PC, EC, SC = 64, 160, 32  # tier 0: points, edges, surface voxels (a 5x5 robot and Thrower's box)
 NS = 8  # state columns
@@ -280,17 +288,153 @@ def _terrain_pair_acts(pos: ti.template(), sv: ti.template(), box: ti.template()
 
 
 @ti.func
+def _sort_along(n_surf, box: ti.template(), order: ti.template(), rank: ti.template(), a):
+    """Insertion sort of `order` (surface voxels) by their box's low edge along axis a (box
+    column: 0 x, 2 y), then `rank` = each voxel's place in it. The order of the last substep is
+    nearly right, so this is ~n steps."""
+    for k in range(1, n_surf):
+        v = order[k]
+        x = box[4 * v + a]
+        m = k
+        while m > 0:
+            u = order[m - 1]
+            if box[4 * u + a] > x:
+                order[m] = u
+                m -= 1
+            else:
+                break
+        order[m] = v
+    for k in range(n_surf):
+        rank[order[k]] = k
+
+
+@ti.func
+def _near(n_surf, w, box: ti.template(), order: ti.template(), a):
+    """Summed over the voxels (sorted along axis a), the voxels whose low edge lies within w (the
+    widest box) of theirs, both sides: about twice the pairs the sweep tests, against the plain
+    loop's n^2 / 2."""
+    total = 0
+    lo = 0
+    hi = 0
+    for k in range(n_surf):
+        x = box[4 * order[k] + a]
+        while box[4 * order[lo] + a] < x - w:
+            lo += 1
+        while hi < n_surf:
+            if box[4 * order[hi] + a] > x + w:
+                break
+            hi += 1
+        total += hi - lo
+    return total
+
+
+@ti.func
+def _choose_sweep(n_surf, wx, wy, box: ti.template(), order: ti.template(), rank: ti.template(),
+                  sweep: ti.template(), always: ti.template()):
+    """At the env step's first substep: sweep[0] = 1 and sweep[1] = the axis (box column 0 x, 2
+    y) along which the sweep tests fewest pairs, if that is at least SWEEP_RATIO times fewer than
+    the plain loop's (or `always`), else sweep[0] = 0. Long, flat worlds pass (BridgeWalker's
+    bridge ~19 along x, Climber-v1's wall ~21 along y); compact bodies do not (16x16: ~5.6)."""
+    _sort_along(n_surf, box, order, rank, 2)
+    near_y = _near(n_surf, wy, box, order, 2)
+    _sort_along(n_surf, box, order, rank, 0)
+    near_x = _near(n_surf, wx, box, order, 0)
+    sweep[0] = 1
+    sweep[1] = 0
+    best = near_x
+    if near_y < near_x:
+        sweep[1] = 2
+        best = near_y
+        _sort_along(n_surf, box, order, rank, 2)
+    if ti.static(not always):
+        if best * SWEEP_RATIO > n_surf * n_surf:
+            sweep[0] = 0
+
+
+@ti.func
+def _candidates(i, n_surf, w, box: ti.template(), order: ti.template(), rank: ti.template(),
+                cand: ti.template(), a):
+    """Surface voxels j > i whose box may overlap voxel i's along axis a (box column 0 x, 2 y),
+    ascending (into cand; returns their number): those whose low edge lies in [lo_i - w - 1e-6,
+    hi_i], found from i's place in `order`. A superset of the j whose boxes overlap i's (w is the
+    widest box along a), so the exact box test that follows sees every pair the plain loop over
+    j > i would, in its order."""
+    lo = box[4 * i + a] - w - 1e-6
+    hi = box[4 * i + a + 1]
+    nc = 0
+    k = rank[i] - 1
+    while k >= 0:
+        j = order[k]
+        if box[4 * j + a] < lo:
+            break
+        if j > i:
+            cand[nc] = j
+            nc += 1
+        k -= 1
+    k = rank[i] + 1
+    while k < n_surf:
+        j = order[k]
+        if box[4 * j + a] > hi:
+            break
+        if j > i:
+            cand[nc] = j
+            nc += 1
+        k += 1
+    for c in range(1, nc):
+        v = cand[c]
+        m = c
+        while m > 0:
+            if cand[m - 1] > v:
+                cand[m] = cand[m - 1]
+                m -= 1
+            else:
+                break
+        cand[m] = v
+    return nc
+
+
+@ti.func
+def _pair(i, j, n_surf_robot, pos: ti.template(), vt: ti.template(), fcol: ti.template(),
+          box: ti.template(), sv: ti.template(), sm: ti.template(), qf: ti.template(),
+          qi: ti.template(), acc: ti.template()):
+    """Surface voxels i < j: if their boxes overlap, evogym's self-collision count (acc[1]) and
+    both `_resolve`s where they can act (voxel i loaded into quad 0 once, acc[0])."""
+    if not (box[4 * i] > box[4 * j + 1] or box[4 * i + 1] < box[4 * j]
+            or box[4 * i + 2] > box[4 * j + 3] or box[4 * i + 3] < box[4 * j + 2]):
+        same = sm[4 * i] == sm[4 * j]
+        scale = 2.0 if same else 1.0
+        if same and i < n_surf_robot and j < n_surf_robot:
+            dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
+            dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
+            if dr > 1 or dc > 1:
+                acc[1] += 2
+        if _robot_pair_acts(pos, sv, box, i, j):
+            if acc[0] == 0:
+                _load_quad(pos, vt, sv, qf, qi, 0, i)
+                acc[0] = 1
+            _load_quad(pos, vt, sv, qf, qi, 1, j)
+            for d in range(2):
+                _resolve(fcol, qf, qi, d, 1 - d, scale)
+
+
+@ti.func
 def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
               fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
-              ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template()):
+              ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
+              order: ti.template(), rank: ti.template(), cand: ti.template(), sweep: ti.template(),
+              sweep_mode: ti.template()):
     """Recompute AABBs and contact forces (into fcol); return evogym's robot self-collision count
     (-1 when a coordinate is not finite). Surface voxel i has corners sv[8i:8i+4], open sides
-    sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]."""
+    sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]. Pairs of surface voxels are those with
+    overlapping boxes, in the order of the loop over i < j (evogym's), found by the plain loop or
+    by sweep and prune along x as `sweep_mode` says (`order`, `rank`, `cand`, `sweep`: scratch)."""
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
     for i in range(2 * n_pts):
         fcol[i] = 0.0
     finite = True
+    wx = 0.0  # the widest box along x and along y
+    wy = 0.0
     for i in range(n_surf):
         p0 = sv[8 * i]
         x0 = pos[2 * p0]
@@ -309,6 +453,8 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
         box[4 * i + 1] = x1
         box[4 * i + 2] = y0
         box[4 * i + 3] = y1
+        wx = ti.max(wx, x1 - x0)
+        wy = ti.max(wy, y1 - y0)
         if not (ti.abs(x0) < 1e30 and ti.abs(x1) < 1e30 and ti.abs(y0) < 1e30
                 and ti.abs(y1) < 1e30):
             finite = False
@@ -316,31 +462,57 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
     if finite:
         qf = ti.Matrix.zero(ti.f64, 8, 4)
         qi = ti.Matrix.zero(ti.i32, 8, 2)
+        acc = ti.Vector([0, 0])  # quad 0 (voxel i) loaded, self-collision count
         gw = ter_grid.shape[0]
         gh = ter_grid.shape[1]
+        if ti.static(sweep_mode != SWEEP_OFF):
+            # sweep[0]: -1 undecided (the env step's first substep), 0 plain loop, 1 sweep along
+            # axis sweep[1]
+            if n_surf < SWEEP_MIN and ti.static(sweep_mode == SWEEP_AUTO):
+                sweep[0] = 0
+            if sweep[0] < 0:
+                _choose_sweep(n_surf, wx, wy, box, order, rank, sweep,
+                              ti.static(sweep_mode == SWEEP_ALWAYS))
+            elif sweep[0] == 1:
+                _sort_along(n_surf, box, order, rank, sweep[1])
         for i in range(n_surf):
             loaded = False
             bx0 = box[4 * i]
             bx1 = box[4 * i + 1]
             by0 = box[4 * i + 2]
             by1 = box[4 * i + 3]
-            for j in range(i + 1, n_surf if ti.static("pairs" not in PROFILE_SKIP) else 0):
-                if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
-                        or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
-                    same = sm[4 * i] == sm[4 * j]
-                    scale = 2.0 if same else 1.0
-                    if same and i < n_surf_robot and j < n_surf_robot:
-                        dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
-                        dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
-                        if dr > 1 or dc > 1:
-                            count += 2
-                    if _robot_pair_acts(pos, sv, box, i, j):
-                        if not loaded:
-                            _load_quad(pos, vt, sv, qf, qi, 0, i)
-                            loaded = True
-                        _load_quad(pos, vt, sv, qf, qi, 1, j)
-                        for d in range(2):
-                            _resolve(fcol, qf, qi, d, 1 - d, scale)
+            if ti.static("pairs" not in PROFILE_SKIP):
+                plain = True
+                if ti.static(sweep_mode != SWEEP_OFF):
+                    if sweep[0] == 1:
+                        acc[0] = 0
+                        acc[1] = 0
+                        w = wx if sweep[1] == 0 else wy
+                        nc = _candidates(i, n_surf, w, box, order, rank, cand, sweep[1])
+                        for c in range(nc):
+                            _pair(i, cand[c], n_surf_robot, pos, vt, fcol, box, sv, sm, qf, qi,
+                                  acc)
+                        loaded = acc[0] == 1
+                        count += acc[1]
+                        plain = False
+                if plain:  # the same as _pair (inline: faster for compact bodies)
+                    for j in range(i + 1, n_surf):
+                        if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
+                                or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
+                            same = sm[4 * i] == sm[4 * j]
+                            scale = 2.0 if same else 1.0
+                            if same and i < n_surf_robot and j < n_surf_robot:
+                                dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
+                                dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
+                                if dr > 1 or dc > 1:
+                                    count += 2
+                            if _robot_pair_acts(pos, sv, box, i, j):
+                                if not loaded:
+                                    _load_quad(pos, vt, sv, qf, qi, 0, i)
+                                    loaded = True
+                                _load_quad(pos, vt, sv, qf, qi, 1, j)
+                                for d in range(2):
+                                    _resolve(fcol, qf, qi, d, 1 - d, scale)
             gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
             gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
             gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -525,7 +697,7 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                       edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
                       actions: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
                       ter_grid: ti.template(), n_sub, P, E, pc: ti.template(), ec: ti.template(),
-                      sc: ti.template()):
+                      sc: ti.template(), sweep_mode: ti.template()):
     """One env step of world b (see `step_kernel`), with local arrays of capacity pc, ec, sc."""
     if counts[b, STATUS] == RUNNING:
         n_pts = counts[b, N_PTS]
@@ -571,6 +743,12 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         box = ti.Vector.zero(ti.f64, 4 * sc)
         sv = ti.Vector.zero(ti.i32, 8 * sc)
         sm = ti.Vector.zero(ti.i32, 4 * sc)
+        order = ti.Vector.zero(ti.i32, sc)  # sweep and prune scratch (see _contacts)
+        rank = ti.Vector.zero(ti.i32, sc)
+        cand = ti.Vector.zero(ti.i32, sc)
+        for i in range(counts[b, N_SURF]):
+            order[i] = i
+        sweep = ti.Vector([-1, 0])  # see _contacts
         for i in range(counts[b, N_SURF]):
             v = lists[b, i, 0]
             for k in ti.static(range(4)):
@@ -591,7 +769,8 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 count = 0
                 if ti.static("contacts" not in PROFILE_SKIP):
                     count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
-                                      ter_i, ter_grid)
+                                      ter_i, ter_grid, order, rank, cand, sweep,
+                                      sweep_mode)
                 if count < 0:
                     status = NONFINITE
                 else:
@@ -630,7 +809,7 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
 def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                 lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
                 n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
-                sc: ti.template(), block: ti.template()):
+                sc: ti.template(), sweep_mode: ti.template(), block: ti.template()):
     """One env step (n_sub substeps) of every running world, worlds in parallel (`block` worlds
     per thread block: 1 on a CPU, where Taichi deals blocks to its threads, a warp's multiple on
     a GPU). state, edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6)
@@ -639,17 +818,17 @@ def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i
     ti.loop_config(block_dim=block)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E, pc, ec, sc)
+                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode)
 
 
 @ti.kernel
 def step_kernel_serial(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                        lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
                        n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
-                       sc: ti.template()):
+                       sc: ti.template(), sweep_mode: ti.template()):
     """`step_kernel` on the calling thread: for single-threaded processes, where handing the loop
     to Taichi's thread pool costs ~0.15 ms per launch (measured on the 2-vCPU VM)."""
     ti.loop_config(serialize=True)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E, pc, ec, sc)
+                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode)

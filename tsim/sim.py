@@ -146,6 +146,11 @@ class BatchSim:
             self.capacity_tier += 1
         # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
         self._serial = self._arch == "cpu" and (runtime.threads() == 1 or self.n_worlds == 1)
+        # how contact pairs are found (the same pairs either way): with the kernel that can sweep
+        # and prune only when some world is long enough to gain from it (tests force either)
+        self.sweep_mode = K.SWEEP_AUTO if any(
+            _sweep_pays(pos0[w], vox_i[w, lists[w, :counts[w, K.N_SURF], 0], K.V_PTS:K.V_PTS + 4])
+            for w in range(B)) else K.SWEEP_OFF
 
     # ------------------------------------------------------------------ control
     @property
@@ -224,7 +229,7 @@ class BatchSim:
             args = (self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
                     self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
                     self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
-                    self.edge_i.shape[1], *K.capacity(self.capacity_tier))
+                    self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode)
             if self._serial:
                 K.step_kernel_serial(*args)
             else:
@@ -284,3 +289,19 @@ class BatchSim:
         mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
         s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
         return s / self.n_robot_points[:, None]
+
+
+def _sweep_pays(pos: np.ndarray, corners: np.ndarray) -> bool:
+    """The kernel's `_choose_sweep` on a world's initial placement: pos (P, 2), corners (n, 4)
+    point ids of its surface voxels."""
+    n = len(corners)
+    if n < K.SWEEP_MIN:
+        return False
+    best = n * n
+    for axis in (0, 1):
+        c = pos[corners, axis]
+        low = np.sort(c.min(axis=1))
+        w = float((c.max(axis=1) - c.min(axis=1)).max())
+        near = np.searchsorted(low, low + w, "right") - np.searchsorted(low, low - w, "left")
+        best = min(best, int(near.sum()))
+    return best * K.SWEEP_RATIO <= n * n

@@ -1,19 +1,24 @@
-"""The step kernel's variants are interchangeable: the parallel and serial kernels and every
-local-array capacity tier give bit-identical states, so large robots (which need a bigger tier)
+"""The step kernel's variants are interchangeable: the parallel and serial kernels, every
+local-array capacity tier and both ways of finding contact pairs (plain loop, sweep and prune)
+give bit-identical states, so large robots (which need a bigger tier) and long worlds (swept)
 follow the same physics as the validated 5x5 ones."""
 
 import numpy as np
 import pytest
 
 from tasks.specs import task_spec, task_world
+from tsim import kernels as K
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
 
 
-def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0) -> BatchSim:
+def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0,
+         sweep: int | None = None) -> BatchSim:
     sim = BatchSim(task_world(task), bodies, task_spec(task).origin)
     sim._serial = serial
     sim.capacity_tier += extra_tiers
+    if sweep is not None:
+        sim.sweep_mode = sweep
     for t in range(steps):
         phase = np.arange(sim.max_actuators)[None, :] * 0.7 + np.arange(len(bodies))[:, None]
         sim.set_actions(1.1 + 0.45 * np.sin(t / 6.0 + phase))
@@ -44,3 +49,21 @@ def test_large_robots_take_a_bigger_tier_with_the_same_results():
     assert sim.capacity_tier == 1 and sim.state.shape[1] > 64
     assert _same(_run("Walker-v0", bodies, 40, serial=False, extra_tiers=1), sim)
     assert np.all(np.isfinite(sim.state)) and not sim.unstable.any()
+
+
+@pytest.mark.parametrize("task", ["BridgeWalker-v0", "Climber-v1"])
+def test_sweep_and_prune_finds_the_plain_loops_pairs_in_its_order(task):
+    """BridgeWalker's bridge (swept along x) and Climber-v1's wall (along y) are simulated objects
+    of ~200 surface voxels, so their own pairs and the robot's contacts with them go through the
+    pair loop: the same bits with the sweep forced on, off, and as chosen per world (on here; off
+    for compact bodies)."""
+    rng = np.random.default_rng(3)
+    bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+    off = _run(task, bodies, 50, serial=True, sweep=K.SWEEP_OFF)
+    assert _same(_run(task, bodies, 50, serial=True, sweep=K.SWEEP_ALWAYS), off)
+    auto = _run(task, bodies, 50, serial=True)
+    assert auto.sweep_mode == K.SWEEP_AUTO
+    assert _same(auto, off)
+    assert _run("Walker-v0", bodies, 1, serial=True).sweep_mode == K.SWEEP_OFF
+    moved = off.state[:, :, 0:2] - off._pos0
+    assert np.abs(moved).max() > 0.05
