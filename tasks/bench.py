@@ -41,7 +41,8 @@ def bench_bodies(task: str, bodies: list[np.ndarray], steps: int, physics: bool 
         env.step(acts[t])
     wall = time.perf_counter() - t0
     out = {"robot_steps_per_s": robots * steps / wall, "compile_s": compile_s,
-           "threads": runtime.threads(), "robots": robots, "steps": steps, "task": task}
+           "threads": runtime.threads(), "pinned": len(runtime.PINNED) > 0, "robots": robots,
+           "steps": steps, "task": task}
     if physics:  # no observations or rewards
         env.reset()
         t1 = time.perf_counter()

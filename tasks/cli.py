@@ -130,7 +130,7 @@ def _bench(args: argparse.Namespace) -> int:
         print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
               f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "
               f"{r['physics_robot_steps_per_s']:.0f} (physics only); compile {r['compile_s']:.1f} s; "
-              f"threads {r['threads']}")
+              f"threads {r['threads']}" + (" (pinned)" if r["pinned"] else ""))
     return 0
 
 
