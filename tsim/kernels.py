@@ -422,7 +422,7 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
               fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
               ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
               order: ti.template(), rank: ti.template(), cand: ti.template(), sweep: ti.template(),
-              sweep_mode: ti.template()):
+              sweep_mode: ti.template(), ter_top):
     """Recompute AABBs and contact forces (into fcol); return evogym's robot self-collision count
     (-1 when a coordinate is not finite). Surface voxel i has corners sv[8i:8i+4], open sides
     sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]. Pairs of surface voxels are those with
@@ -513,31 +513,33 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
                                 _load_quad(pos, vt, sv, qf, qi, 1, j)
                                 for d in range(2):
                                     _resolve(fcol, qf, qi, d, 1 - d, scale)
-            gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
-            gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
-            gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
-            gy1 = ti.min(gh - 1, ti.cast(ti.floor(by1 / C.CELL + 1e-6), ti.i32))
-            for gx in range(gx0, gx1 + 1 if ti.static("terrain" not in PROFILE_SKIP) else gx0):
-                for gy in range(gy0, gy1 + 1):
-                    t = ter_grid[gx, gy]
-                    if t >= 0:
-                        acts = False
-                        if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
-                                or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
-                            acts = _terrain_pair_acts(pos, sv, box, ter_f, i, t)
-                        if acts:
-                            if not loaded:
-                                _load_quad(pos, vt, sv, qf, qi, 0, i)
-                                loaded = True
-                            for k in range(4):
-                                qf[4 + k, 0] = ter_f[t, 2 * k]
-                                qf[4 + k, 1] = ter_f[t, 2 * k + 1]
-                                qf[4 + k, 2] = 0.0
-                                qf[4 + k, 3] = 0.0
-                                qi[4 + k, 0] = -1
-                                qi[4 + k, 1] = ter_i[t, k]
-                            for d in range(2):
-                                _resolve(fcol, qf, qi, d, 1 - d, 1.0)
+            # no terrain box reaches above ter_top, so no terrain test can pass for a box above it
+            if by0 <= ter_top:
+                gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
+                gx1 = ti.min(gw - 1, ti.cast(ti.floor(bx1 / C.CELL + 1e-6), ti.i32))
+                gy0 = ti.max(0, ti.cast(ti.ceil(by0 / C.CELL - 1.0 - 1e-6), ti.i32))
+                gy1 = ti.min(gh - 1, ti.cast(ti.floor(by1 / C.CELL + 1e-6), ti.i32))
+                for gx in range(gx0, gx1 + 1 if ti.static("terrain" not in PROFILE_SKIP) else gx0):
+                    for gy in range(gy0, gy1 + 1):
+                        t = ter_grid[gx, gy]
+                        if t >= 0:
+                            acts = False
+                            if not (bx0 > ter_f[t, 9] or bx1 < ter_f[t, 8]
+                                    or by0 > ter_f[t, 11] or by1 < ter_f[t, 10]):
+                                acts = _terrain_pair_acts(pos, sv, box, ter_f, i, t)
+                            if acts:
+                                if not loaded:
+                                    _load_quad(pos, vt, sv, qf, qi, 0, i)
+                                    loaded = True
+                                for k in range(4):
+                                    qf[4 + k, 0] = ter_f[t, 2 * k]
+                                    qf[4 + k, 1] = ter_f[t, 2 * k + 1]
+                                    qf[4 + k, 2] = 0.0
+                                    qf[4 + k, 3] = 0.0
+                                    qi[4 + k, 0] = -1
+                                    qi[4 + k, 1] = ter_i[t, k]
+                                for d in range(2):
+                                    _resolve(fcol, qf, qi, d, 1 - d, 1.0)
     if not finite:
         count = -1
     return count
@@ -763,6 +765,9 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 vel[2 * p + d] = state[so + NS * p + 2 + d]
                 pl[2 * p + d] = state[so + NS * p + 4 + d]
                 vt[2 * p + d] = state[so + NS * p + 6 + d]
+        ter_top = ter_f[0, 11]  # the highest top of a terrain voxel's box
+        for t in range(1, ter_f.shape[0]):
+            ter_top = ti.max(ter_top, ter_f[t, 11])
         status = RUNNING
         for _ in range(n_sub):
             if status == RUNNING:
@@ -770,7 +775,7 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 if ti.static("contacts" not in PROFILE_SKIP):
                     count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
                                       ter_i, ter_grid, order, rank, cand, sweep,
-                                      sweep_mode)
+                                      sweep_mode, ter_top)
                 if count < 0:
                     status = NONFINITE
                 else:
