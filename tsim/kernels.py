@@ -427,7 +427,8 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
     (-1 when a coordinate is not finite). Surface voxel i has corners sv[8i:8i+4], open sides
     sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]. Pairs of surface voxels are those with
     overlapping boxes, in the order of the loop over i < j (evogym's), found by the plain loop or
-    by sweep and prune along x as `sweep_mode` says (`order`, `rank`, `cand`, `sweep`: scratch)."""
+    by sweep and prune along x or y as `sweep_mode` says (`order`, `rank`, `cand`, `sweep`:
+    scratch)."""
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
     for i in range(2 * n_pts):
