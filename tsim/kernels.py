@@ -129,6 +129,20 @@ def _in_box(x, y, x0, x1, y0, y1):
 SWEEP_OFF, SWEEP_AUTO, SWEEP_ALWAYS = 0, 1, 2
 SWEEP_MIN = 24
 SWEEP_RATIO = 8
+# Pair lists (Verlet lists with a skin): a substep that tests every pair also records the pairs
+# whose boxes, each widened by SKIN, overlap. Later substeps of the env step test only those, as
+# long as no box edge has moved by SKIN / 2 since: a pair left out had a gap above SKIN and each
+# of its boxes moved less than SKIN / 2, so its box test would fail. Exact, not approximate:
+# the same pairs act, in the same order.
+SKIN = 0.05  # half a voxel: a 12x12 body lists ~181 of its 3,583 pairs (158 overlap)
+SKIN_SLACK = 1e-9  # far above the rounding error of |box - ref| at coordinates below REF_MAX
+REF_MAX = 1e6  # no list for worlds with a coordinate beyond this
+# A kernel's `pair_list` (compile time): LIST_OFF never (the kernel that small bodies run: the
+# list's code alone cost them 2-5 %), LIST_AUTO in worlds with at least LIST_MIN surface voxels,
+# LIST_ALWAYS in every world (tests)
+LIST_OFF, LIST_AUTO, LIST_ALWAYS = 0, 1, 2
+LIST_MIN = 24
+LIST_PER_VOXEL = 8  # list capacity per surface voxel (bodies and bridges need ~2; full: no list)
 GPU_BLOCK = 64  # worlds per thread block on a GPU (each world is one thread)
 PC, EC, SC = 64, 160, 32  # tier 0: points, edges, surface voxels (a 5x5 robot and Thrower's box)
 NS = 8  # state columns
@@ -353,14 +367,14 @@ def _choose_sweep(n_surf, wx, wy, box: ti.template(), order: ti.template(), rank
 
 @ti.func
 def _candidates(i, n_surf, w, box: ti.template(), order: ti.template(), rank: ti.template(),
-                cand: ti.template(), a):
+                cand: ti.template(), a, skin):
     """Surface voxels j > i whose box may overlap voxel i's along axis a (box column 0 x, 2 y),
     ascending (into cand; returns their number): those whose low edge lies in [lo_i - w - 1e-6,
     hi_i], found from i's place in `order`. A superset of the j whose boxes overlap i's (w is the
     widest box along a), so the exact box test that follows sees every pair the plain loop over
-    j > i would, in its order."""
-    lo = box[4 * i + a] - w - 1e-6
-    hi = box[4 * i + a + 1]
+    j > i would, in its order; with skin > 0, of the j whose box lies within skin of i's."""
+    lo = box[4 * i + a] - w - skin - 1e-6
+    hi = box[4 * i + a + 1] + skin
     nc = 0
     k = rank[i] - 1
     while k >= 0:
@@ -394,41 +408,20 @@ def _candidates(i, n_surf, w, box: ti.template(), order: ti.template(), rank: ti
 
 
 @ti.func
-def _pair(i, j, n_surf_robot, pos: ti.template(), vt: ti.template(), fcol: ti.template(),
-          box: ti.template(), sv: ti.template(), sm: ti.template(), qf: ti.template(),
-          qi: ti.template(), acc: ti.template()):
-    """Surface voxels i < j: if their boxes overlap, evogym's self-collision count (acc[1]) and
-    both `_resolve`s where they can act (voxel i loaded into quad 0 once, acc[0])."""
-    if not (box[4 * i] > box[4 * j + 1] or box[4 * i + 1] < box[4 * j]
-            or box[4 * i + 2] > box[4 * j + 3] or box[4 * i + 3] < box[4 * j + 2]):
-        same = sm[4 * i] == sm[4 * j]
-        scale = 2.0 if same else 1.0
-        if same and i < n_surf_robot and j < n_surf_robot:
-            dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
-            dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
-            if dr > 1 or dc > 1:
-                acc[1] += 2
-        if _robot_pair_acts(pos, sv, box, i, j):
-            if acc[0] == 0:
-                _load_quad(pos, vt, sv, qf, qi, 0, i)
-                acc[0] = 1
-            _load_quad(pos, vt, sv, qf, qi, 1, j)
-            for d in range(2):
-                _resolve(fcol, qf, qi, d, 1 - d, scale)
-
-
-@ti.func
 def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.template(),
               fcol: ti.template(), box: ti.template(), sv: ti.template(), sm: ti.template(),
               ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
               order: ti.template(), rank: ti.template(), cand: ti.template(), sweep: ti.template(),
-              sweep_mode: ti.template(), ter_top):
+              sweep_mode: ti.template(), ter_top, nbr: ti.template(), nstart: ti.template(),
+              refbox: ti.template(), plist: ti.template(), pair_list: ti.template()):
     """Recompute AABBs and contact forces (into fcol); return evogym's robot self-collision count
     (-1 when a coordinate is not finite). Surface voxel i has corners sv[8i:8i+4], open sides
     sv[8i+4:8i+8] and object, row, col sm[4i:4i+3]. Pairs of surface voxels are those with
     overlapping boxes, in the order of the loop over i < j (evogym's), found by the plain loop or
     by sweep and prune along x or y as `sweep_mode` says (`order`, `rank`, `cand`, `sweep`:
-    scratch)."""
+    scratch), or from the pair list (see SKIN) while it holds: plist[0] = 1 when nbr[nstart[i]:
+    nstart[i + 1]] lists voxel i's partners j > i within SKIN of its box when the boxes were
+    refbox."""
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
     for i in range(2 * n_pts):
@@ -463,9 +456,16 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
     if finite:
         qf = ti.Matrix.zero(ti.f64, 8, 4)
         qi = ti.Matrix.zero(ti.i32, 8, 2)
-        acc = ti.Vector([0, 0])  # quad 0 (voxel i) loaded, self-collision count
         gw = ter_grid.shape[0]
         gh = ter_grid.shape[1]
+        use_list = False
+        listing = ti.static(pair_list == LIST_ALWAYS) or n_surf >= LIST_MIN
+        if ti.static("pairs" not in PROFILE_SKIP and pair_list != LIST_OFF):
+            if plist[0] == 1:
+                moved = 0.0
+                for k in range(4 * n_surf):
+                    moved = ti.max(moved, ti.abs(box[k] - refbox[k]))
+                use_list = 2.0 * moved < SKIN - SKIN_SLACK
         if ti.static(sweep_mode != SWEEP_OFF):
             # sweep[0]: -1 undecided (the env step's first substep), 0 plain loop, 1 sweep along
             # axis sweep[1]
@@ -474,8 +474,10 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
             if sweep[0] < 0:
                 _choose_sweep(n_surf, wx, wy, box, order, rank, sweep,
                               ti.static(sweep_mode == SWEEP_ALWAYS))
-            elif sweep[0] == 1:
+            elif sweep[0] == 1 and not use_list:
                 _sort_along(n_surf, box, order, rank, sweep[1])
+        n_list = 0  # building the list: its length, and whether it fits
+        fits = True
         for i in range(n_surf):
             loaded = False
             bx0 = box[4 * i]
@@ -483,37 +485,58 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
             by0 = box[4 * i + 2]
             by1 = box[4 * i + 3]
             if ti.static("pairs" not in PROFILE_SKIP):
-                plain = True
+                # i's partners j, ascending: j = c for c in [lo, hi) (the plain loop), or listed
+                # at nbr[c] (the pair list) or at cand[c] (sweep and prune)
+                lo = i + 1
+                hi = n_surf
+                src = 0
+                if ti.static(pair_list != LIST_OFF):
+                    if use_list:
+                        lo = nstart[i]
+                        hi = nstart[i + 1]
+                        src = 1
+                    else:
+                        nstart[i] = n_list
                 if ti.static(sweep_mode != SWEEP_OFF):
-                    if sweep[0] == 1:
-                        acc[0] = 0
-                        acc[1] = 0
+                    if sweep[0] == 1 and not use_list:
                         w = wx if sweep[1] == 0 else wy
-                        nc = _candidates(i, n_surf, w, box, order, rank, cand, sweep[1])
-                        for c in range(nc):
-                            _pair(i, cand[c], n_surf_robot, pos, vt, fcol, box, sv, sm, qf, qi,
-                                  acc)
-                        loaded = acc[0] == 1
-                        count += acc[1]
-                        plain = False
-                if plain:  # the same as _pair (inline: faster for compact bodies)
-                    for j in range(i + 1, n_surf):
-                        if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
-                                or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
-                            same = sm[4 * i] == sm[4 * j]
-                            scale = 2.0 if same else 1.0
-                            if same and i < n_surf_robot and j < n_surf_robot:
-                                dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
-                                dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
-                                if dr > 1 or dc > 1:
-                                    count += 2
-                            if _robot_pair_acts(pos, sv, box, i, j):
-                                if not loaded:
-                                    _load_quad(pos, vt, sv, qf, qi, 0, i)
-                                    loaded = True
-                                _load_quad(pos, vt, sv, qf, qi, 1, j)
-                                for d in range(2):
-                                    _resolve(fcol, qf, qi, d, 1 - d, scale)
+                        lo = 0
+                        hi = _candidates(i, n_surf, w, box, order, rank, cand, sweep[1],
+                                         SKIN if ti.static(pair_list != LIST_OFF) else 0.0)
+                        src = 2
+                for c in range(lo, hi):
+                    j = c
+                    if ti.static(pair_list != LIST_OFF):
+                        if src == 1:
+                            j = nbr[c]
+                    if ti.static(sweep_mode != SWEEP_OFF):
+                        if src == 2:
+                            j = cand[c]
+                    if ti.static(pair_list != LIST_OFF):
+                        if src != 1 and listing and not (
+                                bx0 > box[4 * j + 1] + SKIN or bx1 + SKIN < box[4 * j]
+                                or by0 > box[4 * j + 3] + SKIN or by1 + SKIN < box[4 * j + 2]):
+                            if n_list < nbr.n:
+                                nbr[n_list] = j
+                                n_list += 1
+                            else:
+                                fits = False
+                    if not (bx0 > box[4 * j + 1] or bx1 < box[4 * j]
+                            or by0 > box[4 * j + 3] or by1 < box[4 * j + 2]):
+                        same = sm[4 * i] == sm[4 * j]
+                        scale = 2.0 if same else 1.0
+                        if same and i < n_surf_robot and j < n_surf_robot:
+                            dr = ti.abs(sm[4 * i + 1] - sm[4 * j + 1])
+                            dc = ti.abs(sm[4 * i + 2] - sm[4 * j + 2])
+                            if dr > 1 or dc > 1:  # evogym's self-collision count
+                                count += 2
+                        if _robot_pair_acts(pos, sv, box, i, j):
+                            if not loaded:
+                                _load_quad(pos, vt, sv, qf, qi, 0, i)
+                                loaded = True
+                            _load_quad(pos, vt, sv, qf, qi, 1, j)
+                            for d in range(2):
+                                _resolve(fcol, qf, qi, d, 1 - d, scale)
             # no terrain box reaches above ter_top, so no terrain test can pass for a box above it
             if by0 <= ter_top:
                 gx0 = ti.max(0, ti.cast(ti.ceil(bx0 / C.CELL - 1.0 - 1e-6), ti.i32))
@@ -541,6 +564,14 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
                                     qi[4 + k, 1] = ter_i[t, k]
                                 for d in range(2):
                                     _resolve(fcol, qf, qi, d, 1 - d, 1.0)
+        if ti.static("pairs" not in PROFILE_SKIP and pair_list != LIST_OFF):
+            if not use_list:
+                nstart[n_surf] = n_list
+                plist[0] = 1 if fits and listing else 0
+                for k in range(4 * n_surf):
+                    refbox[k] = box[k]
+                    if not ti.abs(box[k]) < REF_MAX:
+                        plist[0] = 0
     if not finite:
         count = -1
     return count
@@ -700,7 +731,7 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                       edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
                       actions: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
                       ter_grid: ti.template(), n_sub, P, E, pc: ti.template(), ec: ti.template(),
-                      sc: ti.template(), sweep_mode: ti.template()):
+                      sc: ti.template(), sweep_mode: ti.template(), pair_list: ti.template()):
     """One env step of world b (see `step_kernel`), with local arrays of capacity pc, ec, sc."""
     if counts[b, STATUS] == RUNNING:
         n_pts = counts[b, N_PTS]
@@ -749,6 +780,10 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         order = ti.Vector.zero(ti.i32, sc)  # sweep and prune scratch (see _contacts)
         rank = ti.Vector.zero(ti.i32, sc)
         cand = ti.Vector.zero(ti.i32, sc)
+        nbr = ti.Vector.zero(ti.i32, LIST_PER_VOXEL * sc)  # the pair list (see SKIN)
+        nstart = ti.Vector.zero(ti.i32, sc + 1)
+        refbox = ti.Vector.zero(ti.f64, 4 * sc)
+        plist = ti.Vector([0])
         for i in range(counts[b, N_SURF]):
             order[i] = i
         sweep = ti.Vector([-1, 0])  # see _contacts
@@ -776,7 +811,8 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
                 if ti.static("contacts" not in PROFILE_SKIP):
                     count = _contacts(b, n_pts, counts, pos, vt, fcol, box, sv, sm, ter_f,
                                       ter_i, ter_grid, order, rank, cand, sweep,
-                                      sweep_mode, ter_top)
+                                      sweep_mode, ter_top, nbr, nstart, refbox, plist,
+                                      pair_list)
                 if count < 0:
                     status = NONFINITE
                 else:
@@ -815,7 +851,8 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
 def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                 lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
                 n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
-                sc: ti.template(), sweep_mode: ti.template(), block: ti.template()):
+                sc: ti.template(), sweep_mode: ti.template(), pair_list: ti.template(),
+                block: ti.template()):
     """One env step (n_sub substeps) of every running world, worlds in parallel (`block` worlds
     per thread block: 1 on a CPU, where Taichi deals blocks to its threads, a warp's multiple on
     a GPU). state, edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6)
@@ -824,17 +861,17 @@ def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i
     ti.loop_config(block_dim=block)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode)
+                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode, pair_list)
 
 
 @ti.kernel
 def step_kernel_serial(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i: I32_3,
                        lists: I32_3, actions: F64_2, ter_f: F64_2, ter_i: I32_2, ter_grid: I32_2,
                        n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(), ec: ti.template(),
-                       sc: ti.template(), sweep_mode: ti.template()):
+                       sc: ti.template(), sweep_mode: ti.template(), pair_list: ti.template()):
     """`step_kernel` on the calling thread: for single-threaded processes, where handing the loop
     to Taichi's thread pool costs ~0.15 ms per launch (measured on the 2-vCPU VM)."""
     ti.loop_config(serialize=True)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
-                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode)
+                          ter_grid, n_sub, P, E, pc, ec, sc, sweep_mode, pair_list)

@@ -151,6 +151,9 @@ class BatchSim:
         self.sweep_mode = K.SWEEP_AUTO if any(
             _sweep_pays(pos0[w], vox_i[w, lists[w, :counts[w, K.N_SURF], 0], K.V_PTS:K.V_PTS + 4])
             for w in range(B)) else K.SWEEP_OFF
+        # and whether a substep may test only the pairs listed at an earlier one (the same pairs
+        # act): in the kernel that lists pairs only when some world is large enough to gain
+        self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
 
     # ------------------------------------------------------------------ control
     @property
@@ -229,7 +232,8 @@ class BatchSim:
             args = (self.counts, self.state.reshape(-1), self.edge_i.reshape(-1),
                     self.edge_f.reshape(-1), self.vox_i, self.lists, self.actions, self.ter_f,
                     self.ter_i, self.ter_grid, C.SUBSTEPS, self.state.shape[1],
-                    self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode)
+                    self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
+                    self.pair_list)
             if self._serial:
                 K.step_kernel_serial(*args)
             else:
