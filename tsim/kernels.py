@@ -1,12 +1,13 @@
 """Taichi kernels: one env step of every world in the batch, evogym's substep repeated 30 times.
 
-Layout (all arrays are Taichi ndarrays, so the kernels compile once per process for any batch):
+Layout (all arrays are Taichi ndarrays, so the kernels compile once per process for any batch;
+`counts`, `state` and `actions` change between launches, the others are static):
 - `counts[b, :]`   int: see the COUNT_* column names below.
 - `state[b, p, :]` f64: pos(0:2) vel(2:4) pos_last(4:6) vel_true(6:8) of dynamic point p
   (robot points first, then free objects such as Thrower's package).
 - `edge_i[b, e, :]` int: a, b, driver0, driver1 (actuator indices or -1).
-- `edge_f[b, e, :]` f64: rest length, k, goal (set from the actions each step), initial current
-  rest length (the kernel keeps the current one in a local array).
+- `edge_f[b, e, :]` f64: rest length, k, goal at rest, current rest length at rest (the kernel
+  derives each step's goals from the actions and keeps the current rest lengths in local arrays).
 - `vox_i[b, v, :]` int: corner points (TL, TR, BR, BL), open sides (top, right, bottom, left),
   material, object id, row, col; `lists[b, i, 0]` surface voxels (robot first),
   `lists[b, i, 1]` rigid voxels, `lists[b, i, 2]` fixed points (corners of a simulated object's
@@ -739,17 +740,6 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         so = b * P * NS
         eio = b * E * 4
         efo = b * E * N_EDGE_F
-        for e in range(n_edges):
-            d0 = edge_i[eio + 4 * e + 2]
-            if d0 >= 0:
-                d1 = edge_i[eio + 4 * e + 3]
-                total = actions[b, d0]
-                cnt = 1.0
-                if d1 >= 0:
-                    total += actions[b, d1]
-                    cnt = 2.0
-                ef = efo + N_EDGE_F * e
-                edge_f[ef + E_GOAL] = total * (edge_f[ef + E_REST] / cnt)
         pos = ti.Vector.zero(ti.f64, 2 * pc)
         vel = ti.Vector.zero(ti.f64, 2 * pc)
         pl = ti.Vector.zero(ti.f64, 2 * pc)  # pos_last
@@ -761,7 +751,7 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
         adx = ti.Vector.zero(ti.f64, 2 * pc)
         adv = ti.Vector.zero(ti.f64, 2 * pc)
         leq = ti.Vector.zero(ti.f64, ec)
-        ea = ti.Vector.zero(ti.i32, ec)  # the springs' ends, stiffness and goal, contiguous
+        ea = ti.Vector.zero(ti.i32, ec)  # the springs' ends, stiffness, goal and rest, contiguous
         eb = ti.Vector.zero(ti.i32, ec)
         ek = ti.Vector.zero(ti.f64, ec)
         egoal = ti.Vector.zero(ti.f64, ec)
@@ -770,8 +760,17 @@ def _step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templ
             ea[e] = edge_i[eio + 4 * e]
             eb[e] = edge_i[eio + 4 * e + 1]
             ek[e] = edge_f[efo + N_EDGE_F * e + E_K]
-            egoal[e] = edge_f[efo + N_EDGE_F * e + E_GOAL]
             erest[e] = edge_f[efo + N_EDGE_F * e + E_REST]
+            egoal[e] = edge_f[efo + N_EDGE_F * e + E_GOAL]  # the rest length, unless driven:
+            d0 = edge_i[eio + 4 * e + 2]
+            if d0 >= 0:  # the mean of its actuators' targets times its rest length
+                d1 = edge_i[eio + 4 * e + 3]
+                total = actions[b, d0]
+                cnt = 1.0
+                if d1 >= 0:
+                    total += actions[b, d1]
+                    cnt = 2.0
+                egoal[e] = total * (erest[e] / cnt)
         ccx = ti.Vector.zero(ti.f64, ec)
         ccy = ti.Vector.zero(ti.f64, ec)
         box = ti.Vector.zero(ti.f64, 4 * sc)
@@ -855,9 +854,8 @@ def step_kernel(counts: I32_2, state: F64_1, edge_i: I32_1, edge_f: F64_1, vox_i
                 block: ti.template()):
     """One env step (n_sub substeps) of every running world, worlds in parallel (`block` worlds
     per thread block: 1 on a CPU, where Taichi deals blocks to its threads, a warp's multiple on
-    a GPU). state, edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 6)
-    arrays; every world fits the capacity (pc points, ec edges, sc surface voxels). The current
-    rest lengths live in a local array (edge_f's column E_LEQ keeps its initial value)."""
+    a GPU). state, edge_i and edge_f are flat views of the (B, P, 8), (B, E, 4) and (B, E, 4)
+    arrays; every world fits the capacity (pc points, ec edges, sc surface voxels)."""
     ti.loop_config(block_dim=block)
     for b in range(counts.shape[0]):
         _step_world(b, counts, state, edge_i, edge_f, vox_i, lists, actions, ter_f, ter_i,
