@@ -136,7 +136,7 @@ SWEEP_RATIO = 8
 # of its boxes moved less than SKIN / 2, so its box test would fail. Exact, not approximate:
 # the same pairs act, in the same order.
 SKIN = 0.05  # half a voxel: a 12x12 body lists ~181 of its 3,583 pairs (158 overlap)
-SKIN_SLACK = 1e-9  # far above the rounding error of |box - ref| at coordinates below REF_MAX
+SKIN_SLACK = 1e-9  # far above the rounding of `box + SKIN` (~6e-11 at coordinates below REF_MAX)
 REF_MAX = 1e6  # no list for worlds with a coordinate beyond this
 # A kernel's `pair_list` (compile time): LIST_OFF never (the kernel that small bodies run: the
 # list's code alone cost them 2-5 %), LIST_AUTO in worlds with at least LIST_MIN surface voxels,

@@ -156,7 +156,8 @@ class BatchSim:
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         # the arrays no step changes, copied once into Taichi's own ndarrays: a launch takes
         # those for ~half the cost of a numpy array's (~7 us each on the CPU), and on a GPU
-        # they stay on the device instead of crossing the bus at every launch
+        # they stay on the device instead of crossing the bus at every launch (so the numpy
+        # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction)
         self._static = tuple(_taichi_array(a) for a in (
             self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists, self.ter_f,
             self.ter_i, self.ter_grid))

@@ -63,7 +63,7 @@ def test_sweep_and_prune_finds_the_plain_loops_pairs_in_its_order(task):
     for compact bodies)."""
     rng = np.random.default_rng(3)
     bodies = [sample_robot((5, 5), rng) for _ in range(3)]
-    off = _run(task, bodies, 50, serial=True, sweep=K.SWEEP_OFF)
+    off = _run(task, bodies, 50, serial=True, sweep=K.SWEEP_OFF, pair_list=K.LIST_OFF)
     assert _same(_run(task, bodies, 50, serial=True, sweep=K.SWEEP_ALWAYS), off)
     auto = _run(task, bodies, 50, serial=True)
     assert auto.sweep_mode == K.SWEEP_AUTO
@@ -76,8 +76,9 @@ def test_sweep_and_prune_finds_the_plain_loops_pairs_in_its_order(task):
 @pytest.mark.parametrize("task, size, n, steps, drop", [
     ("Walker-v0", 12, 3, 40, 0.0),  # large compact bodies: the list is chosen
     # the package thrown onto the robot at 40 units/s closes a gap of SKIN within an env step:
-    # fails if the list is not rebuilt once a box has moved SKIN / 2, or if it misses pairs
-    # within SKIN (both checked by editing the kernel)
+    # fails if the list is never rebuilt within the env step, if it misses pairs within SKIN or
+    # if it lists them out of order (checked by editing the kernel). Not caught: a rebuild after
+    # SKIN instead of SKIN / 2 (only one side moves here) and a list overflow (none happens)
     ("Thrower-v0", 5, 4, 30, 40.0),
     ("BridgeWalker-v0", 5, 3, 50, 0.0),  # listed while swept: the robot walks on the bridge
 ])
