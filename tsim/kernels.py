@@ -370,10 +370,10 @@ def _choose_sweep(n_surf, wx, wy, box: ti.template(), order: ti.template(), rank
 def _candidates(i, n_surf, w, box: ti.template(), order: ti.template(), rank: ti.template(),
                 cand: ti.template(), a, skin):
     """Surface voxels j > i whose box may overlap voxel i's along axis a (box column 0 x, 2 y),
-    ascending (into cand; returns their number): those whose low edge lies in [lo_i - w - 1e-6,
-    hi_i], found from i's place in `order`. A superset of the j whose boxes overlap i's (w is the
-    widest box along a), so the exact box test that follows sees every pair the plain loop over
-    j > i would, in its order; with skin > 0, of the j whose box lies within skin of i's."""
+    ascending (into cand; returns their number): those whose low edge lies in [lo_i - w - skin -
+    1e-6, hi_i + skin], found from i's place in `order`. A superset of the j whose boxes lie
+    within skin of i's (w is the widest box along a), so the box tests that follow see every pair
+    the plain loop over j > i would, in its order (skin = 0: the overlapping ones)."""
     lo = box[4 * i + a] - w - skin - 1e-6
     hi = box[4 * i + a + 1] + skin
     nc = 0

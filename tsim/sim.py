@@ -155,7 +155,8 @@ class BatchSim:
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         # the arrays no step changes, copied once into Taichi's own ndarrays: a launch takes
-        # those for ~half the cost of a numpy array's (~7 us each on the CPU), and on a GPU
+        # those for ~6.5 us each on the CPU against ~11 us for a numpy array's
+        # (bench/launch_args_bench.py), and on a GPU
         # they stay on the device instead of crossing the bus at every launch (so the numpy
         # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction)
         self._static = tuple(_taichi_array(a) for a in (

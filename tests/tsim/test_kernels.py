@@ -1,7 +1,7 @@
 """The step kernel's variants are interchangeable: the parallel and serial kernels, every
 local-array capacity tier and every way of finding contact pairs (plain loop, sweep and prune,
-pair lists) give bit-identical states, so large robots (which need a bigger tier) and long worlds (swept)
-follow the same physics as the validated 5x5 ones."""
+pair lists) give bit-identical states, so large robots (which need a bigger tier) and long worlds
+(swept) follow the same physics as the validated 5x5 ones."""
 
 import numpy as np
 import pytest
