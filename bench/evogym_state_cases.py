@@ -1,7 +1,8 @@
 """Record evogym 2.0.0 episodes that start from a moved state, for the task branches the random
 robots of `evogym_reference.py` never reach: a robot's COM just past / just short of a goal
 (BridgeWalker-v0, CaveCrawler-v0, Climber-v0, Climber-v1, Traverser-v0), a robot standing on
-Traverser-v0's loose blocks (floor sight over moving objects), Catcher-v0's package falling through y = 0.5.
+Traverser-v0's loose blocks (floor sight over moving objects), Catcher-v0's package falling through
+y = 0.5, a robot left of the start of Walker-v0's ground, on evogym's built-in ground plane (y < 0).
 
 Run under the evogym venv (sgr never imports evogym):
 
@@ -50,6 +51,7 @@ CASES: list[tuple[str, str, int, list[tuple[str, tuple]]]] = [
     ("traverser_short_of_goal", "Traverser-v0", 30, [("robot", ("com_x", 5.895, 0.72))]),
     ("traverser_on_blocks", "Traverser-v0", 50, [("robot", ("com_x", 3.2, 0.95))]),
     ("catcher_package_falls_low", "Catcher-v0", 50, [("package", ("beside_robot", 0.3, 0.45))]),
+    ("walker_on_ground_plane", "Walker-v0", 25, [("robot", ("com_x", -1.0, 0.02))]),
 ]
 
 

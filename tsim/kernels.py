@@ -594,7 +594,10 @@ def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.templa
         for i in range(2 * n_pts):
             frc[i] = 0.0
         # the springs' forces in a loop without stores to shared points, which LLVM vectorises
-        # (square roots and divisions 4 at a time), then their scatter in edge order
+        # (square roots and divisions 4 at a time), then their scatter in evogym's order: Eigen's
+        # `force(:, a_index) -= f` then `force(:, b_index) += f`, i.e. every spring's first end in
+        # edge order, then every second end (one interleaved pass rounds differently wherever a
+        # point is the first end of one spring and the second of an earlier one)
         for e in range(n_edges):
             a = ea[e]
             q = eb[e]
@@ -608,42 +611,53 @@ def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.templa
             sfy[e] = dy * mag
         for e in range(n_edges):
             a = ea[e]
-            q = eb[e]
             frc[2 * a] -= sfx[e]
             frc[2 * a + 1] -= sfy[e]
+        for e in range(n_edges):
+            q = eb[e]
             frc[2 * q] += sfx[e]
             frc[2 * q + 1] += sfy[e]
+        # the ground plane's force (a branch and a tanh call) keeps LLVM from vectorising the
+        # point loop, so that loop has a second copy without it for stages with no point below
+        below = 0
         for p in range(n_pts):
-            vx = vs[2 * p]
-            vy = vs[2 * p + 1]
-            fx = frc[2 * p] + vx * (-C.VISCOUS_DRAG)
-            fy = frc[2 * p + 1] + vy * (-C.VISCOUS_DRAG)
-            fy += C.POINT_MASS * (-C.GRAVITY)
-            fx += fcol[2 * p]
-            fy += fcol[2 * p + 1]
-            y = xs[2 * p + 1]
-            if y < 0:
-                normal = y * (-C.GROUND_K)
-                fy += normal
-                fx += (-10.0 * C.FRICTION_DYN) * normal * ti.tanh(vx * normal * C.FRICTION_DYN)
-            acc = vec2(fx / C.POINT_MASS, fy / C.POINT_MASS)
-            for d in ti.static(range(2)):
-                i = 2 * p + d
-                kx = vs[i] * C.DT
-                kv = acc[d] * C.DT
-                if ti.static(stage == 0):
-                    adx[i] = kx
-                    adv[i] = kv
-                elif ti.static(stage < 3):
-                    adx[i] += 2 * kx
-                    adv[i] += 2 * kv
-                else:
-                    adx[i] += kx
-                    adv[i] += kv
-                if ti.static(stage < 3):
-                    h = 0.5 if ti.static(stage < 2) else 1.0
-                    xs[i] = pos[i] + kx * h
-                    vs[i] = vel[i] + kv * h
+            if xs[2 * p + 1] < 0:
+                below += 1
+        for ground in ti.static((False, True)):
+            if (below > 0) == ground:
+                for p in range(n_pts):
+                    vx = vs[2 * p]
+                    vy = vs[2 * p + 1]
+                    fx = frc[2 * p] + vx * (-C.VISCOUS_DRAG)
+                    fy = frc[2 * p + 1] + vy * (-C.VISCOUS_DRAG)
+                    fy += C.POINT_MASS * (-C.GRAVITY)
+                    fx += fcol[2 * p]
+                    fy += fcol[2 * p + 1]
+                    if ti.static(ground):
+                        y = xs[2 * p + 1]
+                        if y < 0:
+                            normal = y * (-C.GROUND_K)
+                            fy += normal
+                            fx += ((-10.0 * C.FRICTION_DYN) * normal
+                                   * ti.tanh(vx * normal * C.FRICTION_DYN))
+                    acc = vec2(fx / C.POINT_MASS, fy / C.POINT_MASS)
+                    for d in ti.static(range(2)):
+                        i = 2 * p + d
+                        kx = vs[i] * C.DT
+                        kv = acc[d] * C.DT
+                        if ti.static(stage == 0):
+                            adx[i] = kx
+                            adv[i] = kv
+                        elif ti.static(stage < 3):
+                            adx[i] += 2 * kx
+                            adv[i] += 2 * kv
+                        else:
+                            adx[i] += kx
+                            adv[i] += kv
+                        if ti.static(stage < 3):
+                            h = 0.5 if ti.static(stage < 2) else 1.0
+                            xs[i] = pos[i] + kx * h
+                            vs[i] = vel[i] + kv * h
     for i in range(2 * n_pts):
         pos[i] += adx[i] / 6
         vel[i] += adv[i] / 6
@@ -669,8 +683,9 @@ def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.te
                  pos: ti.template(), vel: ti.template(), pl: ti.template(), ccx: ti.template(),
                  ccy: ti.template()):
     """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
-    this substep is still pos_last); pass 2: rigid voxels into +-3 % (evogym's rigid pass ignores
-    the fixed flag)."""
+    this substep is still pos_last), applied as evogym's Eigen does: to every edge's first end,
+    then to every second end (see `_rk4`); pass 2: rigid voxels into +-3 % (evogym's rigid pass
+    ignores the fixed flag)."""
     for e in range(n_edges):
         a = ea[e]
         q = eb[e]
@@ -696,9 +711,13 @@ def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.te
         cy = ccy[e]
         if cx != 0.0 or cy != 0.0:
             a = ea[e]
-            q = eb[e]
             pos[2 * a] -= cx
             pos[2 * a + 1] -= cy
+    for e in range(n_edges):
+        cx = ccx[e]
+        cy = ccy[e]
+        if cx != 0.0 or cy != 0.0:
+            q = eb[e]
             pos[2 * q] += cx
             pos[2 * q + 1] += cy
     _hold_fixed(b, counts, lists, pos, vel, pl)

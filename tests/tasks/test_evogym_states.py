@@ -1,6 +1,7 @@
 """Task branches the random robots of tests/data/evogym32 never reach (goals of BridgeWalker-v0,
 CaveCrawler-v0, Climber-v0/-v1 and Traverser-v0, Traverser-v0's floor sight over its blocks,
-Catcher-v0's package below y = 0.5), against evogym 2.0.0 episodes that start from a moved state
+Catcher-v0's package below y = 0.5, evogym's built-in ground plane y < 0), against evogym 2.0.0
+episodes that start from a moved state
 (`state_cases.npz`, recorded by bench/evogym_state_cases.py; README there): evogym's own
 `Sim.translate_object` moved the robot (or Catcher-v0's package) right after reset, and we move ours
 by the same (dx, dy) in `env.sim.state`, then replay the same actions.
@@ -134,3 +135,11 @@ def test_cases_reach_the_branches(data, data_dir):
     obs = data["traverser_on_blocks/obs"]
     sight = obs[:, -11:]
     assert np.ptp(sight, axis=0).max() > 0.01
+    # Walker-v0 left of its ground: points sink below y = 0 (the ground plane acts) and slide
+    # (its friction acts); Walker's observation is the COM velocity, then all x, then all y
+    obs = data["walker_on_ground_plane/obs"]
+    com = data["walker_on_ground_plane/com"]
+    n = (obs.shape[1] - 2) // 2
+    y = obs[:, 2 + n:] + com[1:, 1:2]
+    assert (y < 0).any(axis=1)[5:].all()
+    assert np.ptp(com[:, 0]) > 0.005
