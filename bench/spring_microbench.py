@@ -3,8 +3,9 @@
     python bench/spring_microbench.py
 
 Times, in one Taichi CPU thread on a 5x5 body's springs held in local arrays: (0) the spring force
-with the scatter to its two points, as in the RK4 stages; (1) the forces alone, stored per
-spring; (2) forces then scatter in a second loop; a throughput loop of independent scalar
+with the scatter to its two points in the same loop; (1) the forces alone, stored per spring;
+(2) forces then scatter of both ends in a second loop (the kernel now scatters in two loops, first
+ends then second ends: evogym's order); a throughput loop of independent scalar
 (sqrt, div) pairs; and the same pairs in a contiguous loop that LLVM vectorises (on the
 Sapphire-Rapids VM both cost ~1.5 ns per pair: vectors do not raise the divider's throughput,
 which is why SIMD across worlds would not speed up the springs there). Not run by CI.
