@@ -15,6 +15,7 @@ from tsim import constants as C
 from tsim import kernels as K
 from tsim import runtime
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
+from tsim.launch import CachedLaunch
 from tsim.world import World
 
 
@@ -159,6 +160,7 @@ class BatchSim:
         # (bench/launch_args_bench.py), and on a GPU
         # they stay on the device instead of crossing the bus at every launch (so the numpy
         # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction)
+        self._launch: CachedLaunch | None = None  # see `step`
         self._static = tuple(_taichi_array(a) for a in (
             self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists, self.ter_f,
             self.ter_i, self.ter_grid))
@@ -241,9 +243,18 @@ class BatchSim:
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
             if self._serial:
-                K.step_kernel_serial(*args)
+                kernel = K.step_kernel_serial
             else:
-                K.step_kernel(*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
+                kernel = K.step_kernel
+                args = (*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
+            # the arguments rarely change between steps (arrays are updated in place), so after
+            # the first launch the same launch context is reused (CPU only; see tsim/launch.py)
+            cached = self._launch
+            if cached is not None and cached.matches(args):
+                cached.launch()
+            else:
+                kernel(*args)
+                self._launch = CachedLaunch.build(kernel, args) if self._arch == "cpu" else None
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:
