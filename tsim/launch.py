@@ -19,7 +19,11 @@ from tsim import runtime
 
 
 class CachedLaunch:
-    """A kernel's launch context with `args` set, valid while `matches(args)` holds."""
+    """A kernel's launch context with `args` set, valid while `matches(args)` holds.
+
+    Made for `step_kernel`'s kinds of arguments only: C-contiguous numpy arrays and Taichi
+    ndarrays of scalar dtype without gradients, 32-bit ints and template values (vector-dtype
+    arrays, gradients, floats and structs are set differently by Taichi and are not handled)."""
 
     def __init__(self, prog, t_kernel, ctx, ndarrays: list, args: tuple):
         self._prog = prog
@@ -68,7 +72,7 @@ class CachedLaunch:
         for a, b in zip(args, self._args, strict=True):
             if isinstance(a, np.ndarray):
                 if not (isinstance(b, np.ndarray) and a.ctypes.data == b.ctypes.data
-                        and a.shape == b.shape and a.dtype == b.dtype):
+                        and a.shape == b.shape and a.strides == b.strides and a.dtype == b.dtype):
                     return False
             elif isinstance(a, int | np.integer):
                 if not (isinstance(b, int | np.integer) and a == b):

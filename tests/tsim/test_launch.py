@@ -39,14 +39,17 @@ def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
     cached, plain = _pair()
     for t in range(5):
         _step_both(cached, plain, t)
-    # a new state array (the kernel must write into it, not into the old one)
+    # a new state array (the kernel must write into it, not into the old one), and actions in
+    # column-major order (not cached: Taichi's call copies them to row-major order each time)
     for sim in (cached, plain):
         sim.state = sim.state.copy()
+        sim.actions = np.asfortranarray(sim.actions)
     for t in range(5, 10):
         _step_both(cached, plain, t)
     assert cached.state.tobytes() == plain.state.tobytes()
     # a full reset replaces `counts`; a world deactivated afterwards must stay frozen
     for sim in (cached, plain):
+        sim.actions = np.ascontiguousarray(sim.actions)
         sim.reset()
         sim.deactivate(np.array([False, True, False, False]))
     frozen = cached.state[1].copy()
