@@ -579,6 +579,30 @@ def _contacts(b, n_pts, counts: ti.template(), pos: ti.template(), vt: ti.templa
 
 
 @ti.func
+def _add_to_ends(n_edges, v: ti.template(), ea: ti.template(), eb: ti.template(), fx: ti.template(),
+                 fy: ti.template(), skip_zero: ti.template()):
+    """v[a] -= (fx[e], fy[e]) and v[b] += (fx[e], fy[e]) for every edge e = (a, b), in evogym's
+    order: Eigen's `v(:, a_index) -= f` then `v(:, b_index) += f`, i.e. every edge's first end in
+    edge order, then every second end (one interleaved pass rounds differently wherever a point is
+    the first end of one edge and the second of an earlier one). `skip_zero`: leave out zero
+    vectors, which change nothing (x - 0.0 and x + 0.0 are x; only evogym's -0.0 + 0.0 gives +0.0,
+    a sign of zero)."""
+    for half in ti.static(range(2)):
+        for e in range(n_edges):
+            x = fx[e]
+            y = fy[e]
+            if ti.static(not skip_zero) or x != 0.0 or y != 0.0:
+                if ti.static(half == 0):
+                    a = ea[e]
+                    v[2 * a] -= x
+                    v[2 * a + 1] -= y
+                else:
+                    q = eb[e]
+                    v[2 * q] += x
+                    v[2 * q + 1] += y
+
+
+@ti.func
 def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.template(),
          xs: ti.template(), vs: ti.template(), frc: ti.template(), adx: ti.template(),
          adv: ti.template(), leq: ti.template(), ea: ti.template(), eb: ti.template(),
@@ -594,10 +618,7 @@ def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.templa
         for i in range(2 * n_pts):
             frc[i] = 0.0
         # the springs' forces in a loop without stores to shared points, which LLVM vectorises
-        # (square roots and divisions 4 at a time), then their scatter in evogym's order: Eigen's
-        # `force(:, a_index) -= f` then `force(:, b_index) += f`, i.e. every spring's first end in
-        # edge order, then every second end (one interleaved pass rounds differently wherever a
-        # point is the first end of one spring and the second of an earlier one)
+        # (square roots and divisions 4 at a time), then their scatter in evogym's order
         for e in range(n_edges):
             a = ea[e]
             q = eb[e]
@@ -609,14 +630,7 @@ def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.templa
             mag = (dist - leq[e]) * ek[e] / dist
             sfx[e] = dx * mag
             sfy[e] = dy * mag
-        for e in range(n_edges):
-            a = ea[e]
-            frc[2 * a] -= sfx[e]
-            frc[2 * a + 1] -= sfy[e]
-        for e in range(n_edges):
-            q = eb[e]
-            frc[2 * q] += sfx[e]
-            frc[2 * q + 1] += sfy[e]
+        _add_to_ends(n_edges, frc, ea, eb, sfx, sfy, False)
         # the ground plane's force (a branch and a tanh call) keeps LLVM from vectorising the
         # point loop, so that loop has a second copy without it for stages with no point below
         below = 0
@@ -683,9 +697,8 @@ def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.te
                  pos: ti.template(), vel: ti.template(), pl: ti.template(), ccx: ti.template(),
                  ccy: ti.template()):
     """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
-    this substep is still pos_last), applied as evogym's Eigen does: to every edge's first end,
-    then to every second end (see `_rk4`); pass 2: rigid voxels into +-3 % (evogym's rigid pass
-    ignores the fixed flag)."""
+    this substep is still pos_last), applied in evogym's order (`_add_to_ends`); pass 2: rigid
+    voxels into +-3 % (evogym's rigid pass ignores the fixed flag)."""
     for e in range(n_edges):
         a = ea[e]
         q = eb[e]
@@ -706,20 +719,7 @@ def _constraints(b, n_edges, counts: ti.template(), ea: ti.template(), eb: ti.te
             cy += dy * m
         ccx[e] = cx * 0.8
         ccy[e] = cy * 0.8
-    for e in range(n_edges):
-        cx = ccx[e]
-        cy = ccy[e]
-        if cx != 0.0 or cy != 0.0:
-            a = ea[e]
-            pos[2 * a] -= cx
-            pos[2 * a + 1] -= cy
-    for e in range(n_edges):
-        cx = ccx[e]
-        cy = ccy[e]
-        if cx != 0.0 or cy != 0.0:
-            q = eb[e]
-            pos[2 * q] += cx
-            pos[2 * q + 1] += cy
+    _add_to_ends(n_edges, pos, ea, eb, ccx, ccy, True)
     _hold_fixed(b, counts, lists, pos, vel, pl)
     for i in range(counts[b, N_RIGID]):
         v = lists[b, i, 1]

@@ -155,12 +155,12 @@ class BatchSim:
         # and whether a substep may test only the pairs listed at an earlier one (the same pairs
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
-        # the arrays no step changes, copied once into Taichi's own ndarrays: a launch takes
-        # those for ~6.5 us each on the CPU against ~11 us for a numpy array's
-        # (bench/launch_args_bench.py), and on a GPU
-        # they stay on the device instead of crossing the bus at every launch (so the numpy
-        # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction)
         self._launch: CachedLaunch | None = None  # see `step`
+        # the arrays no step changes, copied once into Taichi's own ndarrays: on a GPU they stay
+        # on the device instead of crossing the bus at every launch; on the CPU a call through
+        # Taichi takes them for ~6.5 us each against ~11 us for a numpy array's
+        # (bench/launch_args_bench.py; a cached launch re-sets them for ~1 us each). So the numpy
+        # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction
         self._static = tuple(_taichi_array(a) for a in (
             self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists, self.ter_f,
             self.ter_i, self.ter_grid))
