@@ -25,7 +25,8 @@ class CachedLaunch:
     ndarrays of scalar dtype without gradients, 32-bit ints and template values (vector-dtype
     arrays, gradients, floats and structs are set differently by Taichi and are not handled)."""
 
-    def __init__(self, prog, t_kernel, ctx, ndarrays: list, args: tuple):
+    def __init__(self, kernel, prog, t_kernel, ctx, ndarrays: list, args: tuple):
+        self._kernel = kernel
         self._prog = prog
         self._t_kernel = t_kernel
         self._ctx = ctx
@@ -62,12 +63,12 @@ class CachedLaunch:
             prog = ti.lang.impl.get_runtime().prog
         except (AttributeError, KeyError, TypeError, ValueError, RuntimeError):
             return None
-        return cls(prog, t_kernel, ctx, ndarrays, args)
+        return cls(kernel, prog, t_kernel, ctx, ndarrays, args)
 
-    def matches(self, args: tuple) -> bool:
-        """The same arguments: the same array objects (numpy arrays with the same memory) and
-        equal integers."""
-        if len(args) != len(self._args):
+    def matches(self, kernel, args: tuple) -> bool:
+        """The same kernel with the same arguments: the same array objects (numpy arrays with the
+        same memory) and equal integers."""
+        if kernel is not self._kernel or len(args) != len(self._args):
             return False
         for a, b in zip(args, self._args, strict=True):
             if isinstance(a, np.ndarray):

@@ -250,7 +250,7 @@ class BatchSim:
             # the arguments rarely change between steps (arrays are updated in place), so after
             # the first launch the same launch context is reused (CPU only; see tsim/launch.py)
             cached = self._launch
-            if cached is not None and cached.matches(args):
+            if cached is not None and cached.matches(kernel, args):
                 cached.launch()
             else:
                 kernel(*args)

@@ -65,3 +65,31 @@ def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
         _step_both(cached, plain, t)
     assert cached.state.tobytes() == plain.state.tobytes()  # the same bits either way, so:
     assert cached._launch is not before and cached._launch is not None
+
+
+def test_cached_launch_is_for_its_kernel_only():
+    """Two kernels with the same signature and arguments: the context of one must not be reused
+    for the other (it would run the first kernel's code)."""
+    from tsim import runtime
+    from tsim.launch import CachedLaunch
+
+    ti = runtime.ti
+    arr = ti.types.ndarray(dtype=ti.f64, ndim=1)
+
+    @ti.kernel
+    def add_one(x: arr):
+        for i in range(x.shape[0]):
+            x[i] += 1.0
+
+    @ti.kernel
+    def double(x: arr):
+        for i in range(x.shape[0]):
+            x[i] *= 2.0
+
+    x = np.ones(4)
+    add_one(x)
+    cached = CachedLaunch.build(add_one, (x,))
+    assert cached is not None and cached.matches(add_one, (x,))
+    assert not cached.matches(double, (x,))
+    cached.launch()
+    assert np.array_equal(x, np.full(4, 3.0))  # the cached launch ran add_one again
