@@ -5,6 +5,7 @@ import io
 import os
 import sys
 import threading
+import time
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
 # warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0
@@ -87,7 +88,10 @@ def init(arch: str | None = None) -> str:
 
 
 PINNED: dict[int, int] = {}  # Taichi worker thread id -> the CPU it is pinned to
-PIN_TRIES = 8  # parallel busy loops (~3 ms each on 2 CPUs) at most to single out the workers
+PIN_TRIES = 8  # rendezvous loops at most to single out the workers, PIN_PAUSE_S apart
+PIN_PAUSE_S = 0.005  # lets another thread's burst (Taichi's, after a first launch) end
+PIN_WORK = 1_000_000  # multiply-adds each worker runs after the rendezvous (~1.3 ms)
+PIN_SPIN_LIMIT = 20_000_000  # spins (~0.1-0.5 s) after which a task stops waiting for the others
 
 
 def pin_threads() -> dict[int, int]:
@@ -98,10 +102,17 @@ def pin_threads() -> dict[int, int]:
     Python thread had just been busy (observations, rewards), Linux often woke both workers on the
     same CPU and moved one only after milliseconds: a 2-thread step kernel then took 6.5 ms
     instead of 4.8 ms (BatchEnv 18k instead of 24k robot-steps/s, docs/BENCHMARKS.md). Where the
-    process has more CPUs than workers the scheduler has room and nothing is pinned. The workers
-    are found by their CPU time during a short parallel busy loop; if that does not single out
-    one thread per worker, nothing is pinned. Results do not depend on it (worlds are independent).
-    """
+    process has more CPUs than workers the scheduler has room and nothing is pinned.
+
+    The workers are found by their CPU time in a parallel loop of as many tasks as workers, each
+    of which waits until all have started and then does ~1 ms of work: a worker cannot take a
+    second task before every task is taken, so each worker runs exactly one, however late the
+    scheduler wakes it. A plain busy loop promised nothing of the kind (one worker often took
+    every task) and its CPU times were added up over loops, so a burst of another thread stayed
+    in the sum: in CI a process once failed all eight loops and ran unpinned. Here each try is
+    judged alone and tries are PIN_PAUSE_S apart, since another thread busy at the same time
+    spoils a try (Taichi runs one for a few ms after the first launch). If no try singles out
+    the workers, nothing is pinned. Results do not depend on pinning (worlds are independent)."""
     if PINNED or os.environ.get("SGR_PIN", "1") == "0" or not hasattr(os, "sched_setaffinity"):
         return PINNED
     n = threads()
@@ -111,24 +122,21 @@ def pin_threads() -> dict[int, int]:
         return PINNED
     if n < 2 or n != len(cpus) or not os.path.isdir("/proc/self/task"):
         return PINNED
-    out = ti.ndarray(ti.f64, 16 * n)
-    _busy(out, 100_000)  # compiles, and starts the pool
+    arrived = ti.ndarray(ti.i32, 1)
+    out = ti.ndarray(ti.f64, n)
+    _rendezvous(arrived, out, 0, 0)  # compiles, and starts the pool
     me = threading.get_native_id()
-    total: dict[int, int] = {}
-    # each worker runs some of the 16 n tasks and the next busiest thread none of them; one loop
-    # often leaves a worker idle (the others took its share first: a third of processes on the
-    # 2-vCPU VM), so CPU times add up over up to PIN_TRIES loops until the workers stand out
     for _ in range(PIN_TRIES):
+        arrived.fill(0)
         before = _thread_cpu_ns()
-        _busy(out, 200_000)
+        _rendezvous(arrived, out, PIN_SPIN_LIMIT, PIN_WORK)
         after = _thread_cpu_ns()
-        for t in after:
-            if t != me:
-                total[t] = total.get(t, 0) + after[t] - before.get(t, 0)
-        used = sorted(((cpu, t) for t, cpu in total.items()), reverse=True)
+        used = sorted(((after[t] - before.get(t, 0), t) for t in after if t != me), reverse=True)
         workers = used[:n]
-        if len(workers) == n and workers[-1][0] >= 4 * (used[n][0] if len(used) > n else 0) + 500_000:
+        rest = used[n][0] if len(used) > n else 0
+        if len(workers) == n and workers[-1][0] >= 4 * rest + 500_000:
             break
+        time.sleep(PIN_PAUSE_S)
     else:
         return PINNED
     for (_, tid), cpu in zip(workers, cpus, strict=True):
@@ -153,10 +161,18 @@ def _thread_cpu_ns() -> dict[int, int]:
 
 
 @ti.kernel
-def _busy(out: ti.types.ndarray(dtype=ti.f64, ndim=1), work: ti.i32):
-    """A parallel loop of len(out) tasks of `work` dependent multiply-adds (~0.1 ms per 100k)."""
+def _rendezvous(arrived: ti.types.ndarray(dtype=ti.i32, ndim=1),
+                out: ti.types.ndarray(dtype=ti.f64, ndim=1), spin_limit: ti.i32, work: ti.i32):
+    """len(out) parallel tasks; each counts itself in `arrived`, waits (at most `spin_limit`
+    spins) until all have, then runs `work` dependent multiply-adds."""
     ti.loop_config(block_dim=1)
     for i in range(out.shape[0]):
+        ti.atomic_add(arrived[0], 1)
+        spins = 0
+        while spins < spin_limit:
+            if ti.atomic_add(arrived[0], 0) >= out.shape[0]:  # an atomic read: not hoisted
+                break
+            spins += 1
         x = 1.0 + i
         for _ in range(work):
             x = x * 0.999999 + 1e-7
