@@ -35,7 +35,7 @@ needs_cpus = pytest.mark.skipif(len(CPUS) < 2 or not os.path.isdir("/proc/self/t
 @needs_cpus
 def test_workers_pinned_one_per_cpu_when_as_many_as_cpus():
     # in every process: one worker per CPU (a plain busy loop missed a worker in a third of
-    # processes, and in CI in every one of eight loops of a process)
+    # processes; eight of them, CPU times summed, still left a CI process unpinned)
     for _ in range(6):
         got = _probe(SGR_THREADS=str(len(CPUS)))
         assert sorted(got["pinned"].values()) == CPUS  # each CPU gets one worker
