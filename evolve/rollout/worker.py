@@ -17,11 +17,13 @@ from typing import BinaryIO
 import numpy as np
 
 from evolve.rollout.episodes import rollout_policy
+from evolve.rollout.robust import EpisodeNoise
 
 
-def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps) -> np.ndarray:
-    """Episode returns of one chunk, simulated as one batch."""
-    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps)
+def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
+              noise: EpisodeNoise | None = None) -> np.ndarray:
+    """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations)."""
+    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise)
 
 
 def write_frame(stream: BinaryIO, obj) -> None:

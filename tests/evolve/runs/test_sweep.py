@@ -81,7 +81,8 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
         best = max(float(x[1]) for x in fitness(cut / "runs" / r["run"]))
         assert float(r["best_final"]) == best and float(r["champion_fitness"]) == best
         assert float(r["replay"]) == pytest.approx(best, abs=1e-9)  # the JSON champion replays
-        assert float(r["robust_min"]) <= float(r["robust_mean"])
+        assert float(r["nominal"]) == float(r["replay"])  # nominal runs: the same episode
+        assert set(r) >= {"noise1e-09_mean", "noise1e-03_min", "noise1e-03_ratio"}
     text = out.read_text()
     assert "| sgr | Walker-v0 | 0, 4 | 4 |" in text and "5.75 / 6.09 / 6.56 / 6.60" in text
     assert (out.parent / "curves.png").read_bytes()[:4] == b"\x89PNG"
@@ -121,8 +122,8 @@ def test_report_names_champions_that_do_not_replay_to_their_fitness():
     from evolve.runs.report import report_markdown
 
     base = {"method": "direct", "task": "Walker-v0", "generations": 100, "best_final": 2.0,
-            "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "robust_mean": 2.0,
-            "robust_sd": 0.0, "robust_min": 2.0, "champion_fitness": 2.0}
+            "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "noise1e-09_mean": 2.0,
+            "noise1e-09_sd": 0.0, "noise1e-09_min": 2.0, "champion_fitness": 2.0, "nominal": 2.0}
     rows = [{**base, "seed": 0, "run": "direct-Walker-v0-s0", "replay": 2.0},
             {**base, "seed": 1, "run": "direct-Walker-v0-s1", "replay": 1.5}]
     text = report_markdown(rows)
