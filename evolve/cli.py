@@ -107,8 +107,9 @@ def _report(args: argparse.Namespace) -> int:
     from evolve.runs.report import write_report
 
     out = write_report(args.dir, args.out, robustness=not args.no_robustness, levels=args.noise,
-                       replays=args.replays)
-    print(f"wrote {out}, {out.parent / 'summary.csv'} and {out.parent / 'curves.png'}")
+                       replays=args.replays, gallery=not args.no_gallery)
+    print(f"wrote {out}, {out.parent / 'report.html'}, {out.parent / 'summary.csv'} and "
+          f"{out.parent / 'curves.png'}" + ("" if args.no_gallery else f" and {out.parent / 'gallery'}/"))
     return 0
 
 
@@ -187,7 +188,8 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
     rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")
-    rp.add_argument("dir", metavar="DIR", help="a sweep directory, or a folder of run directories")
+    rp.add_argument("dir", metavar="DIR", nargs="+",
+                    help="a sweep directory, or a folder of run directories (several: one report)")
     rp.add_argument("--out", help="report path (default DIR/report.md); summary.csv, curves.png beside it")
     rp.add_argument("--no-robustness", action="store_true",
                     help="skip replaying each champion under action noise")
@@ -196,6 +198,8 @@ def main(argv: list[str] | None = None) -> int:
                          "action (default 1e-9 1e-3)")
     rp.add_argument("--replays", type=positive(int), default=10, metavar="N",
                     help="replays per champion and noise level (default 10)")
+    rp.add_argument("--no-gallery", action="store_true",
+                    help="no champion GIFs (gallery/) in report.html")
     rp.set_defaults(fn=_report)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")

@@ -60,10 +60,10 @@ def load_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
 
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
                  height: int = 320, fps: float = 30.0, replay: int = 0, eps: float = 0.0,
-                 kind: str = "uniform", offset: float = 0.0, seed: int = 0) -> Path:
-    """Render the champion's episode in its task (same episode length as its evaluation): the
-    nominal episode, or with `replay` > 0 that perturbed replay of `replay_champion` (same
-    arguments, same episode)."""
+                 kind: str = "uniform", offset: float = 0.0, seed: int = 0, every: int = 1) -> Path:
+    """Render the champion's episode in its task (same episode length as its evaluation; a frame
+    every `every` steps): the nominal episode, or with `replay` > 0 that perturbed replay of
+    `replay_champion` (same arguments, same episode)."""
     from tasks.render_episode import render_episode
     from tsim.render import write_gif
 
@@ -77,7 +77,7 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
         return a if extra is None else a + extra[0]
 
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
-                            indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
+                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
     return write_gif(frames, out or Path(run_dir) / "champion.gif", fps=fps)
 
 

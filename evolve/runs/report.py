@@ -61,8 +61,11 @@ def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
     return SUMMARY_COLUMNS[:-2] + noise + SUMMARY_COLUMNS[-2:]
 
 
-def run_dirs_under(folder: str | Path) -> list[Path]:
-    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder."""
+def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
+    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder; of
+    each folder when given several."""
+    if not isinstance(folder, str | Path):
+        return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
@@ -261,15 +264,25 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
     return path
 
 
-def write_report(folder: str | Path, out: str | Path | None = None, robustness: bool = True,
-                 levels: Sequence[float] = NOISE_LEVELS, replays: int = 10) -> Path:
-    """report.md (at `out`, default folder/report.md), summary.csv and curves.png beside it; each
-    champion replayed `replays` times at each noise level in `levels`."""
-    runs = run_dirs_under(folder)
-    out = Path(out) if out else Path(folder) / "report.md"
+def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
+                 robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS, replays: int = 10,
+                 gallery: bool = True) -> Path:
+    """report.md (at `out`, default <first folder>/report.md), summary.csv, curves.png and
+    report.html beside it, the runs of one folder or several (e.g. a sweep and its robust twin);
+    each champion replayed `replays` times at each noise level in `levels`; `gallery`: the best
+    seed's champion per method and task as a GIF and a body picture in gallery/, inlined in
+    report.html."""
+    from evolve.runs.gallery import gallery_entries, report_html, write_gallery
+
+    folders = [folder] if isinstance(folder, str | Path) else list(folder)
+    runs = run_dirs_under(folders)
+    out = Path(out) if out else Path(folders[0]) / "report.md"
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = summarize(runs, robustness, levels, replays)
-    out.write_text(report_markdown(rows))
+    text = report_markdown(rows)
+    out.write_text(text)
     write_summary_csv(rows, out.parent / "summary.csv")
-    plot_curves(runs, out.parent / "curves.png")
+    curves = plot_curves(runs, out.parent / "curves.png")
+    shown = write_gallery(gallery_entries(rows, runs), out.parent / "gallery") if gallery else []
+    (out.parent / "report.html").write_text(report_html(text, curves, shown))
     return out

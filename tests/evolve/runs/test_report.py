@@ -63,7 +63,7 @@ def report(tmp_path, monkeypatch):
                         lambda run_dir: CHAMPION[seed_of[Path(run_dir).name]])
     monkeypatch.setattr(champion_module, "replay_champion",
                         lambda run_dir, replays, eps: np.array(REPLAYS[seed_of[Path(run_dir).name]][eps]))
-    out = write_report(tmp_path, tmp_path / "out" / "report.md", replays=3)
+    out = write_report(tmp_path, tmp_path / "out" / "report.md", replays=3, gallery=False)
     rows = {r["run"]: r for r in csv.DictReader((out.parent / "summary.csv").open())}
     return out.read_text(), rows
 

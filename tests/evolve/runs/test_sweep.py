@@ -38,6 +38,15 @@ def run_names() -> list[str]:
     return [f"{m}-Walker-v0-s{s}" for m in TINY["methods"] for s in TINY["seeds"]]
 
 
+def best_seeds(sweep: Path) -> list[tuple[str, int]]:
+    """(method, seed) of the best champion of each method (ties: the lower seed)."""
+    out = []
+    for m in TINY["methods"]:
+        fit = {s: RunDir(sweep / "runs" / f"{m}-Walker-v0-s{s}").champion()["fitness"] for s in TINY["seeds"]}
+        out.append((m, max(TINY["seeds"], key=lambda s: (fit[s], -s))))
+    return out
+
+
 def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
     spec = write_sweep(tmp_path, TINY)
     assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "whole"), "--quiet"]) == 0
@@ -74,7 +83,11 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
 
     out = tmp_path / "report" / "paper.md"
     assert main(["report", str(cut), "--out", str(out)]) == 0
-    assert {p.name for p in out.parent.iterdir()} == {"paper.md", "summary.csv", "curves.png"}
+    assert {p.name for p in out.parent.iterdir()} == {"paper.md", "summary.csv", "curves.png", "report.html",
+                                                      "gallery"}
+    # the best seed of each method and task: its episode and its body
+    assert sorted(p.name for p in (out.parent / "gallery").iterdir()) == sorted(
+        f"{m}-Walker-v0-s{s}{ext}" for m, s in best_seeds(cut) for ext in (".gif", "-body.png"))
     rows = list(csv.DictReader((out.parent / "summary.csv").open()))
     assert sorted(r["run"] for r in rows) == sorted(run_names())
     for r in rows:
