@@ -27,6 +27,7 @@ import numpy as np
 from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.worker import read_frame, run_chunk, write_frame
 from tasks.env import BatchEnv
+from tasks.registry import spec_blob
 
 # factory(env, items) -> batched policy for the robots of env; items[i] drives robot i. With
 # workers > 1 it is pickled: a module-level function or a functools.partial of one.
@@ -87,7 +88,8 @@ class RolloutPool:
         if self.workers == 1:
             return run_chunk(task, list(bodies), list(items), factory, episode_steps)
         chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], self.workers)
-        jobs = [(task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps)
+        spec = spec_blob(task)  # a task registered in this process's code travels with the job
+        jobs = [(task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps, spec)
                 for c in chunks]
         for proc, job in zip(self._start(len(chunks)), jobs, strict=True):
             self._send(proc, job)

@@ -98,7 +98,11 @@ class RayRolloutPool:
     def _run(self, task, bodies, items, factory, episode_steps) -> np.ndarray:
         ray = self._start()
         chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(self._actors))
-        refs = [a.run.remote((task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps))
+        from tasks.registry import spec_blob
+
+        spec = spec_blob(task)  # a task registered in this process's code travels with the job
+        refs = [a.run.remote((task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps,
+                              spec))
                 for a, c in zip(self._actors, chunks, strict=False)]
         out = np.zeros(len(bodies))
         try:
