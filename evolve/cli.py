@@ -246,10 +246,10 @@ def _plot(args: argparse.Namespace) -> int:
 
     if args.out:
         output_path(args.out)
-    if len(args.run_dirs) == 1 and not args.compare:
+    if len(args.run_dirs) == 1 and not (args.compare or args.per_run):
         out = plot_run(args.run_dirs[0], args.out or Path(args.run_dirs[0]) / "fitness.png")
     else:
-        out = plot_runs(args.run_dirs, args.out or "fitness.png")
+        out = plot_runs(args.run_dirs, args.out or "fitness.png", per_run=args.per_run)
     print(f"wrote {out}")
     return 0
 
@@ -309,10 +309,13 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
     r.set_defaults(fn=_render)
-    pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged")
+    pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged, or "
+                                     "one line per run with --per-run")
     pl.add_argument("run_dirs", nargs="+", metavar="RUN_DIR")
     pl.add_argument("--out", help="PNG path (default RUN_DIR/fitness.png for one run, else fitness.png)")
     pl.add_argument("--compare", action="store_true", help="group style even for a single run")
+    pl.add_argument("--per-run", action="store_true",
+                    help="one line per run (coloured by method and task) instead of a mean with a band")
     pl.set_defaults(fn=_plot)
     register_task_commands(sub)
     args = p.parse_args(argv)
