@@ -175,10 +175,10 @@ def test_corrupt_champion(tmp_path, capsys, case):
 
 
 def test_champion_check_accepts_a_good_one(tmp_path):
-    from evolve.runs.champion import load_champion
+    from evolve.runs.champion import read_champion
 
     (tmp_path / "champion.json").write_text(json.dumps(GOOD))
-    _, body, ctrl = load_champion(tmp_path)
+    _, body, ctrl = read_champion(tmp_path)
     assert body.tolist() == BODY and ctrl.act(np.zeros(OBS)).shape == (3,)
 
 
