@@ -51,7 +51,7 @@ def _run_and_replay(tmp_path, shipped_config, monkeypatch, method, task, **extra
     assert main(["evolve", "--config", str(_tiny(shipped_config, method, task, **extra)),
                  "--out", str(out), "--quiet"]) == 0
     rows = RunDir(out).rows()
-    assert [int(r["generation"]) for r in rows] == [0, 1]
+    assert [int(r["generation"]) for r in rows] == [1, 2]  # counted from 1
     # every genome of a generation is counted as valid or invalid: the first generation holds exactly
     # pop_size (6) genomes, later ones what neat-python's reproduction made (about pop_size)
     assert sizes[0] == 6
