@@ -21,7 +21,8 @@ def code_block(doc: Path, heading: str) -> str:
 
 def test_readme_first_hour_reads_in_order():
     text = (ROOT / "README.md").read_text()
-    steps = ["**1. Install**", "**2. Run**", "**3. Look**", "**4. Use your champion**", "**5. Your own task**"]
+    steps = ["**1. Install**", "**2. Run**", "**3. Look**", "**4. Use your champion**",
+             "**5. Your own task**"]
     where = [text.find(s) for s in steps]
     assert -1 not in where and where == sorted(where) and where[-1] < text.find("## What is here")
     snippet = code_block(ROOT / "README.md", "**4. Use your champion**").strip().splitlines()

@@ -279,8 +279,9 @@ def test_a_closed_stdout_is_no_disk_error_and_the_run_goes_on(tmp_path, repo_roo
     and finishes (exit 0), with no 'cannot write' or 'make room' and no traceback."""
     cfg = tiny_config(tmp_path, repo_root, generations=6, workers=1)
     env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_THREADS")}
-    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--config", str(cfg), "--out", "r"],
-                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, env=env)
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--config", str(cfg),
+                             "--out", "r"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=env)
     head = [proc.stdout.readline(), proc.stdout.readline()]  # what `head -2` reads, then it exits
     proc.stdout.close()
     err = proc.stderr.read().decode()
@@ -310,7 +311,8 @@ def test_resume_of_a_sweep_folder_points_to_sgr_sweep_resume(tmp_path, capsys):
 
 @pytest.mark.parametrize("argv, names", [
     (["evolve", "--task", "Climbr-v2"], ["unknown task 'Climbr-v2'", "did you mean Climber-v2"]),
-    (["evolve", "--task", "Climber-v2", "--method", "dirct"], ["unknown method 'dirct'", "did you mean direct"]),
+    (["evolve", "--task", "Climber-v2", "--method", "dirct"],
+     ["unknown method 'dirct'", "did you mean direct"]),
     (["evolve", "--config", "sgr/Walkr-v0"], ["sgr/Walkr-v0", "did you mean sgr/Walker-v0"]),
 ])
 def test_unknown_task_method_and_config_names_suggest_the_closest(capsys, argv, names):

@@ -66,7 +66,8 @@ def test_a_world_from_a_matrix_is_the_world_of_the_same_json(tmp_path):
     nbrs = {0: [1], 1: [0, 2], 2: [1, 3], 3: [2, 4, 8], 4: [3, 9], 8: [3, 9], 9: [4, 8]}
     data = {"grid_width": 5, "grid_height": 4, "objects": {
         "terrain": {"indices": [15], "types": [2], "neighbors": {"15": []}},
-        "terrain_1": {"indices": ground, "types": [5] * 7, "neighbors": {str(k): v for k, v in nbrs.items()}}}}
+        "terrain_1": {"indices": ground, "types": [5] * 7,
+                      "neighbors": {str(k): v for k, v in nbrs.items()}}}}
     a = world_from_matrix(m)
     b = world_from_dict(data)
     (tmp_path / "w.json").write_text(__import__("json").dumps(data))

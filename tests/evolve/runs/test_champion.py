@@ -45,6 +45,7 @@ def test_an_old_champion_with_a_null_episode_length_still_loads(tmp_path):
     ctrl = {"layers": [{"weights": np.zeros((n_in, 3)).tolist(), "biases": [0.0] * 3, "activation": "tanh"}],
             "input_size": n_in, "action_cells": [0, 1, 2]}
     (tmp_path / "champion.json").write_text(json.dumps(
-        {"task": "Walker-v0", "episode_steps": None, "fitness": 0.1, "body": [[3, 3, 3]], "controller": ctrl}))
+        {"task": "Walker-v0", "episode_steps": None, "fitness": 0.1, "body": [[3, 3, 3]],
+         "controller": ctrl}))
     champ = load_champion(tmp_path)
     assert champ.episode_steps == 500 and champ.env().spec.max_episode_steps == 500

@@ -1,6 +1,7 @@
 """Runs: config errors name the key; a killed run resumes to the same numbers; run-dir contents."""
 
 import json
+from pathlib import Path
 
 import pytest
 import yaml
@@ -148,3 +149,29 @@ def test_ctrl_c_writes_a_checkpoint_and_every_generation_number_agrees(tmp_path,
     assert champ["generation"] == first_best
     assert main(["evolve", "--resume", str(run.path), "--generations", str(n + 1), "--quiet"]) == 0
     assert [int(r["generation"]) for r in run.rows()] == list(range(1, n + 2))
+
+
+def test_packaged_configs_resolve_by_name_from_any_folder(tmp_path, monkeypatch):
+    """sgr/Climber-v2, quick and paper name the packaged files wherever one stands; a path that
+    exists is still a path."""
+    from evolve.runs.config import configs_dir, find_config
+
+    monkeypatch.chdir(tmp_path)
+    assert find_config("sgr/Climber-v2") == configs_dir() / "sgr" / "Climber-v2.yaml"
+    assert find_config("direct/Walker-v0.yaml") == configs_dir() / "direct" / "Walker-v0.yaml"
+    assert find_config("quick") == configs_dir() / "sgr" / "quick.yaml"
+    assert find_config("paper", "sweep file") == configs_dir() / "sweeps" / "paper.yaml"
+    (tmp_path / "sgr").mkdir()
+    (tmp_path / "sgr" / "Climber-v2").write_text("method: sgr\n")
+    assert find_config("sgr/Climber-v2") == Path("sgr/Climber-v2")
+
+
+def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["evolve", "--task", "Walker-v0", "--method", "direct", "--generations", "1", "--pop", "4",
+                 "--workers", "1", "--quiet"]) == 0
+    (run,) = (tmp_path / "runs").iterdir()
+    assert run.name.startswith("direct-Walker-v0-seed0-")
+    cfg = RunDir(run).config()
+    assert cfg["method"] == "direct" and cfg["task"] == "Walker-v0" and cfg["episode_steps"] == 500
+    assert capsys.readouterr().out.startswith(f"run directory: {Path('runs') / run.name}")
