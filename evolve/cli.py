@@ -113,29 +113,25 @@ def _evolve(args: argparse.Namespace) -> int:
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
-    stdout, sys.stdout = sys.stdout, _ClosedStdoutTolerant(sys.stdout)
-    try:
-        if args.resume:
-            if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
-                raise ValueError("--resume continues a run with its own config; only --generations "
-                                 "(to extend it), --workers and --quiet go with it")
-            exp = Experiment.resume(_resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
-                                    generations=args.generations)
-            print(f"resuming {args.resume} after generation {exp.search.generation}")
-        else:
-            config = _evolve_config(args)
-            overrides = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                         "workers": args.workers}
-            cfg = load_config(config, overrides)
-            stamp = time.strftime("%Y%m%d-%H%M%S")
-            name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
-            out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
-            output_path(out, folder=True)
-            exp = Experiment.create(config, out, overrides, quiet=args.quiet)
-            print(f"run directory: {out}")
-        return _run(exp)
-    finally:
-        sys.stdout = stdout
+    if args.resume:
+        if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
+            raise ValueError("--resume continues a run with its own config; only --generations "
+                             "(to extend it), --workers and --quiet go with it")
+        exp = Experiment.resume(_resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
+                                generations=args.generations)
+        print(f"resuming {args.resume} after generation {exp.search.generation}")
+    else:
+        config = _evolve_config(args)
+        overrides = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
+                     "workers": args.workers}
+        cfg = load_config(config, overrides)
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
+        out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
+        output_path(out, folder=True)
+        exp = Experiment.create(config, out, overrides, quiet=args.quiet)
+        print(f"run directory: {out}")
+    return _run(exp)
 
 
 def _last_checkpoint(run_path: Path) -> int | None:
@@ -319,11 +315,14 @@ def main(argv: list[str] | None = None) -> int:
     pl.set_defaults(fn=_plot)
     register_task_commands(sub)
     args = p.parse_args(argv)
+    stdout, sys.stdout = sys.stdout, _ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
     try:
         return args.fn(args)
     except ValueError as exc:
         print(f"sgr: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":

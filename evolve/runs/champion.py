@@ -31,6 +31,11 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     ValueError naming the file and the key when it is not a champion that runs (checked with one
     forward pass of the controller)."""
     f = Path(run_dir) / "champion.json"
+    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: the modules that register it
+        from tasks.registry import import_tasks
+
+        for ref in RunDir(run_dir).config().get("imports") or ():
+            import_tasks(ref)
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -161,12 +166,6 @@ class Champion:
 def load_champion(run_dir: str | Path) -> Champion:
     """The champion of a run directory (its champion.json), checked to run: ValueError naming the
     file and the key otherwise."""
-    cfg = Path(run_dir) / "config.yaml"
-    if cfg.is_file():  # a task of the user's: the modules that register it
-        from tasks.registry import import_tasks
-
-        for ref in RunDir(run_dir).config().get("imports") or ():
-            import_tasks(ref)
     record, body, ctrl = read_champion(run_dir)
     return Champion(task=record["task"], body=body, controller=ctrl,
                     episode_steps=episode_steps(record["task"], record["episode_steps"]),
