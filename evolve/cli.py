@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tasks.cli import output_path, parse_body, positive, register_task_commands
+from tasks.cli import nonnegative, output_path, parse_body, positive, register_task_commands
 
 
 def workers_arg(text: str) -> int | str:
@@ -207,8 +207,10 @@ def _sweep(args: argparse.Namespace) -> int:
 def _report(args: argparse.Namespace) -> int:
     from evolve.runs.report import write_report
 
-    out = write_report(args.dir, args.out, robustness=not args.no_robustness)
-    print(f"wrote {out}, {out.parent / 'summary.csv'} and {out.parent / 'curves.png'}")
+    out = write_report(args.dir, args.out, robustness=not args.no_robustness, levels=args.noise,
+                       replays=args.replays, gallery=not args.no_gallery)
+    print(f"wrote {out}, {out.parent / 'report.html'}, {out.parent / 'summary.csv'} and "
+          f"{out.parent / 'curves.png'}" + ("" if args.no_gallery else f" and {out.parent / 'gallery'}/"))
     return 0
 
 
@@ -224,10 +226,13 @@ def _render(args: argparse.Namespace) -> int:
     if args.run_dir:
         if args.task or args.body:
             raise ValueError("give either RUN_DIR or --task with --body, not both")
-        out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps)
+        out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
+                           replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
     else:
         if not (args.task and args.body):
             raise ValueError("sgr render needs RUN_DIR, or --task and --body")
+        if args.replay:
+            raise ValueError("--replay renders a perturbed episode of a run's champion: give RUN_DIR")
         body = check_robot(parse_body(args.body))
         n_act = int(np.count_nonzero((body == 3) | (body == 4)))
         frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
@@ -290,10 +295,18 @@ def main(argv: list[str] | None = None) -> int:
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
     rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")
-    rp.add_argument("dir", metavar="DIR", help="a sweep directory, or a folder of run directories")
+    rp.add_argument("dir", metavar="DIR", nargs="+",
+                    help="a sweep directory, or a folder of run directories (several: one report)")
     rp.add_argument("--out", help="report path (default DIR/report.md); summary.csv, curves.png beside it")
     rp.add_argument("--no-robustness", action="store_true",
-                    help="skip replaying each champion under 1e-9 action perturbations")
+                    help="skip replaying each champion under action noise")
+    rp.add_argument("--noise", type=positive(float), nargs="+", default=[1e-9, 1e-3], metavar="EPS",
+                    help="noise levels: each champion replayed with uniform(+-EPS) added to every "
+                         "action (default 1e-9 1e-3)")
+    rp.add_argument("--replays", type=positive(int), default=10, metavar="N",
+                    help="replays per champion and noise level (default 10)")
+    rp.add_argument("--no-gallery", action="store_true",
+                    help="no champion GIFs (gallery/) in report.html")
     rp.set_defaults(fn=_report)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
@@ -304,6 +317,15 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
+    r.add_argument("--replay", type=nonnegative(int), default=0, metavar="I",
+                   help="the champion's perturbed replay I (as sgr report replays it; default 0: the "
+                        "exact episode)")
+    r.add_argument("--noise", type=nonnegative(float), default=1e-3, metavar="EPS",
+                   help="with --replay: action noise scale (default 1e-3)")
+    r.add_argument("--noise-kind", choices=("uniform", "gaussian"), default="uniform",
+                   help="with --replay: uniform(+-EPS) or gaussian(0, EPS) (default uniform)")
+    r.add_argument("--offset", type=nonnegative(float), default=0.0,
+                   help="with --replay: start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
     r.set_defaults(fn=_render)
     pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged, or "
                                      "one line per run with --per-run")

@@ -25,6 +25,19 @@ def positive(cast):
     return parse
 
 
+def nonnegative(cast):
+    """argparse type: a finite number >= 0 of type `cast` (int or float)."""
+    def parse(text: str):
+        try:
+            value = cast(text)
+        except ValueError:
+            value = -1
+        if not 0 <= value < float("inf"):
+            raise argparse.ArgumentTypeError(f"must be a {cast.__name__} >= 0, got {text!r}")
+        return value
+    return parse
+
+
 def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) -> Path:
     """`path` as what a command will write (a folder, or a file); ValueError naming the flag when it
     cannot be one (it, or a folder above it, is a file; a file output is a folder), before any

@@ -35,7 +35,10 @@ class BatchEnv:
 
     def __init__(self, task: str, bodies: Sequence[Body | object],
                  episode_steps: int | str | None = None, *, arch: str | None = None,
-                 passive_ok: bool = False, seeds: Sequence[int] | int | None = None):
+                 passive_ok: bool = False, seeds: Sequence[int] | int | None = None,
+                 robot_shift: Sequence[float] | None = None):
+        """`robot_shift` (B,) starts each robot that much right of its task's placement
+        (`BatchSim.shift_robots`; a perturbed start for robustness tests)."""
         self.spec = task_spec(task)
         self.task = task
         if episode_steps is None:
@@ -47,6 +50,8 @@ class BatchEnv:
         self.episode_steps = episode_steps
         self.sim = BatchSim(task_world(task), bodies, self.spec.origin, arch=arch,
                             passive_ok=passive_ok)
+        if robot_shift is not None:
+            self.sim.shift_robots(np.asarray(robot_shift))
         self.n_worlds = self.sim.n_worlds
         self.n_actuators = self.sim.n_actuators.copy()
         self.n_points = self.sim.n_robot_points.copy()

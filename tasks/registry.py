@@ -9,6 +9,7 @@ functions defined in your script or in your own modules by value, and the worker
 
 from __future__ import annotations
 
+import hashlib
 import importlib
 import importlib.util
 import pickle
@@ -102,7 +103,7 @@ def import_tasks(ref: str, base: Path | None = None) -> None:
         path = path.resolve()
         if not path.is_file():
             raise ValueError(f"task module {ref!r}: file not found: {path}")
-        name = f"sgr_user_tasks_{path.stem}_{abs(hash(str(path))):x}"
+        name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
         if name in sys.modules:
             return
         loader = importlib.util.spec_from_file_location(name, path)

@@ -195,6 +195,16 @@ class BatchSim:
         off = self._obj_offsets[k][w]
         self._pos0[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
 
+    def shift_robots(self, dx: np.ndarray) -> None:
+        """Start each world's robot `dx[w]` further right (left when negative; evogym's length
+        units, a voxel is 0.1) from the next `reset` of that world on: a perturbed start for
+        robustness tests. Objects and terrain stay where they are."""
+        dx = np.asarray(dx, dtype=np.float64)
+        if dx.shape != (self.n_worlds,) or not np.all(np.isfinite(dx)):
+            raise ValueError(f"shift_robots needs {self.n_worlds} finite shifts, got shape {dx.shape}")
+        robot = np.arange(self._pos0.shape[1])[None, :] < self.n_robot_points[:, None]
+        self._pos0[:, :, 0] += np.where(robot, dx[:, None], 0.0)
+
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].
 

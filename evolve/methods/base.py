@@ -15,7 +15,8 @@ from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
-from evolve.rollout.pool import RolloutPool
+from evolve.rollout.pool import PolicyFactory, RolloutPool
+from evolve.rollout.robust import EpisodeNoise, Robust, episode_keys
 
 # config key -> (type or tuple of types, default)
 Schema = dict[str, tuple[Any, Any]]
@@ -58,9 +59,32 @@ class Problem:
         free: the search caches it by genome key and decodes again after a resume."""
         raise NotImplementedError
 
-    def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:
-        """Fitness of each (valid) phenotype and the number of episodes simulated."""
+    def evaluate(self, phenotypes: Sequence[Phenotype],
+                 tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
+        """Fitness of each (valid) phenotype and the number of episodes simulated. `tags` name each
+        phenotype's evaluation uniquely within the run (the search passes "<generation>/<genome
+        key>"); robust evaluation draws its noise from them (`rollout`)."""
         raise NotImplementedError
+
+    def rollout(self, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
+                tags: Sequence[str] | None) -> tuple[np.ndarray, int]:
+        """Fitness of each robot (`RolloutPool.run`'s bodies, items and factory) and the episodes
+        simulated: its episode return, or with the config's `robust` key the statistic over K
+        perturbed episodes, the K episodes of every robot in one batch; episode k of the robot
+        tagged t is perturbed by `episode_keys(seed, [t], k)` alone."""
+        cfg = self.cfg
+        robust = Robust.from_config(cfg.get("robust"))
+        if robust is None:
+            return self.pool.run(cfg["task"], bodies, items, factory, cfg["episode_steps"]), len(bodies)
+        n, k = len(bodies), robust.episodes
+        if n == 0:
+            return np.zeros(0), 0
+        tags = [str(i) for i in range(n)] if tags is None else list(tags)
+        keys = np.concatenate([episode_keys(cfg["seed"], tags, e) for e in range(k)])
+        noise = EpisodeNoise(robust.perturbation, keys, np.ones(n * k, dtype=bool))
+        returns = self.pool.run(cfg["task"], list(bodies) * k, list(items) * k, factory,
+                                cfg["episode_steps"], noise)
+        return robust.score(returns.reshape(k, n)), n * k
 
     def champion(self, phenotype: Phenotype) -> dict:
         """The champion file's method-specific keys: at least `body` and `controller` (JSON)."""

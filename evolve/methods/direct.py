@@ -97,14 +97,13 @@ class DirectProblem(Problem):
         body = np.argmax(out, axis=1).reshape(self.shape).astype(np.int64)
         return DirectPhenotype(body, is_valid_robot(body), genome)
 
-    def evaluate(self, phenotypes: Sequence[DirectPhenotype]) -> tuple[np.ndarray, int]:
-        """One episode per phenotype, its genome's network as controller in the configured layout;
-        episodes = len(phenotypes)."""
-        return self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
-                             [p.genome for p in phenotypes],
-                             partial(direct_policy, genome_config=self.gc,
-                                     cell_xy=self.cells if self.per_cell else None),
-                             self.cfg["episode_steps"]), len(phenotypes)
+    def evaluate(self, phenotypes: Sequence[DirectPhenotype],
+                 tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
+        """One episode per phenotype (K with `robust`, `Problem.rollout`), its genome's network as
+        controller in the configured layout."""
+        return self.rollout([p.body for p in phenotypes], [p.genome for p in phenotypes],
+                            partial(direct_policy, genome_config=self.gc,
+                                    cell_xy=self.cells if self.per_cell else None), tags)
 
     def champion(self, p: DirectPhenotype) -> dict:
         """The body and the network as GraphController JSON (inputs from offset 2, actions from

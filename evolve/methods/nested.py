@@ -16,6 +16,7 @@ available however long ago it was found.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -54,6 +55,12 @@ def nested_policy(env, items: Sequence) -> GraphPolicy:
     """Inner controller networks, items = (genome, genome config), driving the robots of env."""
     nets = NetworkBatch([g for g, _ in items], [c for _, c in items])
     return GraphPolicy(nets, [b.actuator_flat for b in env.sim.bodies], env.sim.max_actuators)
+
+
+def _tag(body_key: bytes, generation: int, genome_key: int) -> str:
+    """A controller's evaluation, named for robust evaluation's noise: its body (hashed), its inner
+    population's generation and its genome key."""
+    return f"{hashlib.blake2b(body_key, digest_size=8).hexdigest()}/{generation}/{genome_key}"
 
 
 class NestedProblem(Problem):
@@ -122,7 +129,8 @@ class NestedProblem(Problem):
                                          lambda g, b=body: ControllerPhenotype(g, b), None, seed=None)
         return self.inner[key]
 
-    def evaluate(self, phenotypes: Sequence[BodyPhenotype]) -> tuple[np.ndarray, int]:
+    def evaluate(self, phenotypes: Sequence[BodyPhenotype],
+                 tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
         """Advance every distinct body's inner search `inner_generations` generations (all
         controllers one batch per inner generation); fitness = that search's best ever, episodes =
         controllers simulated. Has side effects: inner populations advance, stale ones are
@@ -133,8 +141,10 @@ class NestedProblem(Problem):
         for _ in range(self.cfg["inner_generations"]):
             asks = [s.ask() for s in searches]
             flat = [p for a in asks for _, p in a]
-            fit = self._simulate(flat, searches, asks)
-            episodes += len(flat)
+            tags = [_tag(b, s.generation, k) for b, s, a in zip(bodies, searches, asks, strict=True)
+                    for k, _ in a]
+            fit, n = self._simulate(flat, searches, asks, tags)
+            episodes += n
             start = 0
             for s, a in zip(searches, asks, strict=True):
                 s.tell(fit[start:start + len(a)])
@@ -154,11 +164,11 @@ class NestedProblem(Problem):
                     if self.generation - seen >= self.keep_generations and k != self.pinned]:
             del self.inner[key], self.last_seen[key]
 
-    def _simulate(self, flat: list[ControllerPhenotype], searches, asks) -> np.ndarray:
+    def _simulate(self, flat: list[ControllerPhenotype], searches, asks,
+                  tags: list[str]) -> tuple[np.ndarray, int]:
         configs = [s.config.genome_config for s, a in zip(searches, asks, strict=True) for _ in a]
         items = [(p.genome, c) for p, c in zip(flat, configs, strict=True)]
-        return self.pool.run(self.cfg["task"], [p.body for p in flat], items, nested_policy,
-                             self.cfg["episode_steps"])
+        return self.rollout([p.body for p in flat], items, nested_policy, tags)
 
     def champion(self, p: BodyPhenotype) -> dict:
         """The champion's body and the best controller of its inner population, which from now on
@@ -172,7 +182,8 @@ class NestedProblem(Problem):
         b = build_body(p.body)
         ctrl = GraphController.from_genome(s.best["genome"], s.config.genome_config,
                                            obs_dim(self.cfg["task"], b.n_points), 0, 0, b.actuator_flat)
-        return {"body": p.body.tolist(), "controller": ctrl.to_json()}
+        return {"body": p.body.tolist(), "controller": ctrl.to_json(),
+                "evaluation": {"tag": _tag(key, s.best["generation"], s.best["key"])}}
 
     # checkpoint hooks: the inner populations are part of the run's state
     def state(self) -> dict:

@@ -43,12 +43,12 @@ class SgrProblem(Problem):
         controller."""
         return decode(genome, self.genome_config, self.cfg["task"], self.settings)
 
-    def evaluate(self, phenotypes: Sequence[Phenotype]) -> tuple[np.ndarray, int]:
-        """One episode per phenotype with its dense controller; fitness = return, episodes =
-        len(phenotypes)."""
-        fitness = self.pool.run(self.cfg["task"], [p.body for p in phenotypes],
-                                [p.controller for p in phenotypes], dense_policy, self.cfg["episode_steps"])
-        return fitness, len(phenotypes)
+    def evaluate(self, phenotypes: Sequence[Phenotype],
+                 tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
+        """One episode per phenotype with its dense controller (K with `robust`, `Problem.rollout`);
+        fitness = return."""
+        return self.rollout([p.body for p in phenotypes], [p.controller for p in phenotypes],
+                            dense_policy, tags)
 
     def champion(self, phenotype: Phenotype) -> dict:
         """The body and the DenseController JSON (runnable with numpy alone)."""

@@ -11,6 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from evolve.nn.dense import ControllerBatch, DenseController
+from evolve.rollout.robust import EpisodeNoise
 from tasks.env import BatchEnv
 
 
@@ -21,8 +22,9 @@ class BatchPolicy(Protocol):
 
 
 def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callable[[BatchEnv], BatchPolicy],
-                   episode_steps: int | str | None = None) -> np.ndarray:
-    """Episode return of every body driven by the batched policy built for the env's layout.
+                   episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
+    """Episode return of every body driven by the batched policy built for the env's layout;
+    `noise` perturbs each world's episode (robust evaluation, evolve/rollout/robust.py).
 
     Every world's random stream starts from the same seed (0): a task with per-episode randomness
     (BidirectionalWalker-v0's goals) then gives every robot the same episode, so a robot's fitness
@@ -30,12 +32,18 @@ def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callabl
     replayed alone (world 0, seed 0) scores what it scored in evolution."""
     if len(bodies) == 0:
         return np.zeros(0)
-    env = BatchEnv(task, list(bodies), episode_steps=episode_steps, seeds=[0] * len(bodies))
+    env = BatchEnv(task, list(bodies), episode_steps=episode_steps, seeds=[0] * len(bodies),
+                   robot_shift=None if noise is None else noise.shifts())
     policy = make_policy(env)
     obs = env.observe()  # the constructed env's episode: its stream's first draw, as in a replay
     total = np.zeros(env.n_worlds)
-    for _ in range(env.episode_steps):
-        obs, r, term, trunc, _ = env.step(policy.act(obs))
+    for t in range(env.episode_steps):
+        act = policy.act(obs)
+        if noise is not None:
+            extra = noise.actions(t, act.shape[1])
+            if extra is not None:
+                act = act + extra
+        obs, r, term, trunc, _ = env.step(act)
         total += r
         if np.all(term | trunc):
             break

@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from evolve.rollout.episodes import BatchPolicy
+from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, write_frame
 from tasks.env import BatchEnv
 from tasks.registry import spec_blob
@@ -59,6 +60,14 @@ def balanced_chunks(costs: Sequence[float], n: int) -> list[list[int]]:
     return [sorted(c) for c in chunks if c]
 
 
+def chunk_job(task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
+              episode_steps: int | str | None, noise: EpisodeNoise | None, chunk: list[int]) -> tuple:
+    """`run_chunk`'s arguments for the robots `chunk` of a batch (what a worker is sent); a task
+    registered in this process's code travels with the job (`tasks.registry.spec_blob`)."""
+    return (task, [bodies[i] for i in chunk], [items[i] for i in chunk], factory, episode_steps,
+            None if noise is None else noise.take(chunk), spec_blob(task))
+
+
 class WorkerDied(RuntimeError):
     """A rollout worker process died twice on the same chunk."""
 
@@ -77,20 +86,18 @@ class RolloutPool:
         self._procs: list[subprocess.Popen] = []
 
     def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-            episode_steps: int | str | None = None) -> np.ndarray:
+            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
         """Episode return of each body driven by its item (`factory(env, items)` builds the policy),
-        in input order; a worker's exception is raised here, WorkerDied when a worker dies twice on
-        a chunk."""
+        in input order, each episode perturbed by its row of `noise` (if any); a worker's exception
+        is raised here, WorkerDied when a worker dies twice on a chunk."""
         if len(bodies) != len(items):
             raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
         if len(bodies) == 0:
             return np.zeros(0)
         if self.workers == 1:
-            return run_chunk(task, list(bodies), list(items), factory, episode_steps)
+            return run_chunk(task, list(bodies), list(items), factory, episode_steps, noise)
         chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], self.workers)
-        spec = spec_blob(task)  # a task registered in this process's code travels with the job
-        jobs = [(task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps, spec)
-                for c in chunks]
+        jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
         for proc, job in zip(self._start(len(chunks)), jobs, strict=True):
             self._send(proc, job)
         out = np.zeros(len(bodies))

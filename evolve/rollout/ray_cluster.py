@@ -26,7 +26,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from evolve.rollout.pool import PolicyFactory, balanced_chunks
+from evolve.rollout.pool import PolicyFactory, balanced_chunks, chunk_job
+from evolve.rollout.robust import EpisodeNoise
 
 INSTALL = 'pip install "sgr[ray]"'
 ACTOR_RESTARTS = 3  # a rollout actor that dies is restarted, and its chunk re-run, this many times
@@ -79,7 +80,7 @@ class RayRolloutPool:
         self._started_ray = False
 
     def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-            episode_steps: int | str | None = None) -> np.ndarray:
+            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
         """As `RolloutPool.run`, over the actors; Python's `random` state is left as it was
         (neat-python evolves with it). An actor's exception is raised here; RuntimeError when an
         actor died more than ACTOR_RESTARTS times."""
@@ -91,18 +92,14 @@ class RayRolloutPool:
         # caller's random state is left as it was, as local workers leave it
         state = random.getstate()
         try:
-            return self._run(task, bodies, items, factory, episode_steps)
+            return self._run(task, bodies, items, factory, episode_steps, noise)
         finally:
             random.setstate(state)
 
-    def _run(self, task, bodies, items, factory, episode_steps) -> np.ndarray:
+    def _run(self, task, bodies, items, factory, episode_steps, noise) -> np.ndarray:
         ray = self._start()
         chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(self._actors))
-        from tasks.registry import spec_blob
-
-        spec = spec_blob(task)  # a task registered in this process's code travels with the job
-        refs = [a.run.remote((task, [bodies[i] for i in c], [items[i] for i in c], factory, episode_steps,
-                              spec))
+        refs = [a.run.remote(chunk_job(task, bodies, items, factory, episode_steps, noise, c))
                 for a, c in zip(self._actors, chunks, strict=False)]
         out = np.zeros(len(bodies))
         try:

@@ -17,15 +17,17 @@ from typing import BinaryIO
 import numpy as np
 
 from evolve.rollout.episodes import rollout_policy
+from evolve.rollout.robust import EpisodeNoise
 from tasks.registry import load_spec_blob
 
 
 def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
-              spec: bytes | None = None) -> np.ndarray:
-    """Episode returns of one chunk, simulated as one batch; `spec` is a task registered in the
-    parent's code (`tasks.registry.spec_blob`), registered here first."""
+              noise: EpisodeNoise | None = None, spec: bytes | None = None) -> np.ndarray:
+    """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations);
+    `spec` is a task registered in the parent's code (`tasks.registry.spec_blob`), registered here
+    first."""
     load_spec_blob(spec)
-    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps)
+    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise)
 
 
 def write_frame(stream: BinaryIO, obj) -> None:

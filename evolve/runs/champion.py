@@ -2,9 +2,12 @@
 
     from evolve import load_champion
     champ = load_champion("runs/sgr-quick-seed0-...")      # body, policy, episode length, fitness
-    champ.rollout() == champ.fitness                       # True: its episode, in gymnasium
+    champ.rollout() == champ.fitness                       # True: its episode, in gymnasium (*)
     env = champ.env()                                      # gymnasium env of its task and body
     champ.gif("champion.gif")
+
+(*) for a run scored by one exact episode; with robust evaluation `rescore_champion` reproduces the
+fitness.
 """
 
 from __future__ import annotations
@@ -18,6 +21,8 @@ import numpy as np
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
+from evolve.rollout.episodes import rollout_policy
+from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
 from evolve.runs.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS
@@ -71,41 +76,85 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
 
 
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
-                 height: int = 320, fps: float = 30.0) -> Path:
-    """Render the champion's episode in its task (same episode length as its evaluation)."""
+                 height: int = 320, fps: float = 30.0, replay: int = 0, eps: float = 0.0,
+                 kind: str = "uniform", offset: float = 0.0, seed: int = 0, every: int = 1) -> Path:
+    """Render the champion's episode in its task (same episode length as its evaluation; a frame
+    every `every` steps): the nominal episode, or with `replay` > 0 that perturbed replay of
+    `replay_champion` (same arguments, same episode)."""
     from tasks.render_episode import render_episode
     from tsim.render import write_gif
 
     champ, body, ctrl = read_champion(run_dir)
-    frames = render_episode(champ["task"], body, lambda t, obs: ctrl.act(obs), champ["episode_steps"],
-                            width, height, indexed=True)
+    noise = _replay_noise(replay + 1, eps, kind, offset, seed).take([replay])
+    shift = noise.shifts()
+
+    def policy(t: int, obs: np.ndarray) -> np.ndarray:
+        a = ctrl.act(obs)
+        extra = noise.actions(t, len(a))
+        return a if extra is None else a + extra[0]
+
+    frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
+                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
     return write_gif(frames, out or Path(run_dir) / "champion.gif", fps=fps)
 
 
-def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0) -> np.ndarray:
-    """Episode returns of champion.json's robot in its task, from the JSON alone: element 0
-    unperturbed (it must equal the recorded fitness), then `replays` episodes with uniform(-eps,
-    eps) added to every action, all simulated as one batch."""
-    from tasks.env import BatchEnv
+class _SameController:
+    """A batched policy of one controller driving every world (all worlds hold the same body)."""
 
+    def __init__(self, ctrl: DenseController | GraphController, n_obs: int):
+        self.ctrl, self.n_obs = ctrl, n_obs
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """One forward pass per world (a replay has few)."""
+        return np.stack([self.ctrl.act(o[:self.n_obs]) for o in obs])
+
+
+def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndarray:
+    """Returns of len(noise.keys) episodes of the champion, each perturbed by its row of `noise`,
+    as one batch through evolution's own episode loop."""
+    n_obs = obs_dim(champ["task"], build_body(body).n_points)
+    return rollout_policy(champ["task"], [body] * len(noise.keys), lambda env: _SameController(ctrl, n_obs),
+                          champ["episode_steps"], noise)
+
+
+def rescore_champion(run_dir: str | Path) -> float:
+    """The champion's fitness scored again from champion.json alone, as evolution scored it: its
+    episode return, or for a run with robust evaluation the statistic over the same K perturbed
+    episodes (the run's seed and the evaluation's tag give their noise). Must equal the recorded
+    fitness."""
+    champ, body, ctrl = read_champion(run_dir)
+    evaluation = champ.get("evaluation") or {}
+    robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
+    if robust is None:
+        return float(_replay(champ, body, ctrl, EpisodeNoise(Perturbation(), np.zeros(1, np.uint64),
+                                                             np.zeros(1, bool)))[0])
+    keys = np.concatenate([episode_keys(evaluation["seed"], [evaluation["tag"]], e)
+                           for e in range(robust.episodes)])
+    returns = _replay(champ, body, ctrl, EpisodeNoise(robust.perturbation, keys, np.ones(len(keys), bool)))
+    return float(robust.score(returns[:, None])[0])
+
+
+def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0,
+                    kind: str = "uniform", offset: float = 0.0) -> np.ndarray:
+    """Episode returns of champion.json's robot in its task, from the JSON alone: element 0
+    unperturbed (for a nominal run it must equal the recorded fitness), then `replays` episodes
+    with `kind` noise of scale `eps` (uniform: +-eps; gaussian: sd eps) added to every action and
+    the start shifted by uniform(+-offset), all simulated as one batch. Replay i's noise is a pure
+    function of (seed, eps, kind, offset, i) (`evolve/rollout/robust.py`)."""
     champ, body, ctrl = read_champion(run_dir)
     # every world replays evolution's episode (`rollout_policy`: seed 0, the constructed env's
-    # episode), so the perturbed runs differ from it by the action noise alone
-    env = BatchEnv(champ["task"], [body] * (replays + 1), episode_steps=champ["episode_steps"],
-                   seeds=[0] * (replays + 1))
-    obs = env.observe()
-    n = env.obs_dims[0]
-    rng = np.random.default_rng(seed)
-    total = np.zeros(replays + 1)
-    for _ in range(env.episode_steps):
-        act = np.stack([ctrl.act(o[:n]) for o in obs])
-        noise = rng.uniform(-eps, eps, act.shape)
-        noise[0] = 0.0
-        obs, r, term, trunc, _ = env.step(act + noise)
-        total += r
-        if np.all(term | trunc):
-            break
-    return total
+    # episode), so the perturbed runs differ from it by the perturbation alone
+    return _replay(champ, body, ctrl, _replay_noise(replays + 1, eps, kind, offset, seed))
+
+
+def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
+    """The perturbations of replays 0 (none) to n - 1."""
+    if kind not in NOISE_KINDS:
+        raise ValueError(f"noise kind must be one of {', '.join(NOISE_KINDS)}, got {kind!r}")
+    if not (eps >= 0 and offset >= 0):
+        raise ValueError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
+    tags = [f"replay/{kind}/{eps!r}/{offset!r}/{i}" for i in range(n)]
+    return EpisodeNoise(Perturbation(kind, eps, offset), episode_keys(seed, tags, 0), np.arange(n) > 0)
 
 
 def episode_steps(task: str, steps: int | str | None) -> int:
@@ -143,7 +192,9 @@ class Champion:
 
     def rollout(self, env=None) -> float:
         """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
-        as evolution's episode was, so it equals `fitness` exactly."""
+        as evolution's episode was, so for a run scored by one exact episode it equals `fitness`
+        exactly. (A run with robust evaluation scored a statistic over perturbed episodes:
+        `rescore_champion(run_dir)` reproduces that.)"""
         env = self.env() if env is None else env
         obs, _ = env.reset(seed=0)
         total, done = 0.0, False

@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any
 
 from evolve.methods import METHODS
+from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
@@ -45,6 +46,7 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "render_champion": (bool, True),
     "workers": ((int, str), "auto"),
     "imports": (list, []),
+    "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
 }
 
 
@@ -109,6 +111,8 @@ def check_config(raw: dict, source: str = "config") -> dict:
     w = cfg["workers"]
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
+    robust = Robust.from_config(cfg["robust"], source)
+    cfg["robust"] = None if robust is None else robust.to_json()
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)

@@ -159,7 +159,14 @@ class Experiment:
         champ = {"format": "sgr-champion-1", "method": self.cfg["method"], "task": self.cfg["task"],
                  "episode_steps": self.cfg["episode_steps"], "fitness": best["fitness"],
                  "generation": best["generation"] + 1, "genome": genome_json(best["genome"])}
-        champ.update(self.problem.champion(best["phenotype"]))
+        method_keys = self.problem.champion(best["phenotype"])
+        # how the fitness was scored: enough to score the champion again exactly (robust: the
+        # run's seed and the evaluation's tag give every episode's noise; the tag holds the
+        # search's own generation number, counted from 0)
+        evaluation = {"robust": self.cfg.get("robust"), "seed": self.cfg["seed"],
+                      "tag": f"{best['generation']}/{best['key']}"}
+        evaluation.update(method_keys.pop("evaluation", {}))
+        champ.update(method_keys, evaluation=evaluation)
         self.run.write_champion(champ)
 
     def _progress(self, row: dict, elapsed: float) -> None:

@@ -72,7 +72,8 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
 def run_labels(run_dir: str | Path) -> tuple[str, str]:
     """(method, task) of a run from its config.yaml; a missing method falls back to the name of the
     run directory's parent (runs are often stored as <experiment>/<seed>), a missing task to
-    "unknown"."""
+    "unknown". Variants are their own method: "direct (per_cell)", "sgr robust" (robust
+    evaluation)."""
     run_dir = Path(run_dir)
     cfg: dict = {}
     f = run_dir / "config.yaml"
@@ -89,6 +90,8 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     method = str(cfg.get("method") or parent)
     if cfg.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own group
         method = f"{method} ({cfg['layout']})"
+    if cfg.get("robust"):  # scored by robust evaluation: another quantity, its own group
+        method = f"{method} robust"
     return method, str(cfg.get("task") or UNKNOWN)
 
 

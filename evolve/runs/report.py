@@ -6,10 +6,13 @@ generations 1..g (1-based; generation 1 is the first evaluated population), the 
 paper's curves plot.
 
 Robustness: evolution in a chaotic simulator can select a lucky trajectory, so each champion is
-replayed from its champion.json with a tiny perturbation added to every action (uniform in
-+-`eps`, a different draw per replay); the report gives the mean, sd and min of those returns
-beside the recorded fitness. A champion whose return collapses under a 1e-9 change of its actions
-has found a knife-edge trajectory, not a gait.
+replayed from its champion.json at each noise level eps (default 1e-9, rounding, and 1e-3, a
+physical actuator's error) with uniform(+-eps) added to every action, a different draw per replay;
+the report gives the mean, sd and min of those returns beside the champion's recorded fitness and
+its nominal (unperturbed) return. A champion whose return collapses under a 1e-9 change of its
+actions has found a knife-edge trajectory, not a gait. `replay` is the recorded fitness scored
+again from champion.json alone (for runs with robust evaluation, over the same perturbed episodes
+as in evolution): it must equal `champion_fitness`.
 """
 
 from __future__ import annotations
@@ -19,6 +22,7 @@ import io
 import math
 import statistics
 from collections import defaultdict
+from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
@@ -68,12 +72,27 @@ def authors_not_comparable(task: str, episode_steps: list) -> str | None:
 
 
 SUMMARY_COLUMNS = ["method", "task", "seed", "generations", "best_gen1", "best_gen30", "best_gen100",
-                   "best_final", "champion_fitness", "replay", "robust_mean", "robust_sd", "robust_min",
-                   "s_per_gen", "run"]
+                   "best_final", "champion_fitness", "replay", "nominal", "s_per_gen", "run"]
+NOISE_LEVELS = (1e-9, 1e-3)  # sgr report's default: rounding, and a physical actuator's error
+NOISE_STATS = ("mean", "sd", "min", "ratio")  # ratio: mean / nominal (NaN unless nominal > 0)
 
 
-def run_dirs_under(folder: str | Path) -> list[Path]:
-    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder."""
+def noise_column(eps: float, stat: str) -> str:
+    """summary.csv's column of `stat` over the replays at noise level eps, e.g. noise1e-09_mean."""
+    return f"noise{eps:.0e}_{stat}"
+
+
+def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
+    """summary.csv's columns: SUMMARY_COLUMNS, then each level's NOISE_STATS before `run`."""
+    noise = [noise_column(e, s) for e in levels for s in NOISE_STATS]
+    return SUMMARY_COLUMNS[:-2] + noise + SUMMARY_COLUMNS[-2:]
+
+
+def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
+    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder; of
+    each folder when given several."""
+    if not isinstance(folder, str | Path):
+        return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
@@ -94,23 +113,31 @@ def best_so_far(run_dir: Path) -> np.ndarray:
     return np.maximum.accumulate(best) if len(best) else best
 
 
-def champion_robustness(run_dir: Path, replays: int = 10, eps: float = 1e-9) -> dict:
-    """Returns of the champion replayed with uniform(-eps, eps) added to every action, all replays
-    simulated as one batch; replay 0 is unperturbed (it must give the recorded fitness)."""
-    from evolve.runs.champion import replay_champion
+def champion_robustness(run_dir: Path, replays: int = 10,
+                        levels: Sequence[float] = NOISE_LEVELS) -> dict:
+    """The champion's recorded fitness, that fitness scored again from champion.json (`replay`),
+    its nominal return, and per noise level the mean, sd, min and mean / nominal of `replays`
+    episodes with uniform(-eps, eps) added to every action (each level one batch)."""
+    from evolve.runs.champion import replay_champion, rescore_champion
     from evolve.runs.rundir import RunDir
 
-    total = replay_champion(run_dir, replays, eps)
     champ = RunDir(run_dir).champion()
-    perturbed = total[1:]
-    return {"champion_fitness": float(champ["fitness"]), "replay": float(total[0]),
-            "robust_mean": float(perturbed.mean()), "robust_sd": float(perturbed.std()),
-            "robust_min": float(perturbed.min())}
+    out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir)}
+    for eps in levels:
+        total = replay_champion(run_dir, replays, eps)
+        nominal, perturbed = float(total[0]), total[1:]
+        out["nominal"] = nominal
+        mean = float(perturbed.mean())
+        out.update({noise_column(eps, "mean"): mean, noise_column(eps, "sd"): float(perturbed.std()),
+                    noise_column(eps, "min"): float(perturbed.min()),
+                    noise_column(eps, "ratio"): mean / nominal if nominal > 0 else math.nan})
+    return out
 
 
-def summarize(runs: list[Path], robustness: bool = True) -> list[dict]:
-    """One row per run (SUMMARY_COLUMNS): best so far at generations 1, 30, 100 and the end (NaN
-    when not reached); `robustness` also replays each champion (11 episodes per run)."""
+def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS,
+              replays: int = 10) -> list[dict]:
+    """One row per run (`summary_columns`): best so far at generations 1, 30, 100 and the end (NaN
+    when not reached); `robustness` also replays each champion (`champion_robustness`)."""
     rows = []
     for d in runs:
         method, task = run_labels(d)
@@ -124,10 +151,21 @@ def summarize(runs: list[Path], robustness: bool = True) -> list[dict]:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
         if robustness and (d / "champion.json").is_file():
-            rob = champion_robustness(d)
-            row.update(rob)
+            row.update(champion_robustness(d, replays, levels))
         rows.append(row)
     return rows
+
+
+def _levels(rows: list[dict]) -> list[float]:
+    """The noise levels the rows were replayed at, in column order."""
+    out: list[float] = []
+    for r in rows:
+        for k in r:
+            if k.startswith("noise") and k.endswith("_mean"):
+                eps = float(k[len("noise"):-len("_mean")])
+                if eps not in out:
+                    out.append(eps)
+    return out
 
 
 def _ms(values: list[float]) -> str:
@@ -144,18 +182,22 @@ def _fmt(x: float | str | None) -> str:
 
 def report_markdown(rows: list[dict]) -> str:
     """report.md's text: `summarize` rows grouped by (method, task), mean +- sd over seeds, with the
-    authors' figures beside."""
+    authors' figures beside; then each champion under noise, run by run."""
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in rows:
         groups[(r["method"], r["task"])].append(r)
+    levels = _levels(rows)
     out = io.StringIO()
     out.write("# Results\n\nBest fitness found up to generation g (mean ± sd over seeds); "
-              "*authors*: the SGR authors' released logs. Robustness: the champion replayed 10 times "
-              "with uniform(±1e-9) added to every action (mean ± sd of the mean over seeds; worst "
+              "*authors*: the SGR authors' released logs. *champion*: its recorded fitness; "
+              "*nominal*: its return replayed without noise (the same, unless the run was scored "
+              "by robust evaluation); *±eps*: the champion replayed with uniform(±eps) added to "
+              "every action (mean over replays, then mean ± sd over seeds; *worst*: the worst "
               "replay of any seed).\n\n")
+    noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels)
     out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
-              "100 / end) | champion | perturbed | worst perturbed |\n")
-    out.write("|---|---|---|---|---|---|---|---|---|---|---|---|\n")
+              f"100 / end) | champion | nominal |{noise_head}\n")
+    out.write("|---" * (11 + 2 * len(levels)) + "|\n")
     for (method, task), rs in sorted(groups.items()):
         gens = sorted({r["generations"] for r in rs})
         authors = AUTHORS.get((method, task))
@@ -166,31 +208,50 @@ def report_markdown(rows: list[dict]) -> str:
         elif authors and max(gens) < AUTHORS_GENERATIONS:  # only the generations these runs reached
             shown = [x if g <= max(gens) else None for x, g in zip(authors, CHECKPOINTS, strict=False)]
             a = " / ".join(_fmt(x) for x in [*shown, None])
-        rob = [r for r in rs if "robust_mean" in r]
-        champ = _ms([r["champion_fitness"] for r in rob]) if rob else "-"
-        pert = _ms([r["robust_mean"] for r in rob]) if rob else "-"
-        worst = f"{min(r['robust_min'] for r in rob):.2f}" if rob else "-"
+        rob = [r for r in rs if "nominal" in r]
+        cells = [_ms([r["champion_fitness"] for r in rob]) if rob else "-",
+                 _ms([r["nominal"] for r in rob]) if rob else "-"]
+        for e in levels:
+            have = [r for r in rob if noise_column(e, "mean") in r]
+            cells.append(_ms([r[noise_column(e, "mean")] for r in have]) if have else "-")
+            cells.append(f"{min(r[noise_column(e, 'min')] for r in have):.2f}" if have else "-")
         out.write(f"| {method} | {task} | {', '.join(str(r['seed']) for r in rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
                   + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
-                  + f" | {_ms([r['best_final'] for r in rs])} | {a} | {champ} | {pert} | {worst} |\n")
+                  + f" | {_ms([r['best_final'] for r in rs])} | {a} | " + " | ".join(cells) + " |\n")
     off = [r for r in rows if "replay" in r and abs(r["replay"] - r["champion_fitness"]) > 1e-9]
     if off:  # champion.json alone must reproduce the fitness; say plainly where it does not
         out.write(f"\n**{len(off)} of {sum('replay' in r for r in rows)} champions do not replay to "
-                  "their recorded fitness** from champion.json (unperturbed, > 1e-9): "
+                  "their recorded fitness** from champion.json (> 1e-9): "
                   + "; ".join(f"{r['run']} {r['champion_fitness']:.6g} -> {r['replay']:.6g}"
                               for r in off) + ".\n")
+    rob = [r for r in rows if "nominal" in r]
+    if rob and levels:
+        out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
+                  "the mean as a share of the nominal return (- where that is not positive).\n\n")
+        out.write("| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share |"
+                                                          for e in levels) + "\n")
+        out.write("|---" * (3 + 2 * len(levels)) + "|\n")
+        for r in sorted(rob, key=lambda r: r["run"]):
+            cells = []
+            for e in levels:
+                ratio = r.get(noise_column(e, "ratio"), math.nan)
+                cells += [f"{r[noise_column(e, 'mean')]:.3f} / {r[noise_column(e, 'min')]:.3f}",
+                          f"{100 * ratio:.0f} %" if math.isfinite(ratio) else "-"]
+            out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
+                      + " | ".join(cells) + " |\n")
     return out.getvalue()
 
 
 def write_summary_csv(rows: list[dict], path: Path) -> None:
-    """Write `rows` to `path` (replaced) with SUMMARY_COLUMNS in order: missing values empty, other
-    keys dropped."""
+    """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order:
+    missing values empty, other keys dropped."""
+    columns = summary_columns(_levels(rows))
     buf = io.StringIO()
-    w = csv.DictWriter(buf, fieldnames=SUMMARY_COLUMNS, lineterminator="\n", extrasaction="ignore")
+    w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
     for r in rows:
-        w.writerow({k: r.get(k, "") for k in SUMMARY_COLUMNS})
+        w.writerow({k: r.get(k, "") for k in columns})
     path.write_text(buf.getvalue())
 
 
@@ -248,13 +309,25 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
     return path
 
 
-def write_report(folder: str | Path, out: str | Path | None = None, robustness: bool = True) -> Path:
-    """report.md (at `out`, default folder/report.md), summary.csv and curves.png beside it."""
-    runs = run_dirs_under(folder)
-    out = Path(out) if out else Path(folder) / "report.md"
+def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
+                 robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS, replays: int = 10,
+                 gallery: bool = True) -> Path:
+    """report.md (at `out`, default <first folder>/report.md), summary.csv, curves.png and
+    report.html beside it, the runs of one folder or several (e.g. a sweep and its robust twin);
+    each champion replayed `replays` times at each noise level in `levels`; `gallery`: the best
+    seed's champion per method and task as a GIF and a body picture in gallery/, inlined in
+    report.html."""
+    from evolve.runs.gallery import gallery_entries, report_html, write_gallery
+
+    folders = [folder] if isinstance(folder, str | Path) else list(folder)
+    runs = run_dirs_under(folders)
+    out = Path(out) if out else Path(folders[0]) / "report.md"
     out.parent.mkdir(parents=True, exist_ok=True)
-    rows = summarize(runs, robustness)
-    out.write_text(report_markdown(rows))
+    rows = summarize(runs, robustness, levels, replays)
+    text = report_markdown(rows)
+    out.write_text(text)
     write_summary_csv(rows, out.parent / "summary.csv")
-    plot_curves(runs, out.parent / "curves.png")
+    curves = plot_curves(runs, out.parent / "curves.png")
+    shown = write_gallery(gallery_entries(rows, runs), out.parent / "gallery") if gallery else []
+    (out.parent / "report.html").write_text(report_html(text, curves, shown))
     return out

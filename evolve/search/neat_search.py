@@ -9,6 +9,7 @@ uses) so a resumed run continues exactly.
 
 from __future__ import annotations
 
+import inspect
 import itertools
 import random
 import statistics
@@ -22,7 +23,8 @@ from neat.reporting import ReporterSet
 from evolve.search.genome import peek
 
 Decode = Callable[[Any], Any]  # genome -> phenotype with .valid and .body
-Evaluate = Callable[[Sequence[Any]], tuple[np.ndarray, int]]  # valid phenotypes -> fitness, episodes
+# valid phenotypes[, their tags "<generation>/<genome key>"] -> fitness, episodes
+Evaluate = Callable[..., tuple[np.ndarray, int]]
 
 
 class NeatSearch:
@@ -68,7 +70,13 @@ class NeatSearch:
         t0 = time.perf_counter()
         todo = self.ask()
         t1 = time.perf_counter()
-        fit, episodes = self.evaluate([p for _, p in todo]) if todo else (np.zeros(0), 0)
+        phenotypes = [p for _, p in todo]
+        if not todo:
+            fit, episodes = np.zeros(0), 0
+        elif _takes_tags(self.evaluate):
+            fit, episodes = self.evaluate(phenotypes, [f"{self.generation}/{k}" for k, _ in todo])
+        else:  # a method written before tags existed
+            fit, episodes = self.evaluate(phenotypes)
         sim_s = time.perf_counter() - t1
         row = self.tell(fit, episodes)
         row.update(build_s=self._build_s, sim_s=sim_s, total_s=time.perf_counter() - t0)
@@ -197,6 +205,16 @@ class NeatSearch:
         self.best = state["best"]
         if self.best is not None:
             self.best["phenotype"] = self.decode(self.best["genome"])
+
+
+def _takes_tags(evaluate: Callable) -> bool:
+    """Whether `evaluate` accepts the tags (robust evaluation's noise names) after the phenotypes."""
+    try:
+        params = list(inspect.signature(evaluate).parameters.values())
+    except (TypeError, ValueError):
+        return True
+    positional = [p for p in params if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    return len(positional) >= 2 or any(p.kind == p.VAR_POSITIONAL for p in params)
 
 
 STATE_FORMAT = 2  # 1 (unversioned): species pickled whole, no node counter

@@ -38,6 +38,15 @@ def run_names() -> list[str]:
     return [f"{m}-Walker-v0-s{s}" for m in TINY["methods"] for s in TINY["seeds"]]
 
 
+def best_seeds(sweep: Path) -> list[tuple[str, int]]:
+    """(method, seed) of the best champion of each method (ties: the lower seed)."""
+    out = []
+    for m in TINY["methods"]:
+        fit = {s: RunDir(sweep / "runs" / f"{m}-Walker-v0-s{s}").champion()["fitness"] for s in TINY["seeds"]}
+        out.append((m, max(TINY["seeds"], key=lambda s: (fit[s], -s))))
+    return out
+
+
 def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
     spec = write_sweep(tmp_path, TINY)
     assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "whole"), "--quiet"]) == 0
@@ -74,14 +83,19 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
 
     out = tmp_path / "report" / "paper.md"
     assert main(["report", str(cut), "--out", str(out)]) == 0
-    assert {p.name for p in out.parent.iterdir()} == {"paper.md", "summary.csv", "curves.png"}
+    assert {p.name for p in out.parent.iterdir()} == {"paper.md", "summary.csv", "curves.png", "report.html",
+                                                      "gallery"}
+    # the best seed of each method and task: its episode and its body
+    assert sorted(p.name for p in (out.parent / "gallery").iterdir()) == sorted(
+        f"{m}-Walker-v0-s{s}{ext}" for m, s in best_seeds(cut) for ext in (".gif", "-body.png"))
     rows = list(csv.DictReader((out.parent / "summary.csv").open()))
     assert sorted(r["run"] for r in rows) == sorted(run_names())
     for r in rows:
         best = max(float(x[1]) for x in fitness(cut / "runs" / r["run"]))
         assert float(r["best_final"]) == best and float(r["champion_fitness"]) == best
         assert float(r["replay"]) == pytest.approx(best, abs=1e-9)  # the JSON champion replays
-        assert float(r["robust_min"]) <= float(r["robust_mean"])
+        assert float(r["nominal"]) == float(r["replay"])  # nominal runs: the same episode
+        assert set(r) >= {"noise1e-09_mean", "noise1e-03_min", "noise1e-03_ratio"}
     text = out.read_text()
     assert "| sgr | Walker-v0 | 0, 4 | 4 |" in text and "5.75 / 6.09 / 6.56 / 6.60" in text
     assert (out.parent / "curves.png").read_bytes()[:4] == b"\x89PNG"
@@ -121,8 +135,8 @@ def test_report_names_champions_that_do_not_replay_to_their_fitness():
     from evolve.runs.report import report_markdown
 
     base = {"method": "direct", "task": "Walker-v0", "generations": 100, "best_final": 2.0,
-            "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "robust_mean": 2.0,
-            "robust_sd": 0.0, "robust_min": 2.0, "champion_fitness": 2.0}
+            "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "noise1e-09_mean": 2.0,
+            "noise1e-09_sd": 0.0, "noise1e-09_min": 2.0, "champion_fitness": 2.0, "nominal": 2.0}
     rows = [{**base, "seed": 0, "run": "direct-Walker-v0-s0", "replay": 2.0},
             {**base, "seed": 1, "run": "direct-Walker-v0-s1", "replay": 1.5}]
     text = report_markdown(rows)

@@ -1,0 +1,168 @@
+"""Robust evaluation: a genome scored over K perturbed episodes instead of one exact episode.
+
+Why: the simulator is deterministic and chaotic, so evolution can select a trajectory that holds
+only for the exact action sequence it was scored on (docs/RESULTS.md: SGR champions losing a
+quarter to all of their fitness under +-1e-3 action noise). Scoring each genome by a statistic of
+K episodes with small perturbations selects behaviour that holds.
+
+What is perturbed (`Perturbation`):
+- every action of every step gets uniform(+-scale) or gaussian(0, scale) noise (before the
+  simulator's clip to [0.6, 1.6], as noise on a real actuator's command);
+- the robot's start is shifted right by uniform(+-offset) (evogym's length units, a voxel is 0.1).
+
+Every random number is a pure function of one 64-bit episode key (`episode_keys`: run seed, a tag
+naming the generation and genome, the episode index), the step and the actuator, computed by a
+counter-based hash (splitmix64) in numpy: no generator state, so the noise of an episode does not
+depend on the batch it is simulated in, the worker count, the machine or a resume.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+NOISE_KINDS = ("none", "uniform", "gaussian")
+STATISTICS = ("mean", "min", "median", "qNN (a quantile in percent, e.g. q25)")
+
+_M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
+_STEP, _ACT = np.uint64(0x9E3779B97F4A7C15), np.uint64(0xD1B54A32D192ED03)
+_STREAM = np.uint64(0xC2B2AE3D27D4EB4F)
+
+
+def _mix(x: np.ndarray) -> np.ndarray:
+    """splitmix64's finalizer: a bijection of uint64 whose outputs look independent."""
+    x = x ^ (x >> np.uint64(30))
+    x = x * _M1
+    x = x ^ (x >> np.uint64(27))
+    x = x * _M2
+    return x ^ (x >> np.uint64(31))
+
+
+def unit_uniform(keys: np.ndarray, stream: int, t: int, n: int) -> np.ndarray:
+    """(B, n) numbers in [0, 1), one per (episode key, stream, step t, column); 53-bit exact."""
+    with np.errstate(over="ignore"):
+        x = (keys.astype(np.uint64)[:, None] + np.uint64(stream) * _STREAM + np.uint64(t) * _STEP
+             + (np.arange(n, dtype=np.uint64)[None, :] + np.uint64(1)) * _ACT)
+        x = _mix(_mix(x))
+    return (x >> np.uint64(11)).astype(np.float64) * 2.0 ** -53
+
+
+def episode_keys(seed: int, tags: Sequence[str], episode: int) -> np.ndarray:
+    """(len(tags),) uint64 keys of episode `episode` of each tagged genome in a run seeded `seed`."""
+    return np.array([int.from_bytes(hashlib.blake2b(f"{seed}|{tag}|{episode}".encode(),
+                                                    digest_size=8).digest(), "little")
+                     for tag in tags], dtype=np.uint64)
+
+
+@dataclass(frozen=True)
+class Perturbation:
+    """What a perturbed episode changes: action noise of a kind and scale, and a start offset."""
+    action_noise: str = "uniform"
+    action_scale: float = 0.0
+    offset: float = 0.0
+
+    def actions(self, keys: np.ndarray, t: int, n: int) -> np.ndarray | None:
+        """(B, n) noise added to the actions of step t, or None when there is none."""
+        if self.action_noise == "none" or self.action_scale == 0.0:
+            return None
+        u = unit_uniform(keys, 0, t, n)
+        if self.action_noise == "uniform":
+            return self.action_scale * (2.0 * u - 1.0)
+        v = unit_uniform(keys, 1, t, n)  # Box-Muller; 1 - u is in (0, 1]
+        return self.action_scale * np.sqrt(-2.0 * np.log1p(-u)) * np.cos(2.0 * np.pi * v)
+
+    def shifts(self, keys: np.ndarray) -> np.ndarray | None:
+        """(B,) start offsets of the robots, or None when there are none."""
+        if self.offset == 0.0:
+            return None
+        return self.offset * (2.0 * unit_uniform(keys, 2, 0, 1)[:, 0] - 1.0)
+
+
+@dataclass(frozen=True)
+class EpisodeNoise:
+    """The perturbation of each world of a batch: its episode key, and whether it is perturbed at
+    all (False: the exact, nominal episode)."""
+    perturbation: Perturbation
+    keys: np.ndarray
+    on: np.ndarray
+
+    def take(self, idx: Sequence[int]) -> EpisodeNoise:
+        """The noise of the worlds `idx` (a chunk of the batch)."""
+        idx = np.asarray(idx, dtype=np.int64)
+        return EpisodeNoise(self.perturbation, self.keys[idx], self.on[idx])
+
+    def actions(self, t: int, n: int) -> np.ndarray | None:
+        """(B, n) action noise of step t (zero rows for nominal worlds), or None."""
+        a = self.perturbation.actions(self.keys, t, n)
+        return None if a is None else np.where(self.on[:, None], a, 0.0)
+
+    def shifts(self) -> np.ndarray | None:
+        """(B,) start offsets (zero for nominal worlds), or None."""
+        s = self.perturbation.shifts(self.keys)
+        return None if s is None else np.where(self.on, s, 0.0)
+
+
+@dataclass(frozen=True)
+class Robust:
+    """The `robust` config key: each genome's fitness is `statistic` over `episodes` perturbed
+    episodes (`Perturbation`), all simulated in the generation's batch."""
+    episodes: int = 4
+    action_noise: str = "uniform"
+    action_scale: float = 1e-3
+    offset: float = 0.0
+    statistic: str = "mean"
+
+    @property
+    def perturbation(self) -> Perturbation:
+        """The perturbation of every episode."""
+        return Perturbation(self.action_noise, self.action_scale, self.offset)
+
+    def score(self, returns: np.ndarray) -> np.ndarray:
+        """(K, N) returns -> (N,) fitness; a non-finite return makes the genome's fitness -inf
+        only through the statistic itself (min and quantiles see it, mean gives nan)."""
+        s = self.statistic
+        if s == "mean":
+            return returns.mean(axis=0)
+        if s == "min":
+            return returns.min(axis=0)
+        if s == "median":
+            return np.median(returns, axis=0)
+        return np.quantile(returns, int(s[1:]) / 100.0, axis=0)
+
+    def to_json(self) -> dict:
+        """The config mapping (every key)."""
+        return asdict(self)
+
+    @classmethod
+    def from_config(cls, raw: object, source: str = "config") -> Robust | None:
+        """The checked `robust` mapping of a config; None (or a missing key) is nominal evaluation.
+        ValueError naming `source` and the key."""
+        if raw is None:
+            return None
+        name = f"{source}: key 'robust"
+        if not isinstance(raw, dict):
+            raise ValueError(f"{name}' must be a mapping (episodes, action_noise, action_scale, "
+                             f"offset, statistic) or null, got {raw!r}")
+        known = set(cls.__dataclass_fields__)
+        for key in raw:
+            if key not in known:
+                raise ValueError(f"{name}': unknown key {key!r}; known keys: {', '.join(sorted(known))}")
+        r = cls(**raw)
+        if not isinstance(r.episodes, int) or isinstance(r.episodes, bool) or r.episodes < 1:
+            raise ValueError(f"{name}.episodes' must be an int >= 1, got {r.episodes!r}")
+        if r.action_noise not in NOISE_KINDS:
+            raise ValueError(f"{name}.action_noise' must be one of {', '.join(NOISE_KINDS)}, "
+                             f"got {r.action_noise!r}")
+        for key in ("action_scale", "offset"):
+            v = getattr(r, key)
+            if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v) or v < 0:
+                raise ValueError(f"{name}.{key}' must be a number >= 0, got {v!r}")
+        s = r.statistic
+        quantile = isinstance(s, str) and 1 < len(s) <= 4 and s[0] == "q" and s[1:].isdigit() \
+            and 0 <= int(s[1:]) <= 100
+        if s not in STATISTICS[:3] and not quantile:
+            raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, got {s!r}")
+        return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s)

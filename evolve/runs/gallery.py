@@ -1,0 +1,150 @@
+"""What a report shows besides numbers: a gallery of champions and one self-contained report.html.
+
+The gallery holds, per (method, task), the champion of the best seed (highest recorded fitness) as
+a GIF of its episode and a picture of its body. report.html inlines report.md's tables, the curves
+and the gallery as data URIs, so the one file opens anywhere, offline, and can be mailed or
+archived beside a paper.
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+import math
+import re
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from tsim.render import BACKGROUND, BLUES, GRID, ORANGES, RIGID_COLOR, SOFT_COLOR
+
+# evogym's voxel types 0-4: empty, rigid, soft, horizontal and vertical actuator
+VOXEL_RGB = np.array([BACKGROUND, RIGID_COLOR, SOFT_COLOR, ORANGES[60], BLUES[60]], dtype=np.uint8)
+
+
+def body_image(body: np.ndarray, cell: int = 20) -> np.ndarray:
+    """(H*cell+1, W*cell+1, 3) uint8 picture of a body matrix (row 0 = top), one colour per voxel
+    type as in the renderer, with grid lines."""
+    body = np.asarray(body, dtype=np.int64)
+    img = np.repeat(np.repeat(VOXEL_RGB[body], cell, axis=0), cell, axis=1)
+    h, w = body.shape
+    out = np.empty((h * cell + 1, w * cell + 1, 3), dtype=np.uint8)
+    out[:-1, :-1] = img
+    out[::cell, :] = GRID
+    out[:, ::cell] = GRID
+    return out
+
+
+def gallery_entries(rows: Sequence[dict], runs: Sequence[Path]) -> list[dict]:
+    """Per (method, task), the summary row and run directory of the seed with the best recorded
+    champion fitness (ties: the lower seed), sorted by method and task."""
+    by_name = {d.name: d for d in runs}
+    best: dict[tuple[str, str], dict] = {}
+    for r in rows:
+        f = r.get("champion_fitness")
+        d = by_name.get(r["run"])
+        if f is None or not math.isfinite(f) or d is None or not (d / "champion.json").is_file():
+            continue
+        key = (r["method"], r["task"])
+        if key not in best or (f, -int(r["seed"] or 0)) > (best[key]["champion_fitness"],
+                                                             -int(best[key]["seed"] or 0)):
+            best[key] = r
+    return [{"row": best[k], "run": by_name[best[k]["run"]]} for k in sorted(best)]
+
+
+def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 320, height: int = 160,
+                  every: int = 4, fps: float = 15.0) -> list[dict]:
+    """Write <run>.gif (every `every`-th step of the champion's episode) and <run>-body.png into
+    `folder` for each entry; returns the entries with `gif` and `body` paths added."""
+    import imageio.v3 as iio
+
+    from evolve.runs.champion import champion_gif, read_champion
+
+    folder.mkdir(parents=True, exist_ok=True)
+    out = []
+    for e in entries:
+        name = e["run"].name
+        gif = champion_gif(e["run"], folder / f"{name}.gif", width=width, height=height, fps=fps,
+                           every=every)
+        _, body, _ = read_champion(e["run"])
+        png = folder / f"{name}-body.png"
+        iio.imwrite(png, body_image(body))
+        out.append({**e, "gif": gif, "body": png})
+    return out
+
+
+def _data_uri(path: Path, mime: str) -> str:
+    return f"data:{mime};base64,{base64.b64encode(Path(path).read_bytes()).decode()}"
+
+
+def _inline(text: str) -> str:
+    """One line of our markdown as HTML: escaped, **bold** and *emphasis*."""
+    s = html.escape(text, quote=False)
+    s = re.sub(r"\*\*(.+?)\*\*", r"<strong>\1</strong>", s)
+    return re.sub(r"\*(.+?)\*", r"<em>\1</em>", s)
+
+
+def markdown_html(text: str) -> str:
+    """HTML of report.md: headings, paragraphs and pipe tables (all that report.md uses)."""
+    out: list[str] = []
+    lines = text.splitlines()
+    i = 0
+    while i < len(lines):
+        line = lines[i]
+        if line.startswith("#"):
+            level = len(line) - len(line.lstrip("#"))
+            out.append(f"<h{level}>{_inline(line[level:].strip())}</h{level}>")
+        elif line.startswith("|"):
+            table = []
+            while i < len(lines) and lines[i].startswith("|"):
+                table.append([c.strip() for c in lines[i].strip().strip("|").split("|")])
+                i += 1
+            head, body = table[0], [r for r in table[1:] if not all(set(c) <= {"-"} for c in r)]
+            out.append("<table><thead><tr>" + "".join(f"<th>{_inline(c)}</th>" for c in head)
+                       + "</tr></thead><tbody>"
+                       + "".join("<tr>" + "".join(f"<td>{_inline(c)}</td>" for c in r) + "</tr>"
+                                 for r in body) + "</tbody></table>")
+            continue
+        elif line.strip():
+            para = [line]
+            while i + 1 < len(lines) and lines[i + 1].strip() and lines[i + 1][0] not in "#|":
+                i += 1
+                para.append(lines[i])
+            out.append(f"<p>{_inline(' '.join(para))}</p>")
+        i += 1
+    return "\n".join(out)
+
+
+STYLE = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
+table{border-collapse:collapse;font-size:13px;margin:1em 0}th,td{border:1px solid #ccc;padding:3px 6px}
+th{background:#f2f2f2}td{text-align:right}td:first-child,td:nth-child(2){text-align:left}
+.gallery{display:flex;flex-wrap:wrap;gap:16px}figure{margin:0;border:1px solid #ddd;padding:8px}
+figcaption{font-size:13px}#images{color:#888;font-size:12px}"""
+
+# after loading, the page says whether each of its images decoded (read by people and by the test)
+CHECK = """<script>window.addEventListener('load',function(){var im=document.images,ok=0;
+for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0){ok++;}}
+var s=document.getElementById('images');s.textContent=ok+' of '+im.length+' images loaded';
+s.dataset.ok=ok;s.dataset.total=im.length;s.style.color=ok==im.length?'#1a7f37':'#cf222e';});</script>"""
+
+
+def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str = "sgr report") -> str:
+    """The whole report as one HTML page with every image inlined (no network, no other file)."""
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
+             f"<style>{STYLE}</style></head><body>", markdown_html(markdown),
+             "<h2>Curves</h2>", f"<img alt='curves' src='{_data_uri(curves, 'image/png')}' width='100%'>"]
+    if gallery:
+        parts.append("<h2>Champions</h2><p>Per method and task, the seed with the best champion: "
+                     "its body (orange: horizontal actuator, blue: vertical, dark: rigid, grey: soft) "
+                     "and its episode.</p><div class='gallery'>")
+        for e in gallery:
+            r, name = e["row"], html.escape(e["run"].name)
+            parts.append(
+                f"<figure><img alt='{name} episode' src='{_data_uri(e['gif'], 'image/gif')}'>"
+                f"<img alt='{name} body' src='{_data_uri(e['body'], 'image/png')}'>"
+                f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
+                f"{r['seed']} · fitness {r['champion_fitness']:.3f}</figcaption></figure>")
+        parts.append("</div>")
+    parts += ["<p id='images'>images not checked (scripts off)</p>", CHECK, "</body></html>"]
+    return "\n".join(parts)
