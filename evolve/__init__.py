@@ -6,9 +6,12 @@
     exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5,
                                   "pop_size": 16, "episode_steps": 100}, out="runs/notebook")
     exp.run_all(); exp.finish()
+    champ = load_champion("runs/notebook")   # body, policy(obs) -> action, episode length, env()
 """
 
 from evolve.methods import METHODS, Problem
 from evolve.runs import Experiment, RunDir, config_from_dict, load_config
+from evolve.runs.champion import Champion, load_champion
 
-__all__ = ["METHODS", "Experiment", "Problem", "RunDir", "config_from_dict", "load_config"]
+__all__ = ["METHODS", "Champion", "Experiment", "Problem", "RunDir", "config_from_dict", "load_champion",
+           "load_config"]

@@ -5,6 +5,8 @@ simulator commands (demo, validate, bench) come from tasks/cli.py."""
 from __future__ import annotations
 
 import argparse
+import io
+import os
 import sys
 import time
 from pathlib import Path
@@ -27,44 +29,138 @@ def workers_arg(text: str) -> int | str:
     return n
 
 
+class _ClosedStdoutTolerant:
+    """sys.stdout for a run: once the reader of stdout is gone (`sgr evolve ... | head -2`), the
+    rest is dropped and the run goes on; that is no disk error. One line on stderr says so."""
+
+    def __init__(self, stream):
+        self.stream, self.closed_pipe = stream, False
+
+    def _gone(self) -> None:
+        if not self.closed_pipe:
+            self.closed_pipe = True
+            try:  # what is still buffered would fail again at exit: send fd 1 to /dev/null
+                os.dup2(os.open(os.devnull, os.O_WRONLY), self.stream.fileno())
+            except (OSError, ValueError, io.UnsupportedOperation):
+                pass
+            print("sgr: stdout was closed; the run goes on without progress lines", file=sys.stderr)
+
+    def write(self, text: str) -> int:
+        """Write through until the reader is gone, then drop."""
+        if not self.closed_pipe:
+            try:
+                return self.stream.write(text)
+            except BrokenPipeError:
+                self._gone()
+        return len(text)
+
+    def flush(self) -> None:
+        """Flush through until the reader is gone."""
+        if not self.closed_pipe:
+            try:
+                self.stream.flush()
+            except BrokenPipeError:
+                self._gone()
+
+    def __getattr__(self, name):
+        return getattr(self.stream, name)
+
+
+def _resume_dir(path: str) -> str:
+    """The run directory to resume, or a ValueError a person can act on."""
+    p = Path(path)
+    if not p.exists():
+        raise ValueError(f"{path} does not exist")
+    if (p / "sweep.yaml").is_file():
+        raise ValueError(f"{path} is a sweep directory, not a run: continue the sweep with "
+                         f"sgr sweep --resume {path}, or one of its runs with sgr evolve --resume "
+                         f"{p / 'runs' / '<run>'}")
+    return path
+
+
+def _evolve_config(args: argparse.Namespace) -> Path:
+    """The config a new run starts from: --config (a file, or a packaged config's name), the
+    packaged config of --method on --task, or the default quick run."""
+    from evolve.methods import METHODS
+    from evolve.runs.config import configs_dir, find_config
+    from tasks.specs import TASKS, unknown_name, unknown_task
+
+    if args.config and (args.task or args.method):
+        raise ValueError("give --config, or --task (with --method), not both")
+    if args.config:
+        return find_config(args.config)
+    if args.method and not args.task:
+        raise ValueError("--method goes with --task (e.g. sgr evolve --task Climber-v2 --method direct)")
+    if not args.task:
+        return configs_dir() / "sgr" / "quick.yaml"
+    method = args.method or "sgr"
+    if method not in METHODS:
+        raise ValueError(unknown_name("method", method, METHODS))
+    path = configs_dir() / method / f"{args.task}.yaml"
+    if path.is_file():
+        return path
+    if args.task not in TASKS:
+        raise ValueError(f"{unknown_task(args.task)} (a task of your own: --config FILE with "
+                         "task: and imports:, docs/TASKS.md)")
+    shipped = sorted(f.stem for f in (configs_dir() / method).glob("*.yaml"))
+    raise ValueError(f"no packaged config for {method} on {args.task} (there are: {', '.join(shipped)}); "
+                     "write one and give --config FILE")
+
+
 def _evolve(args: argparse.Namespace) -> int:
-    from evolve.rollout.pool import WorkerDied
+    from evolve.runs.config import load_config
     from evolve.runs.experiment import Experiment
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
     if args.resume:
-        if args.config or args.pop or args.seed is not None or args.out:
+        if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
             raise ValueError("--resume continues a run with its own config; only --generations "
                              "(to extend it), --workers and --quiet go with it")
-        exp = Experiment.resume(args.resume, quiet=args.quiet, workers=args.workers,
+        exp = Experiment.resume(_resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
-        print(f"resuming {args.resume} at generation {exp.search.generation}")
+        print(f"resuming {args.resume} after generation {exp.search.generation}")
     else:
-        from evolve.runs.config import configs_dir
-
-        config = args.config or str(configs_dir() / "sgr" / "quick.yaml")
+        config = _evolve_config(args)
+        overrides = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
+                     "workers": args.workers}
+        cfg = load_config(config, overrides)
         stamp = time.strftime("%Y%m%d-%H%M%S")
-        out = args.out or str(Path("runs") / f"{Path(config).stem}-seed{args.seed or 0}-{stamp}")
+        name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
+        out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
         output_path(out, folder=True)
-        exp = Experiment.create(config, out, {"generations": args.generations, "pop_size": args.pop,
-                                              "seed": args.seed, "workers": args.workers},
-                                quiet=args.quiet)
+        exp = Experiment.create(config, out, overrides, quiet=args.quiet)
         print(f"run directory: {out}")
+    return _run(exp)
+
+
+def _last_checkpoint(run_path: Path) -> int | None:
+    """Generations done at the newest checkpoint file (checkpoints/gen-NNNNN.*), None without one."""
+    gens = [int(f.name[4:9]) for f in (run_path / "checkpoints").glob("gen-*") if f.name[4:9].isdigit()]
+    return max(gens) if gens else None
+
+
+def _run(exp) -> int:
+    from evolve.rollout.pool import WorkerDied
+
     try:
         exp.run_all()
         exp.finish()
     except KeyboardInterrupt:
-        print(f"\ninterrupted at generation {exp.search.generation}; continue with: "
-              f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        done, want = exp.search.generation, exp.cfg["generations"]
+        ckpt = _last_checkpoint(exp.run.path)
+        where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
+                 f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
+                 f"generation {ckpt}")
+        print(f"\nsgr: {where}; continue with: sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 130
     except WorkerDied as exc:
-        print(f"sgr: error: {exc}; the run stopped at generation {exp.search.generation} and keeps its "
-              f"last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        print(f"sgr: error: {exc}; the run stopped during generation {exp.search.generation + 1} and "
+              f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
     except OSError as exc:  # e.g. a full disk: every file is still whole (a cut CSV row is dropped)
-        print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped at generation "
-              f"{exp.search.generation} and keeps its last checkpoint: make room, then "
+        print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped during generation "
+              f"{exp.search.generation + 1} and keeps its last checkpoint: make room, then "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
     finally:
@@ -83,13 +179,18 @@ def _sweep(args: argparse.Namespace) -> int:
     if args.resume:
         if args.config or args.out:
             raise ValueError("--resume continues a sweep with its own sweep file; drop --config and --out")
+        if not Path(args.resume).exists():
+            raise ValueError(f"{args.resume} does not exist")
         sweep = Sweep.open(args.resume)
     else:
         if not args.config:
             raise ValueError("sgr sweep needs --config SWEEP.yaml (or --resume DIR)")
+        from evolve.runs.config import find_config
+
+        config = find_config(args.config, "sweep file")  # a path, or a packaged sweep's name (paper)
         stamp = time.strftime("%Y%m%d-%H%M%S")
-        out = args.out or str(Path("runs") / f"sweep-{Path(args.config).stem}-{stamp}")
-        sweep = Sweep.create(args.config, out)
+        out = args.out or str(Path("runs") / f"sweep-{config.stem}-{stamp}")
+        sweep = Sweep.create(config, out)
         print(f"sweep directory: {out}")
     if args.backend == "ray":
         from evolve.runs.ray_sweep import RayBackend
@@ -146,10 +247,10 @@ def _plot(args: argparse.Namespace) -> int:
 
     if args.out:
         output_path(args.out)
-    if len(args.run_dirs) == 1 and not args.compare:
+    if len(args.run_dirs) == 1 and not (args.compare or args.per_run):
         out = plot_run(args.run_dirs[0], args.out or Path(args.run_dirs[0]) / "fitness.png")
     else:
-        out = plot_runs(args.run_dirs, args.out or "fitness.png")
+        out = plot_runs(args.run_dirs, args.out or "fitness.png", per_run=args.per_run)
     print(f"wrote {out}")
     return 0
 
@@ -160,11 +261,15 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog="sgr", description="Batched evogym-faithful soft-robot toolkit")
     sub = p.add_subparsers(dest="cmd", required=True)
     e = sub.add_parser("evolve", help="run an evolution experiment (default: a short SGR Walker-v0 run)")
-    e.add_argument("--config", help="YAML experiment config (default configs/sgr/quick.yaml)")
+    e.add_argument("--config", help="YAML experiment config: a file, or a packaged config's name such as "
+                                    "sgr/Climber-v2 or direct/Walker-v0 (default: quick, a short SGR "
+                                    "Walker-v0 run)")
+    e.add_argument("--task", help="the packaged config of this task (with --method; default method sgr)")
+    e.add_argument("--method", help="with --task: sgr, direct or nested")
     e.add_argument("--generations", type=positive(int))
     e.add_argument("--pop", type=positive(int))
     e.add_argument("--seed", type=int)
-    e.add_argument("--out", help="run directory (default runs/<config>-seed<S>-<time>)")
+    e.add_argument("--out", help="run directory (default runs/<method>-<config>-seed<S>-<time>)")
     e.add_argument("--workers", type=workers_arg,
                    help="rollout processes: a number, 'auto' (all CPUs) or 'ray' (the actors of a Ray "
                         "cluster); default: the config's")
@@ -173,7 +278,9 @@ def main(argv: list[str] | None = None) -> int:
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)
     sw = sub.add_parser("sweep", help="every method x task x seed of a sweep file, resumable")
-    sw.add_argument("--config", metavar="SWEEP.yaml", help="methods, tasks, seeds, [configs], [overrides]")
+    sw.add_argument("--config", metavar="SWEEP.yaml",
+                    help="methods, tasks, seeds, [configs], [overrides], [imports]: a file, or a packaged "
+                         "sweep's name (paper, tiny)")
     sw.add_argument("--out", help="sweep directory (default runs/sweep-<name>-<time>)")
     sw.add_argument("--resume", metavar="DIR",
                     help="continue a sweep: finished runs are kept, the others resumed")
@@ -220,18 +327,24 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--offset", type=nonnegative(float), default=0.0,
                    help="with --replay: start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
     r.set_defaults(fn=_render)
-    pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged")
+    pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged, or "
+                                     "one line per run with --per-run")
     pl.add_argument("run_dirs", nargs="+", metavar="RUN_DIR")
     pl.add_argument("--out", help="PNG path (default RUN_DIR/fitness.png for one run, else fitness.png)")
     pl.add_argument("--compare", action="store_true", help="group style even for a single run")
+    pl.add_argument("--per-run", action="store_true",
+                    help="one line per run (coloured by method and task) instead of a mean with a band")
     pl.set_defaults(fn=_plot)
     register_task_commands(sub)
     args = p.parse_args(argv)
+    stdout, sys.stdout = sys.stdout, _ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
     try:
         return args.fn(args)
     except ValueError as exc:
         print(f"sgr: error: {exc}", file=sys.stderr)
         return 2
+    finally:
+        sys.stdout = stdout
 
 
 if __name__ == "__main__":

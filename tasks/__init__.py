@@ -3,13 +3,16 @@ task-agnostic env (`BatchEnv`) and gymnasium adapters. Importing registers the `
 
     from tasks import BatchEnv, TASKS
     env = BatchEnv("Walker-v0", [body_a, body_b])
+    tasks.register(TaskSpec(name="MyTask-v0", ...))   # yours, everywhere sgr's are (docs/TASKS.md)
 """
 
 from tasks.env import BatchEnv, obs_dim
 from tasks.gym_env import SgrEnv, SgrVectorEnv, register_envs
-from tasks.spec import TaskSpec
+from tasks.registry import register
+from tasks.spec import Measure, TaskSpec
 from tasks.specs import TASKS, task_spec, task_world
 
 register_envs()
 
-__all__ = ["TASKS", "BatchEnv", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "task_spec", "task_world"]
+__all__ = ["TASKS", "BatchEnv", "Measure", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "register",
+           "task_spec", "task_world"]

@@ -200,8 +200,9 @@ class BatchEnv:
         reward = np.where(unstable, reward + UNSTABLE_PENALTY, reward)
         done = unstable.copy()
         if self.spec.goal is not None:
-            gx, bonus = self.spec.goal
-            goal = active & (com_after[:, 0] > gx * 0.1)
+            gx, bonus = self.spec.goal[:2]
+            left = tuple(self.spec.goal[2:]) == ("left",)
+            goal = active & ((com_after[:, 0] < gx * 0.1) if left else (com_after[:, 0] > gx * 0.1))
             reward = np.where(goal, reward + bonus, reward)
             done |= goal
         if self.spec.termination is not None:

@@ -3,8 +3,9 @@
 `BatchEnv` is task-agnostic: it places the robot at `origin` in the world file `world`, writes the
 observation as the spec's blocks in order, calls the spec's `reward` with the measurements taken
 before and after each step, and ends an episode at the goal, at evogym's instability rule or at
-the episode length. A task is one file in `tasks/suite/` with its `SPEC` (and its reward), plus one
-line in `tasks/specs.py`'s registry.
+the episode length. A task of sgr's is one file in `tasks/suite/` with its `SPEC` (and its reward),
+plus one line in `tasks/specs.py`'s registry; a task of yours is `tasks.register(spec)` in your own
+code (docs/TASKS.md).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from functools import cached_property
 import numpy as np
 
 from tasks.orientation import orientation
+from tsim.world import World, world_from_dict
 
 
 @dataclass(frozen=True)
@@ -75,14 +77,16 @@ class TaskSpec:
     """Every fact of one evogym task (see the module docstring); one frozen instance per task,
     registered in `tasks.specs.TASKS`."""
     name: str
-    world: str  # evogym world file in tasks/worlds/
+    world: str | World  # a world file in tasks/worlds/ (or any path), or a World (tsim.world_from_matrix)
     origin: tuple[int, int]  # grid cell of the bottom-left of the robot's body matrix
     paper_steps: int  # episode length used by the SGR paper (our default)
     evogym_steps: int  # evogym's registered max_episode_steps
     observation: tuple[Block, ...]  # in order; exactly one block of width -1 (the robot's points)
     reward: Reward
     tracked: tuple[str, ...] = ()  # objects whose COM the reward needs (Measure.objects)
-    goal: tuple[int, float] | None = None  # (voxel x the robot's COM must pass, bonus); ends the episode
+    # (voxel x the robot's COM must pass, bonus[, "left"]); ends the episode. Passing means going
+    # right of x, or left of it with "left"
+    goal: tuple[int, float] | tuple[int, float, str] | None = None
     termination: Termination | None = None  # further task ends (after the goal); see `Termination`
     state: StateInit | None = None  # per-world task state, drawn anew at each reset of that world
     objects: tuple[AddedObject, ...] = ()  # objects added in code, in the order evogym adds them
@@ -92,6 +96,12 @@ class TaskSpec:
         """A per_world object with no placement function (or a placement with no per_world object
         to place) would otherwise fail only at the first reset, far from the spec: fail here, at
         registration, naming the task and the object."""
+        if isinstance(self.world, dict):  # a world given in the world file's layout
+            object.__setattr__(self, "world", world_from_dict(self.world, self.name))
+        if self.goal is not None and (len(self.goal) not in (2, 3)
+                                      or len(self.goal) == 3 and self.goal[2] not in ("left", "right")):
+            raise ValueError(f"task {self.name}: goal must be (voxel x, bonus) or (voxel x, bonus, "
+                             f"'left' or 'right'), got {self.goal!r}")
         per_world = [o.name for o in self.objects if o.per_world]
         if per_world and self.placement is None:
             raise ValueError(f"task {self.name}: per_world object {per_world[0]!r} has no placement "

@@ -1,9 +1,12 @@
-"""The task registry: every task's spec by its evogym id, and its world."""
+"""The task registry: every task's spec by its evogym id, and its world. sgr's own tasks are listed
+here; `tasks.register` (tasks/registry.py) adds yours."""
 
 from __future__ import annotations
 
+import difflib
 from functools import cache
 from importlib import resources
+from pathlib import Path
 
 from tasks.spec import TaskSpec
 from tasks.suite import (
@@ -25,7 +28,7 @@ from tasks.suite import (
     traverser,
     walker,
 )
-from tsim.world import World, load_object, load_world
+from tsim.world import World, add_world_finder, load_object, load_world
 
 TASKS: dict[str, TaskSpec] = {s.name: s for s in (
     walker.SPEC,
@@ -63,22 +66,51 @@ TASKS: dict[str, TaskSpec] = {s.name: s for s in (
 )}
 
 
+BUILTIN = frozenset(TASKS)  # sgr's own tasks; the others were added by tasks.register
+
+
+def closest(name: object, known) -> str:
+    """ "; did you mean X or Y?" for the known names closest to a misspelt one, else ""."""
+    near = difflib.get_close_matches(str(name), list(known), n=2, cutoff=0.6)
+    return f"; did you mean {' or '.join(near)}?" if near else ""
+
+
+def unknown_name(what: str, name: object, known) -> str:
+    """One line for a name that is not known: the closest known names, then all of them."""
+    hint = closest(name, known)
+    return f"unknown {what} {name!r}{hint}{' Known' if hint else '; known'} {what}s: {', '.join(known)}"
+
+
+def unknown_task(name: object) -> str:
+    """One line for a task name that is not registered: the closest names, then every name."""
+    return unknown_name("task", name, TASKS)
+
+
 def task_spec(name: str) -> TaskSpec:
-    """The spec of an evogym task id such as Walker-v0; ValueError listing the known ids otherwise."""
+    """The spec of a task id such as Walker-v0; ValueError naming the closest ids otherwise."""
     try:
         return TASKS[name]
-    except KeyError:
-        raise ValueError(f"unknown task {name!r}; known tasks: {', '.join(TASKS)}") from None
+    except (KeyError, TypeError):
+        raise ValueError(unknown_task(name)) from None
 
 
 @cache
 def task_world(name: str) -> World:
-    """The task's evogym world (files in tasks/worlds, MIT licence, see LICENSE-evogym there),
-    with the objects its task code adds (`TaskSpec.objects`)."""
+    """The task's world: an evogym world file in tasks/worlds (MIT licence, see LICENSE-evogym
+    there), any world file by path, or the spec's own `World`, with the objects its task code adds
+    (`TaskSpec.objects`)."""
     spec = task_spec(name)
     worlds = resources.files("tasks") / "worlds"
-    with resources.as_file(worlds / spec.world) as p:
-        world = load_world(p)
+    if isinstance(spec.world, World):
+        world = spec.world
+    elif (worlds / spec.world).is_file():
+        with resources.as_file(worlds / spec.world) as p:
+            world = load_world(p)
+    elif Path(spec.world).is_file():
+        world = load_world(spec.world)
+    else:
+        raise ValueError(f"task {name}: world file {spec.world!r} is neither in tasks/worlds nor a path "
+                         "that exists")
     if not spec.objects:
         return world
     extra = []
@@ -86,3 +118,10 @@ def task_world(name: str) -> World:
         with resources.as_file(worlds / a.file) as p:
             extra.append(load_object(p).placed(a.name, a.cell, per_world=a.per_world))
     return world.with_objects(tuple(extra))
+
+
+def _world_of_task(name: str) -> World | None:
+    return task_world(name) if name in TASKS else None
+
+
+add_world_finder(_world_of_task)  # Renderer("Walker-v0", body) draws the task's world

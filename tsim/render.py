@@ -17,7 +17,7 @@ import numpy as np
 
 from tsim import constants as C
 from tsim.body import Body, build_body
-from tsim.world import World, load_world
+from tsim.world import World, resolve_world
 
 BACKGROUND = (244, 245, 247)
 GRID = (204, 204, 204)
@@ -205,7 +205,8 @@ class Camera:
 
 
 class Renderer:
-    """Draws one robot `body` in `world` (static terrain plus free objects such as Thrower's package).
+    """Draws one robot `body` in `world` (static terrain plus free objects such as Thrower's package):
+    a `World`, a world file, or a task id such as "Walker-v0" (its world, once `import tasks` ran).
 
     Scale is fixed: `view_voxels` voxels across the image width (evogym shows 40 x 20 voxels).
     """
@@ -215,7 +216,7 @@ class Renderer:
                  track_objects: bool = True):
         if width < 1 or height < 1:
             raise ValueError(f"image size must be positive, got {width}x{height}")
-        self.world = world if isinstance(world, World) else load_world(world)
+        self.world = resolve_world(world)
         self.body = body if isinstance(body, Body) else build_body(body)
         self.width, self.height = int(width), int(height)
         self.scale = self.width / (view_voxels * C.CELL)  # pixels per world unit

@@ -1,6 +1,14 @@
 """Worlds: evogym world files turned into static terrain and free objects (the files themselves
 belong to the tasks that use them; see tasks/worlds).
 
+A world file is JSON (evogym's layout, docs/TASKS.md "World files"):
+    {"grid_width": W, "grid_height": H,
+     "objects": {NAME: {"indices": [...], "types": [...], "neighbors": {"i": [j, ...], ...}}, ...}}
+cell index i = x + y * W (x from the left, y from the bottom, in voxels); `types` are the materials
+of the cells in `indices` (0 empty .. 5 fixed, `tsim.constants`); `neighbors` lists, for each cell,
+the cells it is glued to. `world_from_dict` takes the same layout as a dict, `world_from_matrix` a
+material matrix (row 0 = top) with every filled cell glued to its filled 4-neighbours.
+
 Fixed terrain never moves in evogym (material 5: every corner point is fixed), so it is kept as
 static geometry with a dense cell grid for contact look-ups, not as simulated points. Free objects
 (Thrower's package) are simulated like the robot; so are objects that mix fixed and free voxels
@@ -11,6 +19,7 @@ each world and episode (`per_world`: Catcher-v0's pegs), whose points are then a
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -125,23 +134,40 @@ def _object_from_json(name: str, data: dict, grid_w: int) -> WorldObject:
     return WorldObject(name=name, body=body, cell=(x0, y0), pos0=body.place(x0, y0))
 
 
+def _items(data: object, source: str) -> tuple[int, int, list]:
+    try:
+        grid_w, grid_h = int(data["grid_width"]), int(data["grid_height"])
+        items = sorted(data["objects"].items())
+        for _, d in items:
+            if len(d["indices"]) != len(d["types"]):
+                raise ValueError(f"{len(d['indices'])} indices but {len(d['types'])} types")
+    except (ValueError, KeyError, AttributeError, TypeError) as exc:
+        raise ValueError(f"bad world {source}: {type(exc).__name__}: {exc}") from None
+    return grid_w, grid_h, items
+
+
 def _read(path: Path) -> tuple[int, int, list]:
     try:
         data = json.loads(path.read_text())
-        grid_w, grid_h = int(data["grid_width"]), int(data["grid_height"])
-        items = sorted(data["objects"].items())
-    except (OSError, ValueError, KeyError, AttributeError) as exc:
+    except (OSError, ValueError) as exc:
         raise ValueError(f"bad world file {path}: {exc}") from None
-    return grid_w, grid_h, items
+    return _items(data, f"file {path}")
+
+
+def _world(name: str, grid_w: int, grid_h: int, items: list, source: str) -> World:
+    try:
+        objects = tuple(_object_from_json(n, d, grid_w) for n, d in items)
+    except (ValueError, KeyError, TypeError) as exc:
+        raise ValueError(f"bad world {source}: {exc}") from None
+    terrain = _build_terrain(objects, grid_w, grid_h)
+    return World(name=name, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
 
 
 def load_world(path: str | Path) -> World:
     """Read an evogym world JSON file (grid size, objects with indices, types, neighbours)."""
     path = Path(path)
     grid_w, grid_h, items = _read(path)
-    objects = tuple(_object_from_json(n, d, grid_w) for n, d in items)
-    terrain = _build_terrain(objects, grid_w, grid_h)
-    return World(name=path.stem, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
+    return _world(path.stem, grid_w, grid_h, items, f"file {path}")
 
 
 def load_object(path: str | Path) -> WorldObject:
@@ -152,6 +178,80 @@ def load_object(path: str | Path) -> WorldObject:
     if len(items) != 1:
         raise ValueError(f"bad object file {path}: {len(items)} objects, expected 1")
     return _object_from_json(items[0][0], items[0][1], grid_w)
+
+
+def world_from_dict(data: dict, name: str = "custom") -> World:
+    """A world from a dict in the world file's layout (module docstring), without writing JSON."""
+    grid_w, grid_h, items = _items(data, repr(name))
+    return _world(name, grid_w, grid_h, items, repr(name))
+
+
+def world_from_matrix(matrix: object, name: str = "custom") -> World:
+    """A world drawn as a material matrix (row 0 = top, as body matrices; 5 = fixed terrain, other
+    materials make simulated objects): every filled cell is glued to its filled 4-neighbours, and
+    each connected group of cells is one object, named terrain, terrain_1, ... in reading order.
+    The grid is the matrix's size: leave empty rows above the terrain for the robot."""
+    m = np.asarray(matrix)
+    if m.ndim != 2 or m.size == 0 or not np.issubdtype(m.dtype, np.integer):
+        raise ValueError(f"world {name!r}: a terrain matrix must be a non-empty 2-D array of ints")
+    if m.min() < C.EMPTY or m.max() > C.FIXED:
+        raise ValueError(f"world {name!r}: materials must be {C.EMPTY}..{C.FIXED}, got {m.min()}..{m.max()}")
+    h, w = m.shape
+    index = lambda r, c: c + (h - 1 - r) * w  # evogym's cell index: x + y * width, y from the bottom
+    seen = np.zeros(m.shape, dtype=bool)
+    objects = {}
+    for r0 in range(h):
+        for c0 in range(w):
+            if m[r0, c0] == C.EMPTY or seen[r0, c0]:
+                continue
+            seen[r0, c0] = True
+            stack, cells = [(r0, c0)], []
+            while stack:  # one connected group (4-neighbours), grown from its first cell
+                r, c = stack.pop()
+                cells.append((r, c))
+                for rr, cc in ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1)):
+                    if 0 <= rr < h and 0 <= cc < w and m[rr, cc] != C.EMPTY and not seen[rr, cc]:
+                        seen[rr, cc] = True
+                        stack.append((rr, cc))
+            cells.sort()
+            members = set(cells)
+            objects[f"terrain_{len(objects)}" if objects else "terrain"] = {
+                "indices": [index(r, c) for r, c in cells],
+                "types": [int(m[r, c]) for r, c in cells],
+                "neighbors": {str(index(r, c)): [index(rr, cc) for rr, cc in
+                                                 ((r - 1, c), (r + 1, c), (r, c - 1), (r, c + 1))
+                                                 if (rr, cc) in members]
+                              for r, c in cells}}
+    if not objects:
+        raise ValueError(f"world {name!r}: the terrain matrix is empty (no material > 0)")
+    return world_from_dict({"grid_width": w, "grid_height": h, "objects": objects}, name)
+
+
+# Where a world given by name comes from: a layer above the simulator (tasks) adds a finder that
+# maps its names (task ids) to worlds, so `Renderer("Walker-v0", body)` works without tsim knowing
+# any task.
+_FINDERS: list[Callable[[str], World | None]] = []
+
+
+def add_world_finder(find: Callable[[str], World | None]) -> None:
+    """Let `resolve_world` look names up with `find(name) -> World or None` (idempotent)."""
+    if find not in _FINDERS:
+        _FINDERS.append(find)
+
+
+def resolve_world(world: World | str | Path) -> World:
+    """A World as is; a path to a world file, loaded; else a name a finder knows (a task id once
+    `import tasks` has run). ValueError saying which of these it is not."""
+    if isinstance(world, World):
+        return world
+    if Path(world).is_file():
+        return load_world(world)
+    for find in _FINDERS:
+        found = find(str(world))
+        if found is not None:
+            return found
+    raise ValueError(f"no world {str(world)!r}: not a world file, nor a task name "
+                     f"({'import tasks first' if not _FINDERS else 'no task of that name'})")
 
 
 # evogym edge orientation of a voxel's sides in corner slots (TL=0, TR=1, BR=2, BL=3):

@@ -18,11 +18,15 @@ import numpy as np
 
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import EpisodeNoise
+from tasks.registry import load_spec_blob
 
 
 def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
-              noise: EpisodeNoise | None = None) -> np.ndarray:
-    """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations)."""
+              noise: EpisodeNoise | None = None, spec: bytes | None = None) -> np.ndarray:
+    """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations);
+    `spec` is a task registered in the parent's code (`tasks.registry.spec_blob`), registered here
+    first."""
+    load_spec_blob(spec)
     return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise)
 
 

@@ -1,8 +1,19 @@
-"""A run's champion as a runnable robot: body + dense controller read back from champion.json."""
+"""A run's champion as a runnable robot: body + controller read back from champion.json.
+
+    from evolve import load_champion
+    champ = load_champion("runs/sgr-quick-seed0-...")      # body, policy, episode length, fitness
+    champ.rollout() == champ.fitness                       # True: its episode, in gymnasium (*)
+    env = champ.env()                                      # gymnasium env of its task and body
+    champ.gif("champion.gif")
+
+(*) for a run scored by one exact episode; with robust evaluation `rescore_champion` reproduces the
+fitness.
+"""
 
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -20,10 +31,16 @@ from tsim.body import build_body, check_robot
 KEYS = ("task", "episode_steps", "body", "controller")
 
 
-def load_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
-    """champion.json's record, body and controller; ValueError naming the file and the key when it
-    is not a champion that runs (checked with one forward pass of the controller)."""
+def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
+    """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
+    ValueError naming the file and the key when it is not a champion that runs (checked with one
+    forward pass of the controller)."""
     f = Path(run_dir) / "champion.json"
+    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: the modules that register it
+        from tasks.registry import import_tasks
+
+        for ref in RunDir(run_dir).config().get("imports") or ():
+            import_tasks(ref)
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -67,7 +84,7 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     from tasks.render_episode import render_episode
     from tsim.render import write_gif
 
-    champ, body, ctrl = load_champion(run_dir)
+    champ, body, ctrl = read_champion(run_dir)
     noise = _replay_noise(replay + 1, eps, kind, offset, seed).take([replay])
     shift = noise.shifts()
 
@@ -105,7 +122,7 @@ def rescore_champion(run_dir: str | Path) -> float:
     episode return, or for a run with robust evaluation the statistic over the same K perturbed
     episodes (the run's seed and the evaluation's tag give their noise). Must equal the recorded
     fitness."""
-    champ, body, ctrl = load_champion(run_dir)
+    champ, body, ctrl = read_champion(run_dir)
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
     if robust is None:
@@ -124,7 +141,7 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
     with `kind` noise of scale `eps` (uniform: +-eps; gaussian: sd eps) added to every action and
     the start shifted by uniform(+-offset), all simulated as one batch. Replay i's noise is a pure
     function of (seed, eps, kind, offset, i) (`evolve/rollout/robust.py`)."""
-    champ, body, ctrl = load_champion(run_dir)
+    champ, body, ctrl = read_champion(run_dir)
     # every world replays evolution's episode (`rollout_policy`: seed 0, the constructed env's
     # episode), so the perturbed runs differ from it by the perturbation alone
     return _replay(champ, body, ctrl, _replay_noise(replays + 1, eps, kind, offset, seed))
@@ -138,3 +155,69 @@ def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> Ep
         raise ValueError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
     tags = [f"replay/{kind}/{eps!r}/{offset!r}/{i}" for i in range(n)]
     return EpisodeNoise(Perturbation(kind, eps, offset), episode_keys(seed, tags, 0), np.arange(n) > 0)
+
+
+def episode_steps(task: str, steps: int | str | None) -> int:
+    """The episode length a record stands for: runs record theirs; older ones wrote null (the
+    paper's length for the task) or "evogym" (evogym's)."""
+    spec = TASKS[task]
+    return spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym" else int(steps)
+
+
+@dataclass(frozen=True)
+class Champion:
+    """A run's champion, ready to use: its task, body, controller and the episode length and
+    fitness of its evaluation. `policy(obs) -> action` whatever the controller's format."""
+
+    task: str
+    body: np.ndarray
+    controller: DenseController | GraphController
+    episode_steps: int
+    fitness: float
+    record: dict = field(repr=False)  # champion.json as read
+
+    def policy(self, obs: np.ndarray) -> np.ndarray:
+        """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
+        return self.controller.act(obs)
+
+    def env(self, **kwargs):
+        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>)`;
+        `kwargs` go to gymnasium.make."""
+        import gymnasium as gym
+
+        import tasks  # noqa: F401  (registers the sgr/<task> ids)
+
+        return gym.make(f"sgr/{self.task}", body=self.body,
+                        **{"max_episode_steps": self.episode_steps, **kwargs})
+
+    def rollout(self, env=None) -> float:
+        """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
+        as evolution's episode was, so for a run scored by one exact episode it equals `fitness`
+        exactly. (A run with robust evaluation scored a statistic over perturbed episodes:
+        `rescore_champion(run_dir)` reproduces that.)"""
+        env = self.env() if env is None else env
+        obs, _ = env.reset(seed=0)
+        total, done = 0.0, False
+        while not done:
+            obs, reward, terminated, truncated, _ = env.step(self.policy(obs))
+            total += reward
+            done = terminated or truncated
+        return total
+
+    def gif(self, out: str | Path, *, width: int = 640, height: int = 320, fps: float = 30.0) -> Path:
+        """Render its episode to a GIF at `out`; returns the path."""
+        from tasks.render_episode import render_episode
+        from tsim.render import write_gif
+
+        frames = render_episode(self.task, self.body, lambda t, obs: self.policy(obs), self.episode_steps,
+                                width, height, indexed=True)
+        return write_gif(frames, out, fps=fps)
+
+
+def load_champion(run_dir: str | Path) -> Champion:
+    """The champion of a run directory (its champion.json), checked to run: ValueError naming the
+    file and the key otherwise."""
+    record, body, ctrl = read_champion(run_dir)
+    return Champion(task=record["task"], body=body, controller=ctrl,
+                    episode_steps=episode_steps(record["task"], record["episode_steps"]),
+                    fitness=float(record.get("fitness", float("nan"))), record=record)

@@ -3,7 +3,11 @@
 The schema is the common keys below plus the method's own (`Problem.config_keys`). Paths inside a
 config (neat_config, ...) are relative to the YAML file; left out, they are the method's packaged
 defaults in configs/neat/. `load_config` returns a plain dict with every key present (defaults
-filled), which is what a run directory stores.
+filled, `episode_steps` resolved to the number of steps a run uses), which is what a run
+directory stores.
+
+`imports` lists modules (names, or .py files relative to the config) that register tasks of your own
+(`tasks.register`); they are imported before the task is looked up, by every process of the run.
 """
 
 from __future__ import annotations
@@ -14,7 +18,8 @@ from typing import Any
 from evolve.methods import METHODS
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
-from tasks.specs import TASKS
+from tasks.registry import import_tasks
+from tasks.specs import TASKS, closest, unknown_task
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -40,6 +45,7 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "checkpoint_every": (int, 5),
     "render_champion": (bool, True),
     "workers": ((int, str), "auto"),
+    "imports": (list, []),
     "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
 }
 
@@ -55,7 +61,8 @@ def check_config(raw: dict, source: str = "config") -> dict:
         raise ValueError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
     if method not in METHODS:
-        raise ValueError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}")
+        raise ValueError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
+                         f"{closest(method, METHODS)}")
     problem = METHODS[method]
     schema = {**COMMON, **problem.config_keys}
     for key in raw:
@@ -77,9 +84,17 @@ def check_config(raw: dict, source: str = "config") -> dict:
         if not ok:
             raise ValueError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
         cfg[key] = val
+    imports = cfg["imports"]
+    if not all(isinstance(m, str) for m in imports):
+        raise ValueError(f"{source}: key 'imports' must be a list of module names or .py files, "
+                         f"got {imports!r}")
+    for ref in imports:  # they register the user's tasks before the task is looked up
+        try:
+            import_tasks(ref)
+        except ValueError as exc:
+            raise ValueError(f"{source}: key 'imports': {exc}") from None
     if cfg["task"] not in TASKS:
-        raise ValueError(f"{source}: key 'task': unknown task {cfg['task']!r}; known tasks: "
-                         f"{', '.join(TASKS)}")
+        raise ValueError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
     for key in ("generations", "pop_size", "checkpoint_every"):
         if cfg[key] < 1:
             raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
@@ -90,6 +105,9 @@ def check_config(raw: dict, source: str = "config") -> dict:
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                          f"got {steps!r}")
+    spec = TASKS[cfg["task"]]  # the run records the episode length it uses, not a rule for it
+    cfg["episode_steps"] = (spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym"
+                            else steps)
     w = cfg["workers"]
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
@@ -125,4 +143,35 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     for key in problem.default_files if problem else ():
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():
             raw[key] = str(((base or Path.cwd()) / raw[key]).resolve())
+    if isinstance(raw.get("imports"), list):  # .py files relative to the config, like neat_config
+        raw["imports"] = [str(((base or Path.cwd()) / m).resolve())
+                          if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m
+                          for m in raw["imports"]]
     return check_config(raw, source)
+
+
+def packaged_config(name: str) -> Path | None:
+    """A config shipped with sgr by name: "sgr/Climber-v2" (a method's config of a task), "quick",
+    or a sweep, "paper" (configs/sweeps/paper.yaml); None when there is none of that name."""
+    base = configs_dir()
+    name = name.removesuffix(".yaml")
+    for f in (base / f"{name}.yaml", base / "sgr" / f"{name}.yaml", base / "sweeps" / f"{name}.yaml"):
+        if f.is_file():
+            return f
+    return None
+
+
+def find_config(ref: str, what: str = "config") -> Path:
+    """A config path as given when that file exists, else the packaged config of that name
+    (`packaged_config`), so names work from any folder; ValueError saying which it is not."""
+    if Path(ref).is_file():
+        return Path(ref)
+    found = packaged_config(ref)
+    if found is not None:
+        return found
+    if Path(ref).exists():
+        raise ValueError(f"{what} {ref} is not a file")
+    names = [str(f.relative_to(configs_dir()).with_suffix("")) for f in sorted(configs_dir().glob("*/*.yaml"))
+             if f.parent.name != "neat"]
+    raise ValueError(f"{what} {ref} does not exist, nor is it the name of a packaged config"
+                     f"{closest(ref.removesuffix('.yaml'), names) or ' (e.g. sgr/Climber-v2, quick, paper)'}")

@@ -1,11 +1,21 @@
-"""Running an experiment: config -> run directory, generation loop, checkpoints, resume."""
+"""Running an experiment: config -> run directory, generation loop, checkpoints, resume.
+
+Generations are counted from 1 everywhere a person reads them: generations.csv, champion.json, the
+console and the messages of a stop ("after generation 3" = 3 generations evaluated, the state of
+checkpoint gen-00003). The NEAT search counts from 0 inside (neat-python's numbering).
+A first Ctrl-C lets the generation under way end, writes a checkpoint and stops (KeyboardInterrupt);
+a second stops at once, at the last checkpoint.
+"""
 
 from __future__ import annotations
 
 import math
+import signal
 import sys
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from evolve.methods import METHODS
@@ -14,6 +24,7 @@ from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
+from tasks.registry import import_tasks
 
 
 def genome_json(genome) -> dict:
@@ -92,6 +103,8 @@ class Experiment:
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
         cfg = run.config()
+        for ref in cfg.get("imports") or ():  # the modules that register the run's own task
+            import_tasks(ref)
         run.lock()
         try:
             state = run.latest_checkpoint()
@@ -120,18 +133,24 @@ class Experiment:
 
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
         """Run to the configured number of generations; `after_generation(self)` is called once
-        each generation's row, champion and checkpoint are written (bench/soak.py measures there)."""
+        each generation's row, champion and checkpoint are written (bench/soak.py measures there).
+        Ctrl-C (SIGINT): the generation under way ends, a checkpoint is written, then
+        KeyboardInterrupt; a second Ctrl-C raises it at once."""
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
-        while search.generation < cfg["generations"]:
-            row = search.step()
-            self.run.append_row(row)
-            self._write_champion()
-            if search.generation % cfg["checkpoint_every"] == 0 or search.generation == cfg["generations"]:
-                self.run.save_checkpoint(search.generation, self.state())
-            self._progress(row, time.perf_counter() - t_start)
-            if after_generation is not None:
-                after_generation(self)
+        with _interrupt_after_generation() as stop:
+            while search.generation < cfg["generations"]:
+                row = search.step()
+                self.run.append_row({**row, "generation": row["generation"] + 1})  # counted from 1
+                self._write_champion()
+                g = search.generation
+                if g % cfg["checkpoint_every"] == 0 or g == cfg["generations"] or stop.is_set():
+                    self.run.save_checkpoint(search.generation, self.state())
+                self._progress(row, time.perf_counter() - t_start)
+                if after_generation is not None:
+                    after_generation(self)
+                if stop.is_set() and search.generation < cfg["generations"]:
+                    raise KeyboardInterrupt
 
     def _write_champion(self) -> None:
         best = self.search.best
@@ -139,10 +158,11 @@ class Experiment:
             return
         champ = {"format": "sgr-champion-1", "method": self.cfg["method"], "task": self.cfg["task"],
                  "episode_steps": self.cfg["episode_steps"], "fitness": best["fitness"],
-                 "generation": best["generation"], "genome": genome_json(best["genome"])}
+                 "generation": best["generation"] + 1, "genome": genome_json(best["genome"])}
         method_keys = self.problem.champion(best["phenotype"])
         # how the fitness was scored: enough to score the champion again exactly (robust: the
-        # run's seed and the evaluation's tag give every episode's noise)
+        # run's seed and the evaluation's tag give every episode's noise; the tag holds the
+        # search's own generation number, counted from 0)
         evaluation = {"robust": self.cfg.get("robust"), "seed": self.cfg["seed"],
                       "tag": f"{best['generation']}/{best['key']}"}
         evaluation.update(method_keys.pop("evaluation", {}))
@@ -177,5 +197,28 @@ class Experiment:
         if self.cfg.get("render_champion", True):
             champion_gif(self.run.path)
         if not self.quiet:
-            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
+            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation'] + 1}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+
+
+@contextmanager
+def _interrupt_after_generation() -> Iterator[threading.Event]:
+    """While inside: the first SIGINT sets the event (the loop stops after its generation, with a
+    checkpoint) and the next one raises KeyboardInterrupt at once. Outside the main thread, where
+    signal handlers cannot be set, SIGINT keeps Python's default."""
+    stop = threading.Event()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def first(signum, frame):
+        stop.set()
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+        print("\nsgr: stopping after this generation, with a checkpoint (Ctrl-C again: stop now, "
+              "at the last checkpoint)", file=sys.stderr, flush=True)
+
+    old = signal.signal(signal.SIGINT, first)
+    try:
+        yield stop
+    finally:
+        signal.signal(signal.SIGINT, old)

@@ -59,7 +59,7 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 320, he
     `folder` for each entry; returns the entries with `gif` and `body` paths added."""
     import imageio.v3 as iio
 
-    from evolve.runs.champion import champion_gif, load_champion
+    from evolve.runs.champion import champion_gif, read_champion
 
     folder.mkdir(parents=True, exist_ok=True)
     out = []
@@ -67,7 +67,7 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 320, he
         name = e["run"].name
         gif = champion_gif(e["run"], folder / f"{name}.gif", width=width, height=height, fps=fps,
                            every=every)
-        _, body, _ = load_champion(e["run"])
+        _, body, _ = read_champion(e["run"])
         png = folder / f"{name}-body.png"
         iio.imwrite(png, body_image(body))
         out.append({**e, "gif": gif, "body": png})

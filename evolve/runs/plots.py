@@ -3,7 +3,8 @@
 `plot_runs` compares methods: runs are grouped by (method, task) from their config.yaml, and each
 group becomes one curve, the mean over seeds of the best fitness per generation, with a min..max
 band over seeds, so the spread between seeds is visible rather than hidden in a mean.
-`plot_run` shows one run's best, mean and median fitness.
+`plot_runs(..., per_run=True)` draws one line per run instead. `plot_run` shows one run's best, mean
+and median fitness. Generations are counted from 1 and the ticks are whole generations.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
+from matplotlib.ticker import MaxNLocator
 
 UNKNOWN = "unknown"
 _WRAPPED = re.compile(r"^\s*[A-Za-z_][\w.]*\((.*)\)\s*$")
@@ -40,7 +42,8 @@ class Curve:
 
 
 def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
-    """Columns of `run_dir/generations.csv` as float arrays (non-numeric cells become NaN)."""
+    """Columns of `run_dir/generations.csv` as float arrays (non-numeric cells become NaN);
+    generations counted from 1, also in runs written when the file counted from 0."""
     f = Path(run_dir) / "generations.csv"
     if not f.is_file():
         raise ValueError(f"{run_dir} has no generations.csv")
@@ -60,7 +63,10 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
         except (TypeError, ValueError):
             return float("nan")
 
-    return {k: np.array([num(r.get(k)) for r in rows]) for k in rows[0]}
+    cols = {k: np.array([num(r.get(k)) for r in rows]) for k in rows[0]}
+    if "generation" in cols and cols["generation"][0] == 0:  # written when rows counted from 0
+        cols["generation"] = cols["generation"] + 1
+    return cols
 
 
 def run_labels(run_dir: str | Path) -> tuple[str, str]:
@@ -134,17 +140,44 @@ def _save(fig: Figure, out: str | Path) -> Path:
     return out
 
 
-def plot_runs(run_dirs: Sequence[str | Path], out: str | Path) -> Path:
+def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = False) -> Path:
     """PNG comparing (method, task) groups of runs: mean best fitness per generation with a min..max
-    band over seeds. Returns the PNG path; `summarize_runs` gives the groups it draws."""
+    band over seeds (`summarize_runs` gives the groups), or with `per_run` one line per run, in
+    its group's colour. Returns the PNG path."""
     curves = summarize_runs(run_dirs)
     if not curves:
         raise ValueError("no run with generations to plot among " + ", ".join(map(str, run_dirs)))
     fig = Figure(figsize=(8, 4.5))
     ax = fig.add_subplot()
-    draw_curves(ax, curves)
+    if per_run:
+        draw_runs(ax, run_dirs)
+    else:
+        draw_curves(ax, curves)
     tasks = sorted({t for _, t in curves})
     return _finish(fig, ax, f"Best fitness per generation: {', '.join(tasks)}", "best fitness", out)
+
+
+def draw_runs(ax: Axes, run_dirs: Sequence[str | Path]) -> None:
+    """One line per run (best fitness per generation), one colour per (method, task) group."""
+    colors: dict[tuple[str, str], str] = {}
+    cycle = iter(matplotlib_colors())
+    for d in run_dirs:
+        cols = read_generations(d)
+        if not cols or "best" not in cols or "generation" not in cols:
+            continue
+        group = run_labels(d)
+        if group not in colors:
+            colors[group] = next(cycle)
+        best = np.where(np.isfinite(cols["best"]), cols["best"], np.nan)
+        ax.plot(cols["generation"], best, color=colors[group], alpha=0.85,
+                label=f"{group[0]} / {group[1]}: {Path(d).name}")
+
+
+def matplotlib_colors() -> list[str]:
+    """matplotlib's default colour cycle, repeated (more groups than colours reuse them)."""
+    from matplotlib import rcParams
+
+    return rcParams["axes.prop_cycle"].by_key()["color"] * 8
 
 
 def plot_run(run_dir: str | Path, out: str | Path) -> Path:
@@ -164,6 +197,7 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
 def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
     ax.set_title(title)
     ax.set_xlabel("generation")
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # whole generations, never 2.5
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")

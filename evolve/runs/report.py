@@ -44,6 +44,33 @@ AUTHORS: dict[tuple[str, str], tuple[float | str | None, ...]] = {
     ("direct", "Thrower-v0"): (None, None, None, 3.45),
     ("nested", "ObstacleTraverser-v1"): (1.14, None, None, "2.5-3.2"),  # end: range over their seeds
 }
+AUTHORS_GENERATIONS = 100  # their "end" figures come from runs of at least this many generations
+
+
+def episode_length(cfg: dict, task: str) -> int | None:
+    """The episode length a run used: its config's (runs record it), or for a config that left it
+    out (null: the paper's, "evogym": evogym's) the task's; None for a task not registered here."""
+    from tasks.specs import TASKS
+
+    steps = cfg.get("episode_steps")
+    if isinstance(steps, int):
+        return steps
+    spec = TASKS.get(task)
+    return None if spec is None else spec.evogym_steps if steps == "evogym" else spec.paper_steps
+
+
+def authors_not_comparable(task: str, episode_steps: list) -> str | None:
+    """Why the authors' figures for `task` cannot be set beside runs with these episode lengths
+    (they ran the paper's), or None when they can."""
+    from tasks.specs import TASKS
+
+    theirs = TASKS[task].paper_steps if task in TASKS else None
+    ours = sorted({s for s in episode_steps if s is not None})
+    if theirs is None or ours == [theirs]:
+        return None
+    return (f"not comparable: {'/'.join(map(str, ours)) or '?'}-step episodes, theirs {theirs}")
+
+
 SUMMARY_COLUMNS = ["method", "task", "seed", "generations", "best_gen1", "best_gen30", "best_gen100",
                    "best_final", "champion_fitness", "replay", "nominal", "s_per_gen", "run"]
 NOISE_LEVELS = (1e-9, 1e-3)  # sgr report's default: rounding, and a physical actuator's error
@@ -118,7 +145,8 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         best = best_so_far(d)
         cols = read_generations(d)
         row = {"method": method, "task": task, "seed": cfg.get("seed"), "generations": len(best),
-               "run": d.name, "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan)}
+               "run": d.name, "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
+               "episode_steps": episode_length(cfg, task)}
         for g in CHECKPOINTS:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
@@ -174,6 +202,12 @@ def report_markdown(rows: list[dict]) -> str:
         gens = sorted({r["generations"] for r in rs})
         authors = AUTHORS.get((method, task))
         a = " / ".join(_fmt(x) for x in authors) if authors else "-"
+        why = authors_not_comparable(task, [r.get("episode_steps") for r in rs]) if authors else None
+        if why:  # another episode length: their figures measure something else
+            a = f"{a} ({why})"
+        elif authors and max(gens) < AUTHORS_GENERATIONS:  # only the generations these runs reached
+            shown = [x if g <= max(gens) else None for x, g in zip(authors, CHECKPOINTS, strict=False)]
+            a = " / ".join(_fmt(x) for x in [*shown, None])
         rob = [r for r in rs if "nominal" in r]
         cells = [_ms([r["champion_fitness"] for r in rob]) if rob else "-",
                  _ms([r["nominal"] for r in rob]) if rob else "-"]
@@ -222,13 +256,19 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
 
 
 def plot_curves(runs: list[Path], path: Path) -> Path:
-    """One panel per task: mean best-so-far fitness per method with a ± sd band over seeds."""
+    """One panel per task: mean best-so-far fitness per method with a ± sd band over seeds, over the
+    runs' generations; the authors' SGR figures as markers at the generations the runs reached, only
+    where the runs used the paper's episode lengths (as the authors did)."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.ticker import MaxNLocator
 
     by_task: dict[str, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+    steps: dict[tuple[str, str], list] = defaultdict(list)
     for d in runs:
         method, task = run_labels(d)
+        steps[(method, task)].append(episode_length(yaml.safe_load((d / "config.yaml").read_text()) or {},
+                                                    task))
         b = best_so_far(d)
         if len(b):
             by_task[task][method].append(b)
@@ -249,13 +289,18 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
             g = np.arange(1, n + 1)
             (line,) = ax.plot(g, mean, label=f"{method} ({len(curves)} seeds)")
             ax.fill_between(g, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, linewidth=0)
+        last = max(len(c) for curves in by_task[task].values() for c in curves)
         for method in sorted(by_task[task]):  # the authors' figures at generations 1, 30, 100
             known = [(g, v) for g, v in zip(CHECKPOINTS, AUTHORS.get((method, task), ())[:3], strict=False)
-                     if isinstance(v, float)]
+                     if isinstance(v, float) and g <= last]  # the x-axis stays the runs'
+            if authors_not_comparable(task, steps[(method, task)]):
+                continue  # other episode lengths: no marker (report.md says why)
             if known and method == "sgr":  # their other methods' logs are doubtful (docs/RESULTS.md)
                 ax.plot(*zip(*known, strict=True), "kx", label="sgr, authors' logs")
         ax.set_title(task)
         ax.set_xlabel("generation")
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+        ax.set_xlim(0.5, last + 0.5)
         ax.set_ylabel("best fitness")
         ax.grid(alpha=0.3)
         ax.legend(fontsize="small")

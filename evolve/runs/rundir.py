@@ -151,8 +151,12 @@ class RunDir:
             raise
 
     def truncate_rows(self, generation: int) -> None:
-        """Drop rows of generations >= `generation` (they are recomputed after a resume)."""
-        self._write_rows([r for r in self.rows() if int(r["generation"]) < generation])
+        """Keep the rows of the first `generation` generations (the others are recomputed after a
+        resume). Rows count generations from 1; a run written when they counted from 0 is renumbered."""
+        rows = self.rows()
+        if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
+            rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
+        self._write_rows([r for r in rows if int(r["generation"]) <= generation])
 
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:

@@ -12,6 +12,7 @@ Sweep file:
     tasks: [Walker-v0, ObstacleTraverser-v1]
     seeds: [0, 1, 2]                  # or a count: 3 -> 0, 1, 2
     configs: path/to/configs          # optional: <method>/<task>.yaml; default the packaged configs
+    imports: [mytasks.py]             # optional: modules registering tasks of your own (tasks.register)
     overrides:                        # optional: applied to every run's config ...
       generations: 100
       nested: {inner_generations: 1}  # ... and, under a method's name, to that method's runs only
@@ -35,9 +36,11 @@ from evolve.methods import METHODS
 from evolve.runs.config import configs_dir
 from evolve.runs.files import atomic_write, read_yaml
 from evolve.runs.rundir import RunDir
-from tasks.specs import TASKS
+from tasks.registry import import_tasks
+from tasks.specs import TASKS, closest, unknown_task
 
 SWEEP_FILE = "sweep.yaml"
+KEYS = ("configs", "imports", "methods", "overrides", "seeds", "tasks")
 RETRIES = 2  # a run whose process dies is resumed from its checkpoints this many more times
 
 
@@ -70,18 +73,32 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
     any run starts. ValueError naming `source`."""
     if not isinstance(raw, dict):
         raise _fail(source, "a sweep must be a mapping with methods, tasks and seeds")
-    unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides"}
+    unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides", "imports"}
     if unknown:
-        raise _fail(source, f"unknown key {sorted(unknown)[0]!r}; known keys: configs, methods, "
-                            "overrides, seeds, tasks")
+        key = sorted(unknown)[0]
+        raise _fail(source, f"unknown key {key!r}{closest(key, KEYS)} known keys: {', '.join(KEYS)}")
     for key in ("methods", "tasks", "seeds"):
         if key not in raw:
             raise _fail(source, f"missing required key {key!r}")
     methods, tasks, seeds = raw["methods"], raw["tasks"], raw["seeds"]
+    imports = raw.get("imports") or []
+    if not isinstance(imports, list) or not all(isinstance(m, str) for m in imports):
+        raise _fail(source, f"key 'imports' must be a list of module names or .py files, got {imports!r}")
+    imports = [str(((base or Path.cwd()) / m).resolve()) if m.endswith(".py") and not Path(m).is_absolute()
+               else m for m in imports]
+    for ref in imports:  # the user's tasks are registered before the task names are checked
+        try:
+            import_tasks(ref)
+        except ValueError as exc:
+            raise _fail(source, f"key 'imports': {exc}") from None
     if not isinstance(methods, list) or not methods or any(m not in METHODS for m in methods):
-        raise _fail(source, f"key 'methods' must be a list of {', '.join(METHODS)}, got {methods!r}")
+        bad = next((m for m in methods if m not in METHODS), None) if isinstance(methods, list) else None
+        raise _fail(source, f"key 'methods' must be a list of {', '.join(METHODS)}, got {methods!r}"
+                            f"{closest(bad, METHODS)}")
     if not isinstance(tasks, list) or not tasks or any(t not in TASKS for t in tasks):
-        raise _fail(source, f"key 'tasks' must be a list of known tasks ({', '.join(TASKS)}), got {tasks!r}")
+        bad = next((t for t in tasks if t not in TASKS), None) if isinstance(tasks, list) else None
+        raise _fail(source, "key 'tasks': " + (unknown_task(bad) if bad is not None else
+                                                  f"must be a list of known tasks, got {tasks!r}"))
     if isinstance(seeds, int) and not isinstance(seeds, bool) and seeds > 0:
         seeds = list(range(seeds))
     if (not isinstance(seeds, list) or not seeds
@@ -102,6 +119,8 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
         raise _fail(source, "key 'overrides' must not set 'seed': the sweep's seeds do")
     sweep = {"methods": list(methods), "tasks": list(tasks), "seeds": list(dict.fromkeys(seeds)),
              "configs": str(configs.resolve()), "overrides": overrides}
+    if imports:
+        sweep["imports"] = imports
     for run in runs_of(sweep):  # every config must exist and accept the overrides before any run starts
         run_config(sweep, run, source)
     return sweep
@@ -121,9 +140,17 @@ def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path,
         raise _fail(source, f"no config for {run.method} on {run.task}: {path} not found")
     ov = sweep["overrides"]
     overrides = {k: v for k, v in ov.items() if k not in METHODS}
-    overrides.update(ov.get(run.method, {}), seed=run.seed)
-    load_config(path, overrides)  # raises naming the key
-    return path, overrides
+    overrides.update(ov.get(run.method, {}))
+    if sweep.get("imports"):
+        overrides["imports"] = sweep["imports"]
+    load_config(path, {"imports": overrides.get("imports")})  # the config file's own errors name it
+    try:
+        load_config(path, {**overrides, "seed": run.seed})
+    except ValueError as exc:  # an override's: name the sweep file, where it was written
+        msg = str(exc).removeprefix(f"{path}: ")
+        raise _fail(source, f"key 'overrides' (for {run.method} on {run.task}, config {path}): "
+                            f"{msg}") from None
+    return path, {**overrides, "seed": run.seed}
 
 
 class Sweep:

@@ -175,10 +175,10 @@ def test_corrupt_champion(tmp_path, capsys, case):
 
 
 def test_champion_check_accepts_a_good_one(tmp_path):
-    from evolve.runs.champion import load_champion
+    from evolve.runs.champion import read_champion
 
     (tmp_path / "champion.json").write_text(json.dumps(GOOD))
-    _, body, ctrl = load_champion(tmp_path)
+    _, body, ctrl = read_champion(tmp_path)
     assert body.tolist() == BODY and ctrl.act(np.zeros(OBS)).shape == (3,)
 
 
@@ -255,3 +255,75 @@ def test_ray_options_without_ray(tmp_path, repo_root, capsys, monkeypatch):
     assert not (tmp_path / "run").exists()
     in_process(capsys, "sweep", "--config", str(sweep), "--address", "auto",
                names=["--address", "--backend ray"])
+
+
+# ---------------------------------------------------------------- messages a person can act on
+def test_a_bad_override_names_the_sweep_file_and_the_key(tmp_path, capsys):
+    """A sweep's override that the config refuses blames the sweep file (where it was written) and
+    names the key; a packaged config file is not blamed for it."""
+    sweep = tmp_path / "my-sweep.yaml"
+    sweep.write_text(yaml.safe_dump({"methods": ["sgr"], "tasks": ["Walker-v0"], "seeds": 1,
+                                     "overrides": {"generations": "many"}}))
+    line = in_process(capsys, "sweep", "--config", str(sweep), "--out", str(tmp_path / "s"),
+                      names=[sweep, "'overrides'", "'generations'"])
+    assert line.startswith(f"sgr: error: {sweep}: ") and not (tmp_path / "s").exists()
+    sweep.write_text(yaml.safe_dump({"methods": ["sgr"], "tasks": ["Walker-v0"], "seeds": 1,
+                                     "overrides": {"sgr": {"pop_sise": 8}}}))
+    line = in_process(capsys, "sweep", "--config", str(sweep), "--out", str(tmp_path / "s"),
+                      names=[sweep, "'overrides'", "'pop_sise'"])
+    assert line.startswith(f"sgr: error: {sweep}: ")
+
+
+def test_a_closed_stdout_is_no_disk_error_and_the_run_goes_on(tmp_path, repo_root):
+    """`sgr evolve ... | head -2`: once the reader is gone the run goes on without progress lines
+    and finishes (exit 0), with no 'cannot write' or 'make room' and no traceback."""
+    cfg = tiny_config(tmp_path, repo_root, generations=6, workers=1)
+    env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_THREADS")}
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--config", str(cfg),
+                             "--out", "r"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            env=env)
+    head = [proc.stdout.readline(), proc.stdout.readline()]  # what `head -2` reads, then it exits
+    proc.stdout.close()
+    err = proc.stderr.read().decode()
+    assert proc.wait(timeout=300) == 0, err
+    assert head[0].startswith(b"run directory: r") and head[1].startswith(b"gen    1/6")
+    assert "make room" not in err and "cannot write" not in err and "Traceback" not in err, err
+    assert "Exception ignored" not in err, err
+    assert len((tmp_path / "r" / "generations.csv").read_text().splitlines()) == 7  # all 6 generations
+
+
+def test_resume_of_a_missing_path_says_it_does_not_exist(tmp_path, capsys):
+    line = in_process(capsys, "evolve", "--resume", str(tmp_path / "nowhere"), names=["nowhere"])
+    assert line.endswith("does not exist")
+    line = in_process(capsys, "sweep", "--resume", str(tmp_path / "nowhere"), names=["nowhere"])
+    assert line.endswith("does not exist")
+    line = in_process(capsys, "evolve", "--config", str(tmp_path / "nowhere.yaml"), names=["nowhere.yaml"])
+    assert "does not exist" in line
+
+
+def test_resume_of_a_sweep_folder_points_to_sgr_sweep_resume(tmp_path, capsys):
+    sweep = tmp_path / "sweep"
+    (sweep / "runs").mkdir(parents=True)
+    (sweep / "sweep.yaml").write_text("methods: [sgr]\n")
+    line = in_process(capsys, "evolve", "--resume", str(sweep), names=[f"sgr sweep --resume {sweep}"])
+    assert "is a sweep directory" in line
+
+
+@pytest.mark.parametrize("argv, names", [
+    (["evolve", "--task", "Climbr-v2"], ["unknown task 'Climbr-v2'", "did you mean Climber-v2"]),
+    (["evolve", "--task", "Climber-v2", "--method", "dirct"],
+     ["unknown method 'dirct'", "did you mean direct"]),
+    (["evolve", "--config", "sgr/Walkr-v0"], ["sgr/Walkr-v0", "did you mean sgr/Walker-v0"]),
+])
+def test_unknown_task_method_and_config_names_suggest_the_closest(capsys, argv, names):
+    in_process(capsys, *argv, names=names)
+
+
+def test_unknown_names_in_config_and_sweep_files_suggest_the_closest(tmp_path, repo_root, capsys):
+    cfg = tiny_config(tmp_path, repo_root, task="Walkr-v0")
+    in_process(capsys, "evolve", "--config", str(cfg), names=[cfg, "'task'", "did you mean Walker-v0"])
+    cfg = tiny_config(tmp_path, repo_root, method="nestd")
+    in_process(capsys, "evolve", "--config", str(cfg), names=[cfg, "'method'", "did you mean nested"])
+    sweep = tmp_path / "s.yaml"
+    sweep.write_text(yaml.safe_dump({"methods": ["sgr"], "tasks": ["Thrower-v9"], "seeds": 1}))
+    in_process(capsys, "sweep", "--config", str(sweep), names=[sweep, "did you mean Thrower-v0"])

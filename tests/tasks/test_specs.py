@@ -9,11 +9,14 @@ from tasks.spec import Measure, TaskSpec
 from tasks.specs import TASKS, task_spec, task_world
 
 
-def test_unknown_task_names_the_task():
+def test_unknown_task_names_the_task_and_the_closest_ones():
     with pytest.raises(ValueError, match="unknown task 'Jumper-v9'"):
         task_world("Jumper-v9")
-    with pytest.raises(ValueError, match="unknown task 'Jumper-v9'; known tasks: Walker-v0"):
+    with pytest.raises(ValueError, match="unknown task 'Jumper-v9'; did you mean Jumper-v0 or "
+                                         "GapJumper-v0[?] Known tasks: Walker-v0"):
         task_spec("Jumper-v9")
+    with pytest.raises(ValueError, match="unknown task 'Hopper'; known tasks: Walker-v0"):  # none close
+        task_spec("Hopper")
 
 
 def test_observation_layouts_give_evogym_lengths():

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from evolve.cli import main
-from evolve.runs.champion import load_champion, replay_champion
+from evolve.runs.champion import read_champion, replay_champion
 from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_search import NeatSearch
@@ -51,14 +51,14 @@ def _run_and_replay(tmp_path, shipped_config, monkeypatch, method, task, **extra
     assert main(["evolve", "--config", str(_tiny(shipped_config, method, task, **extra)),
                  "--out", str(out), "--quiet"]) == 0
     rows = RunDir(out).rows()
-    assert [int(r["generation"]) for r in rows] == [0, 1]
+    assert [int(r["generation"]) for r in rows] == [1, 2]  # counted from 1
     # every genome of a generation is counted as valid or invalid: the first generation holds exactly
     # pop_size (6) genomes, later ones what neat-python's reproduction made (about pop_size)
     assert sizes[0] == 6
     assert [int(r["n_valid"]) + int(r["n_invalid"]) for r in rows] == sizes
     if method == "direct":  # generation 0 has no elites: each valid genome is simulated once
         assert int(rows[0]["episodes"]) == int(rows[0]["n_valid"])
-    champ, body, ctrl = load_champion(out)
+    champ, body, ctrl = read_champion(out)
     assert champ["method"] == method and champ["task"] == task
     assert champ["controller"]["format"] == "sgr-graph-controller-1"
     # the JSON controller alone reproduces the champion's recorded fitness
@@ -120,7 +120,7 @@ def test_nested_inner_populations_stay_bounded_and_the_champion_keeps_its_contro
         recent = set().union(*seen[max(0, g + 1 - keep):g + 1])
         assert inner <= recent | {pinned} and len(inner) <= len(recent) + 1
     assert len(set().union(*seen)) > len(exp.problem.inner), "no inner population was forgotten"
-    champ, body, ctrl = load_champion(tmp_path / "run")
+    champ, body, ctrl = read_champion(tmp_path / "run")
     assert exp.problem.pinned == np.array(champ["body"], dtype=np.int64).tobytes()
     assert replay_champion(tmp_path / "run")[0] == pytest.approx(champ["fitness"], abs=1e-9)
 

@@ -63,7 +63,7 @@ def test_a_registered_toy_method_runs_from_a_config_dict(tmp_path, monkeypatch):
     exp.close()
     run = RunDir(tmp_path / "run")
     rows = run.rows()
-    assert [int(r["generation"]) for r in rows] == [0, 1, 2]
+    assert [int(r["generation"]) for r in rows] == [1, 2, 3]  # counted from 1
     champ = run.champion()
     assert champ["method"] == "gait" and champ["fitness"] == max(float(r["best"]) for r in rows)
     assert abs(champ["controller"]["amplitude"]) <= 0.4

@@ -6,7 +6,7 @@ import math
 
 import pytest
 
-from evolve.runs.champion import load_champion, replay_champion
+from evolve.runs.champion import read_champion, replay_champion
 from evolve.runs.experiment import Experiment
 from tasks.specs import TASKS
 
@@ -30,7 +30,7 @@ def test_a_short_sgr_run_on_every_task(tmp_path, name):
         rows = list(csv.DictReader(f))
     assert len(rows) == 2
     assert all(math.isfinite(float(r["best"])) for r in rows)
-    champ, body, ctrl = load_champion(out)
+    champ, body, ctrl = read_champion(out)
     assert champ["task"] == name
     assert replay_champion(out)[0] == pytest.approx(champ["fitness"], abs=1e-9)
 
@@ -48,6 +48,6 @@ def test_a_randomised_task_champion_replays_evolutions_episode_in_every_world(tm
         exp.run_all()
     finally:
         exp.close()
-    champ = load_champion(out)[0]
+    champ = read_champion(out)[0]
     returns = replay_champion(out, replays=3, eps=0.0)
     assert returns == pytest.approx([champ["fitness"]] * 4, abs=1e-9)

@@ -1,6 +1,7 @@
 """Runs: config errors name the key; a killed run resumes to the same numbers; run-dir contents."""
 
 import json
+from pathlib import Path
 
 import pytest
 import yaml
@@ -110,3 +111,67 @@ def test_ctrl_c_stops_the_run_with_a_resume_hint(tmp_path, repo_root, capsys, mo
     err = capsys.readouterr().err
     assert f"sgr evolve --resume {out}" in err
     assert RunDir(out).latest_checkpoint() is not None  # generation 0's state is there to resume
+
+
+def test_ctrl_c_writes_a_checkpoint_and_every_generation_number_agrees(tmp_path, repo_root):
+    """A real SIGINT: the generation under way ends, a checkpoint of it is written (none was due:
+    checkpoint_every is 1000) and the run stops with exit 130. The console, generations.csv,
+    champion.json, the checkpoint and the stop message all count generations from 1 alike, and the
+    resumed run starts after the interrupted generation."""
+    import os
+    import re
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    p = _write(tmp_path, repo_root, generations=1000, checkpoint_every=1000, workers=1)
+    env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_THREADS")}
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--config", str(p), "--out", "r"],
+                            cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    run = RunDir(tmp_path / "r")
+    deadline = time.monotonic() + 120
+    while len(run.rows()) < 3:
+        assert proc.poll() is None and time.monotonic() < deadline, proc.stderr.read()
+        time.sleep(0.02)
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=120)
+    assert proc.returncode == 130, err
+    rows = run.rows()
+    n = len(rows)
+    assert [int(r["generation"]) for r in rows] == list(range(1, n + 1))
+    console = [int(g) for g in re.findall(r"^gen +(\d+)/1000", out, re.M)]
+    assert console == list(range(1, n + 1))
+    assert f"stopped after generation {n} of 1000, with a checkpoint" in err
+    assert (run.ckpt_dir / f"gen-{n:05d}.pkl").is_file()  # written at the stop, not by the schedule
+    champ = json.loads((run.path / "champion.json").read_text())
+    first_best = next(int(r["generation"]) for r in rows if float(r["best"]) == champ["fitness"])
+    assert champ["generation"] == first_best
+    assert main(["evolve", "--resume", str(run.path), "--generations", str(n + 1), "--quiet"]) == 0
+    assert [int(r["generation"]) for r in run.rows()] == list(range(1, n + 2))
+
+
+def test_packaged_configs_resolve_by_name_from_any_folder(tmp_path, monkeypatch):
+    """sgr/Climber-v2, quick and paper name the packaged files wherever one stands; a path that
+    exists is still a path."""
+    from evolve.runs.config import configs_dir, find_config
+
+    monkeypatch.chdir(tmp_path)
+    assert find_config("sgr/Climber-v2") == configs_dir() / "sgr" / "Climber-v2.yaml"
+    assert find_config("direct/Walker-v0.yaml") == configs_dir() / "direct" / "Walker-v0.yaml"
+    assert find_config("quick") == configs_dir() / "sgr" / "quick.yaml"
+    assert find_config("paper", "sweep file") == configs_dir() / "sweeps" / "paper.yaml"
+    (tmp_path / "sgr").mkdir()
+    (tmp_path / "sgr" / "Climber-v2").write_text("method: sgr\n")
+    assert find_config("sgr/Climber-v2") == Path("sgr/Climber-v2")
+
+
+def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["evolve", "--task", "Walker-v0", "--method", "direct", "--generations", "1", "--pop", "4",
+                 "--workers", "1", "--quiet"]) == 0
+    (run,) = (tmp_path / "runs").iterdir()
+    assert run.name.startswith("direct-Walker-v0-seed0-")
+    cfg = RunDir(run).config()
+    assert cfg["method"] == "direct" and cfg["task"] == "Walker-v0" and cfg["episode_steps"] == 500
+    assert capsys.readouterr().out.startswith(f"run directory: {Path('runs') / run.name}")

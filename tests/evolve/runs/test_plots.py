@@ -9,12 +9,14 @@ from evolve.runs.plots import draw_curves, plot_run, plot_runs, run_labels, summ
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
 
-def _run(path, best, method=None, task="Walker-v0"):
+def _run(path, best, method=None, task="Walker-v0", first=1):
+    """A run directory with these best fitnesses; generations counted from `first` (0: a run
+    written before generations were counted from 1)."""
     path.mkdir(parents=True)
     if method is not None:
         (path / "config.yaml").write_text(yaml.safe_dump({"method": method, "task": task, "seed": 0}))
     lines = ["generation,best,mean,median,n_species"]
-    lines += [f"{g},{b!r},{b / 2!r},{b / 3!r},3" for g, b in enumerate(best)]
+    lines += [f"{g},{b!r},{b / 2!r},{b / 3!r},3" for g, b in enumerate(best, start=first)]
     (path / "generations.csv").write_text("\n".join(lines) + "\n")
     return path
 
@@ -33,10 +35,10 @@ def test_groups_are_method_task_pairs_with_mean_and_min_max(runs):
     assert set(curves) == {("sgr", "Walker-v0"), ("direct", "Walker-v0")}
     sgr = curves[("sgr", "Walker-v0")]
     assert sgr.n_runs == 2
-    assert sgr.generation.tolist() == [0, 1, 2]
+    assert sgr.generation.tolist() == [1, 2, 3]
     assert np.allclose(sgr.mean, [2.0, 3.0, 3.0])
     assert np.allclose(sgr.low, [1.0, 2.0, 3.0]) and np.allclose(sgr.high, [3.0, 4.0, 3.0])
-    assert curves[("direct", "Walker-v0")].generation.tolist() == [0, 1]
+    assert curves[("direct", "Walker-v0")].generation.tolist() == [1, 2]
 
 
 def test_plot_runs_writes_png_with_one_curve_per_group(runs, tmp_path):
@@ -82,3 +84,40 @@ def test_numpy_scalar_reprs_are_read_as_numbers(tmp_path):
     (run / "generations.csv").write_text("generation,best\n0,np.float64(1.5)\n1,np.float64(2.5)\n")
     curve = next(iter(summarize_runs([run]).values()))
     assert curve.mean.tolist() == [1.5, 2.5]
+
+
+def test_a_run_counted_from_0_reads_as_counted_from_1(tmp_path):
+    """generations.csv of runs made before generations were counted from 1 starts at 0; read, it is
+    renumbered, so old and new runs line up in one plot."""
+    from evolve.runs.plots import read_generations
+    old = _run(tmp_path / "old", [1.0, 2.0], "sgr", first=0)
+    new = _run(tmp_path / "new", [1.5, 2.5], "sgr")
+    assert read_generations(old)["generation"].tolist() == [1, 2]
+    assert summarize_runs([old, new])[("sgr", "Walker-v0")].generation.tolist() == [1, 2]
+
+
+def test_ticks_are_whole_generations_and_per_run_draws_one_line_per_run(tmp_path):
+    """A 3-generation run has no tick at 2.5; --per-run draws each run as its own line."""
+    from matplotlib.figure import Figure
+
+    import evolve.runs.plots as P
+    runs = [_run(tmp_path / "a", [1.0, 2.0, 3.0], "sgr"), _run(tmp_path / "b", [0.5, 1.0, 1.5], "sgr"),
+            _run(tmp_path / "c", [0.2, 0.4, 0.6], "direct")]
+    seen = {}
+    real_finish = P._finish
+
+    def spy(fig: Figure, ax, title, ylabel, out):
+        path = real_finish(fig, ax, title, ylabel, out)
+        seen["ticks"] = [t for t in ax.get_xticks() if ax.get_xlim()[0] <= t <= ax.get_xlim()[1]]
+        seen["lines"] = [line.get_label() for line in ax.get_lines()]
+        return path
+
+    P._finish = spy
+    try:
+        plot_runs(runs, tmp_path / "per-run.png", per_run=True)
+        assert len(seen["lines"]) == 3 and seen["lines"][0].endswith(": a")
+        assert all(float(t).is_integer() for t in seen["ticks"]) and len(seen["ticks"]) >= 2
+        plot_run(runs[0], tmp_path / "one.png")
+        assert all(float(t).is_integer() for t in seen["ticks"])
+    finally:
+        P._finish = real_finish

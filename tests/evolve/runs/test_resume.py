@@ -255,7 +255,7 @@ def test_generations_csv_is_appended_and_a_row_cut_short_is_no_row(tmp_path, rep
     csv_path = exp.run.path / "generations.csv"
     whole = csv_path.read_bytes()
     with csv_path.open("ab") as f:  # a kill or a full disk in the middle of writing generation 2's row
-        f.write(b"2,1.2345")
+        f.write(b"3,1.2345")
     assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))[:2]
     from evolve.runs.plots import read_generations
     assert len(read_generations(exp.run.path)["best"]) == 2
@@ -265,10 +265,10 @@ def test_generations_csv_is_appended_and_a_row_cut_short_is_no_row(tmp_path, rep
     resumed.close()
     assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))
     with csv_path.open("ab") as f:
-        f.write(b"3,0.5")
-    exp.run.append_row({**exp.run.rows()[-1], "generation": 3})  # a cut row is dropped on the next write
+        f.write(b"4,0.5")
+    exp.run.append_row({**exp.run.rows()[-1], "generation": 4})  # a cut row is dropped on the next write
     lines = csv_path.read_text().splitlines()
-    assert [r["generation"] for r in exp.run.rows()] == ["0", "1", "2", "3"]
+    assert [r["generation"] for r in exp.run.rows()] == ["1", "2", "3", "4"]  # counted from 1
     assert len(lines) == 5 and all(line.count(",") == len(COLUMNS) - 1 for line in lines)
 
 

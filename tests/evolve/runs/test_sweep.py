@@ -103,7 +103,7 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
 
 @pytest.mark.parametrize("change, message", [
     ({"methods": ["cmaes"]}, "key 'methods' must be a list of sgr, direct, nested"),
-    ({"tasks": ["Jumper-v9"]}, "key 'tasks' must be a list of known tasks"),
+    ({"tasks": ["Jumper-v9"]}, "key 'tasks': unknown task 'Jumper-v9'; did you mean Jumper-v0"),
     ({"seeds": -1}, "key 'seeds' must be a positive count or a list of seeds"),
     ({"overrides": {"popsize": 3}}, "unknown key 'popsize'"),
     ({"overrides": {"nested": {"layout": "per_cell"}}}, "unknown key 'layout' for method 'nested'"),
