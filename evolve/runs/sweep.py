@@ -153,7 +153,16 @@ class Sweep:
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        return cls(out, check_sweep(read_yaml(f), str(f)))
+        sweep = cls(out, check_sweep(read_yaml(f), str(f)))
+        old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
+               and not sweep.run_dir(r).checkpoints()]
+        if old:  # refused before any run starts (each would fail, and be retried, alone)
+            names = ", ".join(old[:3]) + (", ..." if len(old) > 3 else "")
+            raise ValueError(f"{len(old)} run(s) of {out} ({names}) "
+                             "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
+                             "which can run any code; if you trust this folder, convert them with: "
+                             f"sgr convert-checkpoints {out} --trust-pickle")
+        return sweep
 
     def run_dir(self, run: SweepRun) -> RunDir:
         """The RunDir of `run` (runs/<name>), whether or not it exists yet."""
@@ -172,7 +181,7 @@ class Sweep:
         from evolve.runs.experiment import Experiment
 
         rd = self.run_dir(run)
-        if (rd.path / "config.yaml").is_file() and list(rd.ckpt_dir.glob("gen-*.pkl")):
+        if (rd.path / "config.yaml").is_file() and rd.has_checkpoint():
             return
         if rd.path.exists():
             shutil.rmtree(rd.path)
