@@ -59,7 +59,7 @@ def checkpoint_bytes(data: dict) -> bytes:
     gzipped with no timestamp, so the same state gives the same bytes."""
     text = json.dumps({"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, **data},
                       separators=(",", ":"))
-    return gzip.compress(text.encode(), compresslevel=1, mtime=0)
+    return gzip.compress(text.encode(), compresslevel=3, mtime=0)
 
 
 def read_checkpoint_file(path: Path) -> dict:

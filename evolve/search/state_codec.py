@@ -7,7 +7,7 @@ the objects again from the run's own neat-python config. Nothing named in the da
 called: gene types come from the config, and activation and aggregation names must be in the fixed
 tables of evolve/nn/activations.py.
 
-Every genome is stored once in a table, and the population, the species (members and
+Every genome is stored once, in columns (`encode_genomes`), and the population, the species (members and
 representatives) and the best genome refer to it by index, so objects shared in memory are shared
 again after loading (a fitness set on a population genome is seen by its species). Every dict keeps
 its order, which neat-python's iteration (and so the random numbers it draws) depends on. An
@@ -18,6 +18,7 @@ dropping state.
 from __future__ import annotations
 
 import base64
+from operator import attrgetter
 
 import numpy as np
 
@@ -57,24 +58,50 @@ def encode_random(state: tuple) -> dict:
     return {"version": version, "words": base64.b64encode(raw).decode(), "gauss_next": _float(gauss)}
 
 
+def _b64(values, dtype: str) -> str:
+    return base64.b64encode(np.asarray(values, dtype=dtype).tobytes()).decode()
+
+
+def encode_genomes(genomes: list) -> dict:
+    """Genomes as columns: per genome its key, fitness and gene counts; the genes of all genomes
+    one after the other, numbers as base64 of little-endian arrays (exact, and fast to write),
+    activation and aggregation as indices into `names`."""
+    for g in genomes:
+        _known(g, GENOME_ATTRS, "a genome")
+    nodes = [n for g in genomes for n in g.nodes.values()]
+    conns = [c for g in genomes for c in g.connections.values()]
+    for genes, attrs, what in ((nodes, {"key", *NODE_ATTRS}, "a node gene"),
+                               (conns, {"key", "weight", "enabled", "innovation"}, "a connection gene")):
+        if genes and (set(map(len, map(vars, genes))) != {len(attrs)} or set(vars(genes[0])) != attrs):
+            raise TypeError(f"cannot checkpoint {what}: its attributes are not {sorted(attrs)}")
+    act, agg = list(map(attrgetter("activation"), nodes)), list(map(attrgetter("aggregation"), nodes))
+    names = sorted(set(act) | set(agg))
+    code = {n: i for i, n in enumerate(names)}
+    ckeys = list(map(attrgetter("key"), conns))
+    return {
+        "key": [g.key for g in genomes], "fitness": [_float(g.fitness) for g in genomes],
+        "n_nodes": [len(g.nodes) for g in genomes], "n_connections": [len(g.connections) for g in genomes],
+        "names": names,
+        "node_key": _b64(list(map(attrgetter("key"), nodes)), "<i8"),
+        "node_float": _b64([list(map(attrgetter(a), nodes)) for a in ("bias", "response", "time_constant")],
+                           "<f8"),
+        "node_fn": _b64([[code[n] for n in act], [code[n] for n in agg]], "<u2"),
+        "conn_int": _b64([[k[0] for k in ckeys], [k[1] for k in ckeys],
+                          list(map(attrgetter("innovation"), conns))], "<i8"),
+        "conn_weight": _b64(list(map(attrgetter("weight"), conns)), "<f8"),
+        "conn_enabled": _b64(list(map(attrgetter("enabled"), conns)), "u1"),
+    }
+
+
 def encode_search_state(state: dict) -> dict:
     """`NeatSearch.state()` (format 2) as JSON data (module docstring)."""
-    table: list[dict] = []
+    table: list = []
     index: dict[int, int] = {}
 
     def ref(g) -> int:
         if id(g) not in index:
-            _known(g, GENOME_ATTRS, "a genome")
             index[id(g)] = len(table)
-            table.append({
-                "key": g.key, "fitness": _float(g.fitness),
-                "nodes": [[n.key, *(getattr(n, a) for a in NODE_ATTRS)] for n in g.nodes.values()],
-                "connections": [[c.key[0], c.key[1], c.weight, c.enabled, c.innovation]
-                                for c in g.connections.values()]})
-            for n in g.nodes.values():
-                _known(n, {"key", *NODE_ATTRS}, "a node gene")
-            for c in g.connections.values():
-                _known(c, {"key", "weight", "enabled", "innovation"}, "a connection gene")
+            table.append(g)
         return index[id(g)]
 
     population = [[k, ref(g)] for k, g in state["population"].items()]
@@ -103,7 +130,7 @@ def encode_search_state(state: dict) -> dict:
         "species_indexer": sp["indexer"],
         "genome_indexer": repro["genome_indexer"],
         "random": encode_random(state["random"]),
-        "genomes": table,
+        "genomes": None,  # below, once every genome has its index
         "population": population,
         "species": species,
         "genome_to_species": [[g, s] for g, s in sp["genome_to_species"].items()],
@@ -114,7 +141,7 @@ def encode_search_state(state: dict) -> dict:
         "best": None if best is None else {"fitness": float(best["fitness"]),
                                            "generation": best["generation"], "key": best["key"],
                                            "genome": ref(best["genome"])},
-    }
+    } | {"genomes": encode_genomes(table)}
 
 
 # ---------------------------------------------------------------------------------- decoding
@@ -173,28 +200,67 @@ def decode_random(d, path: str) -> tuple:
     return version, words, get(d, "gauss_next", path, "float?")
 
 
-def _genome(d, path: str, genome_type, gc):
-    g = genome_type(get(d, "key", path, "int"))
-    g.fitness = get(d, "fitness", path, "float?")
-    for i, n in enumerate(get(d, "nodes", path, "list")):
-        key, bias, response, act, agg, tc = row(n, f"{path}.nodes[{i}]",
-                                               ("int", "float", "float", "str", "str", "float"))
-        if act not in NEAT_ACTIVATIONS or agg not in NEAT_AGGREGATIONS:
-            raise _fail(f"{path}.nodes[{i}]", f"unknown activation or aggregation {act!r}/{agg!r}")
-        if key in g.nodes:
-            raise _fail(f"{path}.nodes[{i}]", f"node {key} twice")
-        gene = gc.node_gene_type(key)
-        gene.bias, gene.response, gene.activation, gene.aggregation, gene.time_constant = \
-            bias, response, act, agg, tc
-        g.nodes[key] = gene
-    for i, c in enumerate(get(d, "connections", path, "list")):
-        a, b, w, enabled, inn = row(c, f"{path}.connections[{i}]", ("int", "int", "float", "bool", "int"))
-        if (a, b) in g.connections:
-            raise _fail(f"{path}.connections[{i}]", f"connection {(a, b)} twice")
-        gene = gc.connection_gene_type((a, b), innovation=inn)
-        gene.weight, gene.enabled = w, enabled
-        g.connections[(a, b)] = gene
-    return g
+def _array(d, key: str, path: str, dtype: str, shape: tuple[int, ...]) -> list:
+    """A base64 column of `encode_genomes` as Python numbers, its length checked."""
+    try:
+        raw = base64.b64decode(get(d, key, path, "str"), validate=True)
+    except ValueError:
+        raise _fail(f"{path}.{key}", "not base64") from None
+    size = int(np.prod(shape)) * np.dtype(dtype).itemsize
+    if len(raw) != size:
+        raise _fail(f"{path}.{key}", f"expected {size} bytes, got {len(raw)}")
+    return np.frombuffer(raw, dtype=dtype).reshape(shape).tolist()
+
+
+def decode_genomes(d, path: str, genome_type, gc) -> list:
+    """`encode_genomes`'s columns back as genomes of `genome_type` with the config's gene types;
+    activation and aggregation names must be in the fixed tables."""
+    keys = [check(k, f"{path}.key", "int") for k in get(d, "key", path, "list")]
+    n = len(keys)
+    cols = {c: get(d, c, path, "list") for c in ("fitness", "n_nodes", "n_connections")}
+    if any(len(v) != n for v in cols.values()):
+        raise _fail(path, "columns of different lengths")
+    fitness = [check(f, f"{path}.fitness", "float?") for f in cols["fitness"]]
+    n_nodes = [check(k, f"{path}.n_nodes", "int") for k in cols["n_nodes"]]
+    n_conns = [check(k, f"{path}.n_connections", "int") for k in cols["n_connections"]]
+    if min(n_nodes + n_conns, default=0) < 0:
+        raise _fail(path, "negative gene count")
+    names = [check(x, f"{path}.names", "str") for x in get(d, "names", path, "list")]
+    for x in names:
+        if x not in NEAT_ACTIVATIONS and x not in NEAT_AGGREGATIONS:
+            raise _fail(f"{path}.names", f"unknown activation or aggregation {x!r}")
+    tn, tc = sum(n_nodes), sum(n_conns)
+    node_key = _array(d, "node_key", path, "<i8", (tn,))
+    bias, response, tconst = _array(d, "node_float", path, "<f8", (3, tn))
+    act, agg = _array(d, "node_fn", path, "<u2", (2, tn))
+    if any(i >= len(names) for i in act + agg):
+        raise _fail(f"{path}.node_fn", "name index out of range")
+    if any(names[i] not in NEAT_ACTIVATIONS for i in act) or any(names[i] not in NEAT_AGGREGATIONS
+                                                                 for i in agg):
+        raise _fail(f"{path}.node_fn", "an activation that is an aggregation or the reverse")
+    c_in, c_out, c_inn = _array(d, "conn_int", path, "<i8", (3, tc))
+    weight = _array(d, "conn_weight", path, "<f8", (tc,))
+    enabled = _array(d, "conn_enabled", path, "u1", (tc,))
+    if any(e > 1 for e in enabled):
+        raise _fail(f"{path}.conn_enabled", "not 0 or 1")
+    genomes, i, j = [], 0, 0
+    for key, fit, nn, nc in zip(keys, fitness, n_nodes, n_conns, strict=True):
+        g = genome_type(key)
+        g.fitness = fit
+        for k in range(i, i + nn):
+            gene = gc.node_gene_type(node_key[k])
+            gene.bias, gene.response, gene.time_constant = bias[k], response[k], tconst[k]
+            gene.activation, gene.aggregation = names[act[k]], names[agg[k]]
+            g.nodes[node_key[k]] = gene
+        for k in range(j, j + nc):
+            gene = gc.connection_gene_type((c_in[k], c_out[k]), innovation=c_inn[k])
+            gene.weight, gene.enabled = weight[k], bool(enabled[k])
+            g.connections[(c_in[k], c_out[k])] = gene
+        if len(g.nodes) != nn or len(g.connections) != nc:
+            raise _fail(path, f"genome {key} has a gene twice")
+        i, j = i + nn, j + nc
+        genomes.append(g)
+    return genomes
 
 
 def decode_search_state(data, neat_config, path: str = "search") -> dict:
@@ -205,8 +271,8 @@ def decode_search_state(data, neat_config, path: str = "search") -> dict:
 
     check(data, path, "dict")
     gc = neat_config.genome_config
-    genomes = [_genome(g, f"{path}.genomes[{i}]", neat_config.genome_type, gc)
-               for i, g in enumerate(get(data, "genomes", path, "list"))]
+    genomes = decode_genomes(get(data, "genomes", path, "dict"), f"{path}.genomes",
+                             neat_config.genome_type, gc)
 
     def deref(i, p: str):
         check(i, p, "int")

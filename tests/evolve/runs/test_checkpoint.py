@@ -165,13 +165,19 @@ def _rewrite(f: Path, change) -> None:
     f.write_bytes(checkpoint_bytes({k: v for k, v in data.items() if k not in ("format", "version")}))
 
 
+def _rename(d: dict, old: str, new: str) -> None:
+    names = d["search"]["genomes"]["names"]
+    names[names.index(old)] = new
+
+
 @pytest.mark.parametrize("change, problem", [
-    (lambda d: d["search"]["genomes"][0]["nodes"][0].__setitem__(3, "os.system"),
-     "unknown activation or aggregation 'os.system'"),
-    (lambda d: d["search"]["genomes"][1]["nodes"][0].__setitem__(4, "builtins.eval"),
-     "unknown activation or aggregation"),
-    (lambda d: d["search"]["genomes"][2]["connections"][0].__setitem__(2, "0.5"),
-     "search.genomes[2].connections[0][2]: expected float, got str"),
+    (lambda d: _rename(d, "tanh", "os.system"), "unknown activation or aggregation 'os.system'"),
+    (lambda d: _rename(d, "sum", "builtins.eval"), "unknown activation or aggregation 'builtins.eval'"),
+    (lambda d: _rename(d, "sum", "tanh"), "an activation that is an aggregation or the reverse"),
+    (lambda d: d["search"]["genomes"]["fitness"].__setitem__(2, "0.5"),
+     "search.genomes.fitness: expected float, got str"),
+    (lambda d: d["search"]["genomes"].__setitem__("conn_weight", "AAAA"),
+     "search.genomes.conn_weight: expected"),
     (lambda d: d["search"]["population"].append([10**6, 10**6]), "no genome 1000000"),
     (lambda d: d["search"]["random"].__setitem__("words", "AAAA"), "expected 625 words"),
     (lambda d: d.__setitem__("method", "direct"), "checkpoint of method 'direct'"),
@@ -192,9 +198,9 @@ def test_a_damaged_newest_checkpoint_with_bad_fields_falls_back_to_the_one_befor
                                                                                   capsys):
     done = run(config(tmp_path, repo_root), tmp_path / "run", 2)
     _rewrite(done.ckpt_dir / "gen-00002.json.gz",
-             lambda d: d["search"]["genomes"][0].__setitem__("fitness", "high"))
+             lambda d: d["search"]["genomes"]["fitness"].__setitem__(0, "high"))
     state = load_checkpoint(done)
     assert state["generation"] == 0
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and "search.genomes[0].fitness: expected float" in err
+    assert err.count("\n") == 1 and "search.genomes.fitness: expected float" in err
     assert os.path.exists(done.ckpt_dir / "gen-00002.json.gz")  # kept for the user to look at
