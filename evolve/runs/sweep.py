@@ -198,6 +198,10 @@ class Sweep:
         return out
 
 
+class BackendLost(RuntimeError):
+    """The machines a sweep runs on are gone (a whole Ray cluster): the sweep stops, to be resumed."""
+
+
 def die_with_parent() -> None:
     """In a run's process: SIGKILL when the sweep process dies, so a killed sweep leaves no run
     going on alone (Linux; elsewhere the run's lock still keeps a resumed sweep from doubling it)."""
@@ -209,6 +213,8 @@ def die_with_parent() -> None:
 
 class LocalBackend:
     """Runs on this machine, `parallel` at a time, each with cpus / parallel rollout workers."""
+
+    resume_args = ""  # what `sgr sweep --resume DIR` needs besides DIR to resume on this backend
 
     def __init__(self, parallel: int = 1):
         self.parallel = parallel
@@ -291,6 +297,10 @@ def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: f
         backend.stop()
         say(f"interrupted; continue with: sgr sweep --resume {sweep.path}")
         raise
+    except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
+        backend.stop()
+        raise ValueError(f"{exc}; every run keeps its last checkpoint; continue with: "
+                         f"sgr sweep --resume {sweep.path}{getattr(backend, 'resume_args', '')}") from None
     failed = [r for r, n in failures.items() if n > RETRIES]
     say(f"{total - len(sweep.pending())}/{total} runs done"
         + (f"; failed: {', '.join(r.name for r in failed)}" if failed else "")
