@@ -1,7 +1,7 @@
 """Checkpoint size and save time: today's gzipped JSON against the pickles sgr wrote before.
 
 For each run the state is restored into an Experiment, then saved both ways (best of --repeat, the
-state taken and serialised, the file write itself left out: it is the same atomic_write for both):
+state taken and serialised; then again with the file written by atomic_write, fsync included):
   pickle: {**search.state(), "problem": the method's state as objects} -> pickle.dumps (the old format)
   json:   Experiment.state() -> checkpoint_bytes (encode, json.dumps, gzip level 1)
 Runs: any run directories given (their newest checkpoint; an older sgr's .pkl ones are unpickled,
@@ -27,6 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from evolve.runs.checkpoint import load_checkpoint  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
+from evolve.runs.files import atomic_write  # noqa: E402
 from evolve.runs.legacy import load_trusted_pickle  # noqa: E402
 from evolve.runs.rundir import RunDir, checkpoint_bytes  # noqa: E402
 
@@ -64,13 +65,19 @@ def measure(run: RunDir, repeat: int) -> dict:
                                  repeat)
         g = exp.search.generation
         t_new, b_new = best_time(lambda: checkpoint_bytes({"generation": g, **exp.state()}), repeat)
+        with tempfile.TemporaryDirectory(dir=run.path) as tmp:  # the whole save: + atomic_write (fsync)
+            t_old_w, _ = best_time(lambda: atomic_write(Path(tmp) / "a.pkl", pickle.dumps(
+                old_state(exp), protocol=pickle.HIGHEST_PROTOCOL)), repeat)
+            t_new_w, _ = best_time(lambda: atomic_write(Path(tmp) / "a.json.gz", checkpoint_bytes(
+                {"generation": g, **exp.state()})), repeat)
     finally:
         exp.pool.close()
     genomes = len(exp.search.population) + sum(len(s.population) for s in
                                                getattr(exp.problem, "inner", {}).values())
     return {"run": f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} gen {g}", "genomes": genomes,
             "pickle_kib": len(b_old) / 1024, "json_kib": len(b_new) / 1024,
-            "pickle_ms": 1e3 * t_old, "json_ms": 1e3 * t_new}
+            "pickle_ms": 1e3 * t_old, "json_ms": 1e3 * t_new, "pickle_save_ms": 1e3 * t_old_w,
+            "json_save_ms": 1e3 * t_new_w}
 
 
 def fresh_runs(tmp: Path, generations: int) -> list[RunDir]:
@@ -100,12 +107,13 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         runs = [RunDir(r) for r in args.runs] + fresh_runs(Path(tmp), args.generations)
         print(f"{'run':<36} {'genomes':>7} {'pickle KiB':>10} {'json.gz KiB':>11} {'size x':>6} "
-              f"{'pickle ms':>9} {'json ms':>8} {'time x':>6}")
+              f"{'pickle ms':>9} {'json ms':>8} {'time x':>6} {'saved: pickle ms':>16} {'json ms':>8}")
         for run in runs:
             m = measure(run, args.repeat)
             print(f"{m['run']:<36} {m['genomes']:>7} {m['pickle_kib']:>10.1f} {m['json_kib']:>11.1f} "
                   f"{m['json_kib'] / m['pickle_kib']:>6.2f} {m['pickle_ms']:>9.1f} {m['json_ms']:>8.1f} "
-                  f"{m['json_ms'] / m['pickle_ms']:>6.2f}", flush=True)
+                  f"{m['json_ms'] / m['pickle_ms']:>6.2f} {m['pickle_save_ms']:>16.1f} "
+                  f"{m['json_save_ms']:>8.1f}", flush=True)
 
 
 if __name__ == "__main__":
