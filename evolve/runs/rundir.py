@@ -25,6 +25,7 @@ import json
 import os
 import re
 import sys
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 
@@ -38,6 +39,7 @@ KEEP_CHECKPOINTS = 2
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
+MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
 PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
 
 
@@ -65,7 +67,16 @@ def checkpoint_bytes(data: dict) -> bytes:
 def read_checkpoint_file(path: Path) -> dict:
     """A checkpoint file's JSON data, its format and version checked; never unpickles (ValueError
     or gzip/JSON errors for anything else)."""
-    data = json.loads(gzip.decompress(Path(path).read_bytes()))
+    inflate = zlib.decompressobj(16 + zlib.MAX_WBITS)  # gzip, one member, as checkpoint_bytes writes
+    try:
+        text = inflate.decompress(Path(path).read_bytes(), MAX_CHECKPOINT_BYTES)
+    except zlib.error as exc:
+        raise ValueError(f"not gzip ({exc})") from None
+    if inflate.unconsumed_tail:  # a small file that would fill the memory
+        raise ValueError(f"over {MAX_CHECKPOINT_BYTES >> 20} MiB once uncompressed")
+    if not inflate.eof:
+        raise EOFError("cut short")
+    data = json.loads(text)
     if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
         raise ValueError("not an sgr checkpoint")
     if data.get("version") != CHECKPOINT_VERSION:

@@ -204,3 +204,20 @@ def test_a_damaged_newest_checkpoint_with_bad_fields_falls_back_to_the_one_befor
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "search.genomes.fitness: expected float" in err
     assert os.path.exists(done.ckpt_dir / "gen-00002.json.gz")  # kept for the user to look at
+
+
+def test_a_checkpoint_that_would_fill_the_memory_once_uncompressed_is_refused(tmp_path, repo_root,
+                                                                               monkeypatch):
+    import evolve.runs.rundir as rundir
+
+    done = run(config(tmp_path, repo_root), tmp_path / "run", 2)
+    assert load_checkpoint(done)["generation"] == 2
+    monkeypatch.setattr(rundir, "MAX_CHECKPOINT_BYTES", 1 << 20)
+    bomb = gzip.compress(b" " * (3 << 20))  # 3 MiB of spaces: a few KiB compressed
+    (done.ckpt_dir / "gen-00003.json.gz").write_bytes(bomb)
+    assert len(bomb) < 20000
+    assert load_checkpoint(done)["generation"] == 2  # skipped as damaged
+    for f in done.checkpoints():
+        f.write_bytes(bomb)
+    with pytest.raises(ValueError, match="over 1 MiB once uncompressed"):
+        load_checkpoint(done)
