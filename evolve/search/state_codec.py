@@ -7,12 +7,12 @@ the objects again from the run's own neat-python config. Nothing named in the da
 called: gene types come from the config, and activation and aggregation names must be in the fixed
 tables of evolve/nn/activations.py.
 
-Every genome is stored once, in columns (`encode_genomes`), and the population, the species (members and
-representatives) and the best genome refer to it by index, so objects shared in memory are shared
-again after loading (a fitness set on a population genome is seen by its species). Every dict keeps
-its order, which neat-python's iteration (and so the random numbers it draws) depends on. An
-attribute this module does not know on any object makes encoding fail rather than silently
-dropping state.
+Every genome is stored once, in columns (`encode_genomes`), and the population, the species
+(members and representatives) and the best genome refer to it by index, so objects shared in
+memory are shared again after loading (a fitness set on a population genome is seen by its
+species). Every dict keeps its order, which neat-python's iteration (and so the random numbers it
+draws) depends on. An attribute this module does not know on any object makes encoding fail
+rather than silently dropping state.
 """
 
 from __future__ import annotations
@@ -120,6 +120,9 @@ def encode_search_state(state: dict) -> dict:
     if set(repro) - REPRODUCTION_ATTRS:
         unknown = sorted(set(repro) - REPRODUCTION_ATTRS)
         raise TypeError(f"cannot checkpoint the reproduction: unknown {unknown}")
+    # the stagnation keeps no state of its own (species hold theirs): rebuilt from the config
+    _known(repro["stagnation"], {"stagnation_config", "species_fitness_func", "reporters"},
+           "the stagnation")
     tracker = repro["innovation_tracker"]
     _known(tracker, {"global_counter", "generation_innovations"}, "the innovation tracker")
     best = state["best"]
