@@ -17,7 +17,7 @@ import numpy as np
 
 
 def main() -> None:
-    bodies = np.load(sys.argv[1])
+    bodies = np.load(sys.argv[1], allow_pickle=False)
     task, steps = sys.argv[2], int(sys.argv[3])
     total_t, total_steps = 0.0, 0
     for body in bodies:

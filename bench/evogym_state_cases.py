@@ -63,7 +63,7 @@ def trace_case(task: str, name: str) -> dict:
     """Body, seed and actions of the task's trace case 1 (= returns case 0); NARROW_BODY with the
     program of the same seed for the climbers' free-fall cases."""
     (f,) = sorted(DATA.glob(f"trace_{task}_1_*.npz"))
-    z = np.load(f)
+    z = np.load(f, allow_pickle=False)
     out = {"body": z["body"], "seed": int(z["seed"]), "actions": z["actions"], "file": f.name}
     if task.startswith("Climber") and name != "climber_squeezed":
         n_act = int(np.isin(NARROW_BODY, (3, 4)).sum())

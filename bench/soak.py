@@ -112,7 +112,7 @@ def main() -> None:
         if g % args.every and g != args.generations:
             return
         now = time.perf_counter()
-        ckpt = e.run.ckpt_dir / f"gen-{g:05d}.pkl"
+        ckpt = e.run.ckpt_dir / f"gen-{g:05d}.json.gz"
         workers = sum(rss_mib(p.pid) for p in e.pool._procs)
         pop = e.search.population.values()
         inner = getattr(e.problem, "inner", None)

@@ -255,6 +255,20 @@ def _plot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _convert_checkpoints(args: argparse.Namespace) -> int:
+    from evolve.runs.legacy import convert_run, run_dirs
+
+    if not args.trust_pickle:
+        raise ValueError("an older sgr's checkpoints are pickles, and loading a pickle runs any code "
+                         "its author put in it: add --trust-pickle only if you trust everyone who "
+                         f"could write {args.dir}")
+    for run in run_dirs(args.dir):
+        written = convert_run(run)
+        if written:
+            print(f"{run.path}: {', '.join(written)}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """The `sgr` command; returns the exit code. A ValueError from a command is printed as one
     line, sgr: error: ..., on stderr with exit code 2 (argparse's own errors exit 2 as well)."""
@@ -335,6 +349,12 @@ def main(argv: list[str] | None = None) -> int:
     pl.add_argument("--per-run", action="store_true",
                     help="one line per run (coloured by method and task) instead of a mean with a band")
     pl.set_defaults(fn=_plot)
+    cc = sub.add_parser("convert-checkpoints",
+                        help="turn an older sgr's pickled checkpoints (gen-*.pkl) into JSON checkpoints")
+    cc.add_argument("dir", metavar="DIR", help="a run directory or a sweep directory")
+    cc.add_argument("--trust-pickle", action="store_true",
+                    help="required: loading a pickle runs any code in it; say you trust the folder")
+    cc.set_defaults(fn=_convert_checkpoints)
     register_task_commands(sub)
     args = p.parse_args(argv)
     stdout, sys.stdout = sys.stdout, _ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error

@@ -65,7 +65,7 @@ def parse_body(text: str) -> np.ndarray:
                 if f.read(6) != b"\x93NUMPY":
                     raise ValueError(f"bad body matrix: {path}: not a .npy file")
             try:
-                return np.load(path)
+                return np.load(path, allow_pickle=False)
             except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
                 raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
         try:

@@ -28,7 +28,7 @@ def _npz(path: Path):
     if not zipfile.is_zipfile(path):
         raise ValueError(f"{path}: not a .npz file")
     try:
-        return np.load(path)
+        return np.load(path, allow_pickle=False)
     except (ValueError, EOFError, OSError, zipfile.BadZipFile) as exc:
         raise ValueError(f"{path}: unreadable .npz file ({exc})") from None
 

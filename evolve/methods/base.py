@@ -91,11 +91,20 @@ class Problem:
         raise NotImplementedError
 
     def state(self) -> dict:
-        """The method's own run state for checkpoints (beyond the NEAT population)."""
+        """The method's own run state for checkpoints (beyond the NEAT population), as JSON data:
+        numbers, strings, lists and dicts only (checkpoints are JSON, never pickles)."""
+        return {}
+
+    @classmethod
+    def decode_state(cls, data, cfg: dict) -> dict:
+        """`state`'s data read back from a checkpoint, checked (ValueError naming the bad field)
+        and made into what `restore` takes; must build nothing from names in the data."""
+        if data != {}:
+            raise ValueError(f"problem: {cls.name} keeps no state of its own, got {str(data)[:60]}")
         return {}
 
     def restore(self, state: dict) -> None:
-        """Take back what `state` returned, in a fresh process."""
+        """Take back what `decode_state` returned, in a fresh process."""
 
 
 def positive(cfg: dict, source: str, *keys: str) -> None:

@@ -31,6 +31,15 @@ from evolve.nn.graph import GraphController
 from evolve.rollout.pool import RolloutPool
 from evolve.search.neat_ini import neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
+from evolve.search.state_codec import (
+    StateError,
+    check,
+    decode_search_state,
+    encode_search_state,
+    get,
+    is_int,
+    row,
+)
 from tasks.env import obs_dim
 from tsim.body import build_body
 
@@ -187,16 +196,52 @@ class NestedProblem(Problem):
 
     # checkpoint hooks: the inner populations are part of the run's state
     def state(self) -> dict:
-        """Every inner search's state with its input grid side k, keyed by body bytes, and the
-        forgetting bookkeeping (generation, last_seen, pinned)."""
-        return {"inner": {key: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
-                          for key, s in self.inner.items()},
-                "generation": self.generation, "last_seen": dict(self.last_seen), "pinned": self.pinned}
+        """Every inner search's state (JSON data, evolve/search/state_codec.py) with its body and
+        input grid side k, in order, and the forgetting bookkeeping (generation, last_seen, pinned),
+        bodies as lists of rows."""
+        def body(key: bytes) -> list:
+            return np.frombuffer(key, dtype=np.int64).reshape(self.shape).tolist()
+
+        return {"inner": [{"body": body(key), "k": round(len(s.config.genome_config.input_keys) ** 0.5),
+                           "search": encode_search_state(s.state())} for key, s in self.inner.items()],
+                "generation": self.generation,
+                "last_seen": [[body(key), g] for key, g in self.last_seen.items()],
+                "pinned": None if self.pinned is None else body(self.pinned)}
+
+    @classmethod
+    def decode_state(cls, data, cfg: dict) -> dict:
+        """`state`'s data checked and rebuilt: bodies of the run's robot_shape with material codes,
+        each inner search decoded with the controller config of its k."""
+        shape = tuple(cfg["robot_shape"])
+
+        def key(b, path: str) -> bytes:
+            arr = np.asarray(check(b, path, "list"), dtype=object)
+            if arr.shape != shape or not all(is_int(v) and 0 <= v < N_TYPES for v in arr.flat):
+                raise StateError(f"{path}: not a {shape[0]}x{shape[1]} body of material codes")
+            return arr.astype(np.int64).tobytes()
+
+        configs: dict[int, object] = {}
+        inner = {}
+        for i, entry in enumerate(get(data, "inner", "problem", "list")):
+            p = f"problem.inner[{i}]"
+            k = get(entry, "k", p, "int")
+            if not 1 <= k <= 64:
+                raise StateError(f"{p}.k: {k} is not an input grid side")
+            if k not in configs:
+                configs[k] = cls.controller_config(cfg, k)
+            inner[key(get(entry, "body", p, "list"), f"{p}.body")] = (
+                decode_search_state(get(entry, "search", p, "dict"), configs[k], f"{p}.search"), k)
+        last_seen = {}
+        for i, item in enumerate(get(data, "last_seen", "problem", "list")):
+            b, g = row(item, f"problem.last_seen[{i}]", ("list", "int"))
+            last_seen[key(b, f"problem.last_seen[{i}]")] = g
+        pinned = get(data, "pinned", "problem", "list?")
+        return {"inner": inner, "generation": get(data, "generation", "problem", "int"),
+                "last_seen": last_seen, "pinned": None if pinned is None else key(pinned, "problem.pinned")}
 
     def restore(self, state: dict) -> None:
-        # checkpoints from before inner populations were forgotten: every body counts as just seen
-        """Rebuild the inner searches from `state`; in checkpoints from before forgetting existed
-        every body counts as just seen."""
+        """Rebuild the inner searches from `decode_state`'s result (or an older sgr's pickled state,
+        being converted: from before forgetting existed, every body counts as just seen)."""
         self.generation = state.get("generation", 0)
         self.last_seen = dict(state.get("last_seen", dict.fromkeys(state["inner"], self.generation)))
         self.pinned = state.get("pinned")

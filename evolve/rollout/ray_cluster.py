@@ -13,7 +13,12 @@ code, and `run_sweep` resumes the run from its own checkpoints, on whichever nod
 Rollout pool (`RayRolloutPool`): one actor per CPU of the cluster, each a process with one Taichi
 thread that compiles the simulator once and then simulates a chunk of every generation. The
 chunks are `balanced_chunks` of the bodies, as with local workers, and the split does not change
-the returns. An actor that dies is restarted by Ray and its chunk run again.
+the returns. An actor that dies (its process killed, its node lost) has its chunk simulated again
+at once by a surviving actor, so the generation's returns are those it would have had; before the
+next generation it is replaced by a new actor where the cluster has a free CPU (a killed process
+frees its own), and otherwise the pool goes on with fewer actors. Ray does not restart our actors
+itself: a restarted actor waits for a free CPU, and after a node loss there may be none, so a
+generation would wait for ever.
 """
 
 from __future__ import annotations
@@ -30,7 +35,8 @@ from evolve.rollout.pool import PolicyFactory, balanced_chunks, chunk_job
 from evolve.rollout.robust import EpisodeNoise
 
 INSTALL = 'pip install "sgr[ray]"'
-ACTOR_RESTARTS = 3  # a rollout actor that dies is restarted, and its chunk re-run, this many times
+ACTOR_RESTARTS = 3  # a chunk whose actor dies is re-run on another actor this many times
+REPLACE_TIMEOUT_S = 60.0  # a replacement actor that has not started by then is given up
 
 
 def require_ray(what: str) -> None:
@@ -98,20 +104,45 @@ class RayRolloutPool:
 
     def _run(self, task, bodies, items, factory, episode_steps, noise) -> np.ndarray:
         ray = self._start()
-        chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(self._actors))
-        refs = [a.run.remote(chunk_job(task, bodies, items, factory, episode_steps, noise, c))
-                for a, c in zip(self._actors, chunks, strict=False)]
+        self._replace_dead(ray)
+        live = [i for i, a in enumerate(self._actors) if a is not None]
+        if not live:
+            raise RuntimeError("no Ray rollout actor is left and the cluster has no free CPU for a new "
+                               "one; set workers: 1 or N to run on this machine")
+        chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(live))
+        jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
+        pending = {self._actors[i].run.remote(job): (k, i)
+                   for k, (i, job) in enumerate(zip(live, jobs, strict=False))}
+        tries = [0] * len(jobs)
         out = np.zeros(len(bodies))
-        try:
-            for ref, c in zip(refs, chunks, strict=True):
-                out[c] = ray.get(ref)
-        except ray.exceptions.RayTaskError as exc:  # raised in an actor: raise it here as it was
-            raise exc.cause from None
-        except ray.exceptions.RayActorError as exc:  # died more often than it may be restarted
-            raise RuntimeError(f"a Ray rollout actor died {ACTOR_RESTARTS + 1} times ("
-                               f"{' '.join(str(exc).split())[:300]}); set workers: 1 or N to run on "
-                               "this machine") from None
+        while pending:
+            ready, _ = ray.wait(list(pending), num_returns=1)
+            k, i = pending.pop(ready[0])
+            try:
+                out[chunks[k]] = ray.get(ready[0])
+            except ray.exceptions.RayTaskError as exc:  # raised in an actor: raise it here as it was
+                raise exc.cause from None
+            except ray.exceptions.RayActorError as exc:  # the process or its node died: run it elsewhere
+                self._actors[i] = None
+                tries[k] += 1
+                live = [j for j, a in enumerate(self._actors) if a is not None]
+                if tries[k] > ACTOR_RESTARTS or not live:
+                    why = "no rollout actor is left" if not live else f"its actor died {tries[k]} times"
+                    raise RuntimeError(f"a chunk of Ray rollouts could not be simulated: {why} ("
+                                       f"{' '.join(str(exc).split())[:300]}); set workers: 1 or N to "
+                                       "run on this machine") from None
+                j = live[k % len(live)]
+                pending[self._actors[j].run.remote(jobs[k])] = (k, j)
         return out
+
+    def _new_actor(self, ray):
+        env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
+        if os.environ.get("SGR_ARCH"):  # actors simulate where this process would
+            env["SGR_ARCH"] = os.environ["SGR_ARCH"]
+        # the environment is set before the actor's process starts: Taichi reads it at its start
+        cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=0, max_task_retries=0,
+                                                runtime_env={"env_vars": env})
+        return cls.remote()
 
     def _start(self):
         """Ray (joined, or started by this pool) and the actors, created on first use."""
@@ -122,22 +153,31 @@ class RayRolloutPool:
             self._started_ray = True
         if not self._actors:
             n = self.n_actors or max(1, int(ray.cluster_resources().get("CPU", 1)))
-            env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
-            if os.environ.get("SGR_ARCH"):  # actors simulate where this process would
-                env["SGR_ARCH"] = os.environ["SGR_ARCH"]
-            # the environment is set before the actor's process starts: Taichi reads it at its start
-            cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=ACTOR_RESTARTS,
-                                                    max_task_retries=ACTOR_RESTARTS,
-                                                    runtime_env={"env_vars": env})
-            self._actors = [cls.remote() for _ in range(n)]
+            self._actors = [self._new_actor(ray) for _ in range(n)]
         return ray
 
+    def _replace_dead(self, ray) -> None:
+        """A new actor in each dead one's place while the cluster has a free CPU for it; one that
+        does not start within REPLACE_TIMEOUT_S is given up (the pool goes on without it)."""
+        for i, actor in enumerate(self._actors):
+            if actor is not None or ray.available_resources().get("CPU", 0) < 1:
+                continue
+            new = self._new_actor(ray)
+            try:
+                ray.get(new.pid.remote(), timeout=REPLACE_TIMEOUT_S)
+            except (ray.exceptions.GetTimeoutError, ray.exceptions.RayActorError):
+                ray.kill(new, no_restart=True)
+                continue
+            self._actors[i] = new
+
     def pids(self) -> list[int]:
-        """The process ids of the actors (starting them)."""
+        """The process ids of the actors (starting them, and replacing dead ones where there is
+        room)."""
         state = random.getstate()
         try:
             ray = self._start()
-            return ray.get([a.pid.remote() for a in self._actors])
+            self._replace_dead(ray)
+            return ray.get([a.pid.remote() for a in self._actors if a is not None])
         finally:
             random.setstate(state)
 
@@ -148,7 +188,8 @@ class RayRolloutPool:
         import ray
 
         for actor in self._actors:
-            ray.kill(actor, no_restart=True)
+            if actor is not None:
+                ray.kill(actor, no_restart=True)
         self._actors = []
         if self._started_ray:
             ray.shutdown()

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
@@ -107,7 +108,7 @@ class Experiment:
             import_tasks(ref)
         run.lock()
         try:
-            state = run.latest_checkpoint()
+            state = load_checkpoint(run, cfg)
             if state is None:
                 raise ValueError(f"{out} has no checkpoint to resume from")
             done = state["generation"]
@@ -128,8 +129,9 @@ class Experiment:
             raise
 
     def state(self) -> dict:
-        """What a checkpoint holds: the NEAT search's state plus the method's own under `problem`."""
-        return {**self.search.state(), "problem": self.problem.state()}
+        """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own
+        (evolve/runs/checkpoint.py)."""
+        return checkpoint_data(self.search, self.problem)
 
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
         """Run to the configured number of generations; `after_generation(self)` is called once

@@ -1,15 +1,26 @@
 """The Ray sweep backend: each run of a sweep is a Ray task that advances the run's directory (on a
-filesystem every node shares) with `sgr evolve --resume` on whichever node has room."""
+filesystem every node shares) with `sgr evolve --resume` on whichever node has room.
+
+A node that is lost takes its runs' processes with it; their tasks fail, and `run_sweep` resumes
+each run from its own checkpoints on a node that is left. A cluster that goes away altogether (its
+head unreachable, or no node with a CPU left) for CLUSTER_LOST_S stops the sweep with one line that
+names the resume command; every run keeps its last checkpoint.
+"""
 
 from __future__ import annotations
 
 import os
+import socket
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 from evolve.rollout.ray_cluster import connect
-from evolve.runs.sweep import die_with_parent
+from evolve.runs.sweep import BackendLost, die_with_parent
+
+CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
+HEALTH_EVERY_S = 1.0
 
 
 def _run_on_node(run_path: str, workers: int) -> int:
@@ -31,6 +42,10 @@ class RayBackend:
 
     def __init__(self, parallel: int = 1, address: str | None = None):
         ray = connect("--backend ray", address, start="local")
+        self.resume_args = " --backend ray" + (f" --address {address}" if address else "")
+        self._gcs = ray.get_runtime_context().gcs_address  # host:port of the cluster's head
+        self._checked = time.monotonic()
+        self._unwell_since: float | None = None
         nodes = [n["Resources"].get("CPU", 0) for n in ray.nodes() if n["Alive"]]
         nodes = [int(c) for c in nodes if c >= 1] or [1]
         self.cpus_per_run = max(1, min(nodes) // parallel)
@@ -44,6 +59,7 @@ class RayBackend:
     def start(self, sweep, run) -> None:
         """Submit `run` (already prepared) as one Ray task and return at once; `poll` reports its
         end."""
+        self._wait_for_cluster()  # a task submitted to a cluster that is gone could wait for ever
         path = sweep.run_dir(run).path.resolve()  # the same path on every node
         self._logs[run] = path / "log.txt"
         self.procs[run] = self._task.remote(str(path), self.cpus_per_run)
@@ -55,6 +71,7 @@ class RayBackend:
 
         if not self.procs:
             return {}
+        self._check_cluster()
         refs = {ref: run for run, ref in self.procs.items()}
         ready, _ = ray.wait(list(refs), num_returns=len(refs), timeout=0)
         ended = {}
@@ -68,6 +85,45 @@ class RayBackend:
             del self.procs[run]
         return ended
 
+    def _check_cluster(self) -> None:
+        """BackendLost once the head has been unreachable, or no live node has had a CPU, for
+        CLUSTER_LOST_S (checked every HEALTH_EVERY_S); the head is probed by a plain TCP connection
+        first, as Ray's own calls would wait for it."""
+        now = time.monotonic()
+        if now - self._checked < HEALTH_EVERY_S:
+            return
+        self._checked = now
+        problem = self._cluster_problem()
+        if problem is None:
+            self._unwell_since = None
+            return
+        if self._unwell_since is None:
+            self._unwell_since = now
+        if now - self._unwell_since >= CLUSTER_LOST_S:
+            raise BackendLost(f"the Ray cluster is gone ({problem} for {CLUSTER_LOST_S:.0f} s)")
+
+    def _wait_for_cluster(self) -> None:
+        """Return once the cluster is usable; BackendLost when it has not been for CLUSTER_LOST_S."""
+        while (problem := self._cluster_problem()) is not None:
+            now = time.monotonic()
+            self._unwell_since = self._unwell_since or now
+            if now - self._unwell_since >= CLUSTER_LOST_S:
+                raise BackendLost(f"the Ray cluster is gone ({problem} for {CLUSTER_LOST_S:.0f} s)")
+            time.sleep(HEALTH_EVERY_S)
+        self._unwell_since = None
+
+    def _cluster_problem(self) -> str | None:
+        import ray
+
+        host, _, port = self._gcs.rpartition(":")
+        try:
+            socket.create_connection((host, int(port)), timeout=2.0).close()
+        except OSError:
+            return f"its head at {self._gcs} does not answer"
+        if not any(n["Alive"] and n["Resources"].get("CPU", 0) >= 1 for n in ray.nodes()):
+            return "no node with a CPU is left"
+        return None
+
     def _log(self, run, exc: Exception) -> None:
         what = " ".join(str(exc).split())[:2000]
         try:
@@ -78,9 +134,12 @@ class RayBackend:
 
     def stop(self) -> None:
         """Cancel the running tasks: their workers are killed, and each run's process with its
-        worker; every run keeps its last checkpoint."""
+        worker; every run keeps its last checkpoint. Nothing to do once the cluster is lost."""
         import ray
 
+        if self._unwell_since is not None:
+            self.procs = {}
+            return
         for ref in self.procs.values():
             ray.cancel(ref, force=True)
         if self.procs:

@@ -1,14 +1,17 @@
 """Run directories: resolved config, per-generation CSV, champion JSON, atomic checkpoints.
 
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
-checkpoints/gen-XXXXX.pkl (state at the start of generation XXXXX). Every file that a crash could
+checkpoints/gen-XXXXX.json.gz (state at the start of generation XXXXX: gzipped JSON, never a
+pickle; evolve/runs/checkpoint.py says what it holds). Every file that a crash could
 leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
 a kill or a full disk leaves the previous version whole; generations.csv gets one line per
 generation appended and flushed to disk instead (rewriting it made every generation cost time in
 proportion to the run's length), and a last line cut short by a kill or a full disk, which lacks
 its newline, is no row: readers skip it and the next write or a resume drops it. The two newest
 checkpoints are kept: a damaged newest one (a disk that lied about fsync, a copy cut short) falls
-back to the one before.
+back to the one before. Nothing else in checkpoints/ is ever loaded: a pickle (an older sgr's
+gen-XXXXX.pkl, or one planted under any name) is named in one warning line and skipped, and a run
+holding only old pickles is refused with the command that converts them.
 Files get the permissions the user's umask gives, as `open()` would create them.
 """
 
@@ -16,11 +19,14 @@ from __future__ import annotations
 
 import csv
 import fcntl
+import gzip
 import io
 import json
 import os
-import pickle
+import re
 import sys
+import zlib
+from collections.abc import Callable
 from pathlib import Path
 
 import yaml
@@ -30,6 +36,11 @@ from evolve.runs.files import atomic_write, read_yaml
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s"]
 KEEP_CHECKPOINTS = 2
+CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
+CHECKPOINT_FORMAT = "sgr-checkpoint"
+CHECKPOINT_VERSION = 1
+MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
+PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
 
 
 def _ends_a_line(path: Path) -> bool:
@@ -45,13 +56,49 @@ def _ends_a_line(path: Path) -> bool:
         return False
 
 
-# modules renamed since checkpoints were first written: old checkpoints still load
-MOVED_MODULES = {"evolve.genome": "evolve.search.genome"}
+def checkpoint_bytes(data: dict) -> bytes:
+    """A checkpoint file's bytes: `data` as JSON (NaN allowed, as Python's json writes it),
+    gzipped with no timestamp, so the same state gives the same bytes."""
+    text = json.dumps({"format": CHECKPOINT_FORMAT, "version": CHECKPOINT_VERSION, **data},
+                      separators=(",", ":"))
+    return gzip.compress(text.encode(), compresslevel=3, mtime=0)
 
 
-class _Unpickler(pickle.Unpickler):
-    def find_class(self, module: str, name: str):
-        return super().find_class(MOVED_MODULES.get(module, module), name)
+def read_checkpoint_file(path: Path) -> dict:
+    """A checkpoint file's JSON data, its format and version checked; never unpickles (ValueError
+    or gzip/JSON errors for anything else)."""
+    inflate = zlib.decompressobj(16 + zlib.MAX_WBITS)  # gzip, one member, as checkpoint_bytes writes
+    try:
+        text = inflate.decompress(Path(path).read_bytes(), MAX_CHECKPOINT_BYTES)
+    except zlib.error as exc:
+        raise ValueError(f"not gzip ({exc})") from None
+    if inflate.unconsumed_tail:  # a small file that would fill the memory
+        raise ValueError(f"over {MAX_CHECKPOINT_BYTES >> 20} MiB once uncompressed")
+    if not inflate.eof:
+        raise EOFError("cut short")
+    data = json.loads(text)
+    if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
+        raise ValueError("not an sgr checkpoint")
+    if data.get("version") != CHECKPOINT_VERSION:
+        raise ValueError(f"checkpoint version {data.get('version')!r}, this sgr reads {CHECKPOINT_VERSION}")
+    if not isinstance(data.get("generation"), int) or isinstance(data["generation"], bool):
+        raise ValueError("no generation")
+    return data
+
+
+def is_pickle(path: Path) -> bool:
+    """Whether a file looks like a pickle (by its name or first byte; nothing is loaded)."""
+    if path.suffix in (".pkl", ".pickle"):
+        return True
+    try:
+        with path.open("rb") as f:
+            return f.read(1) == PICKLE_PROTOCOL_2_PLUS
+    except OSError:
+        return False
+
+
+class PickledCheckpoints(ValueError):
+    """A run whose only checkpoints are an older sgr's pickles: not loaded without trust."""
 
 
 class RunDir:
@@ -171,34 +218,64 @@ class RunDir:
             raise ValueError(f"{self.path} has no champion.json yet")
         return json.loads(f.read_text())
 
-    def save_checkpoint(self, generation: int, state: dict) -> Path:
-        """Write `state` atomically as checkpoints/gen-<generation>.pkl and delete all but the
-        newest KEEP_CHECKPOINTS; returns its path."""
+    def save_checkpoint(self, generation: int, data: dict) -> Path:
+        """Write `data` (JSON-able: numbers, strings, lists, dicts) atomically as
+        checkpoints/gen-<generation>.json.gz and delete all but the newest KEEP_CHECKPOINTS of
+        ours; returns its path."""
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
-        path = self.ckpt_dir / f"gen-{generation:05d}.pkl"
-        atomic_write(path, pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL))
-        for old in sorted(self.ckpt_dir.glob("gen-*.pkl"))[:-KEEP_CHECKPOINTS]:
+        path = self.ckpt_dir / f"gen-{generation:05d}.json.gz"
+        atomic_write(path, checkpoint_bytes({"generation": generation, **data}))
+        for old in self.checkpoints()[KEEP_CHECKPOINTS:]:
             old.unlink()
         return path
 
-    def latest_checkpoint(self) -> dict | None:
-        """The newest checkpoint that loads; a damaged one is skipped with a one-line warning.
-        None when there is none at all; ValueError naming the files when none loads."""
-        ckpts = sorted(self.ckpt_dir.glob("gen-*.pkl"), reverse=True)
+    def checkpoints(self) -> list[Path]:
+        """sgr's checkpoint files (gen-XXXXX.json.gz), newest first."""
+        if not self.ckpt_dir.is_dir():
+            return []
+        found = [(int(m.group(1)), f) for f in self.ckpt_dir.iterdir() if (m := CHECKPOINT.fullmatch(f.name))]
+        return [f for _, f in sorted(found, reverse=True)]
+
+    def has_checkpoint(self) -> bool:
+        """Whether the run has any checkpoint to resume from, an older sgr's pickled ones included
+        (they are refused on resume, with the way to convert them, but the run is not lost)."""
+        return bool(self.checkpoints() or self.pickled_checkpoints())
+
+    def pickled_checkpoints(self) -> list[Path]:
+        """An older sgr's checkpoints (gen-*.pkl), oldest first; never loaded here."""
+        return sorted(self.ckpt_dir.glob("gen-*.pkl")) if self.ckpt_dir.is_dir() else []
+
+    def latest_checkpoint(self, decode: Callable[[dict], dict] | None = None) -> dict | None:
+        """The newest checkpoint that loads and that `decode` (which checks it and builds objects)
+        accepts, as `decode` returns it (the JSON data without one). Damaged checkpoints and every
+        other file in checkpoints/ (pickles above all) are skipped, named in one warning line. None
+        when there is none at all; ValueError naming the files when none loads;
+        PickledCheckpoints when there are only an older sgr's pickles."""
+        ours = self.checkpoints()
+        others = sorted(f for f in self.ckpt_dir.iterdir() if f not in ours and not f.name.startswith(".")
+                        ) if self.ckpt_dir.is_dir() else []  # (".": atomic_write's temporary files)
+        skipped = [f"{f.name} ({'a pickle, never loaded' if is_pickle(f) else 'not a checkpoint'})"
+                   for f in others]
+        if not ours and self.pickled_checkpoints():
+            raise PickledCheckpoints(
+                f"{self.ckpt_dir} holds only pickled checkpoints of an older sgr "
+                f"({', '.join(f.name for f in self.pickled_checkpoints())}); sgr does not load "
+                "pickles, which can run any code; if you trust this folder, convert them with: "
+                f"sgr convert-checkpoints {self.path} --trust-pickle")
         damaged = []
-        for f in ckpts:
+        for f in ours:
             try:
-                state = _Unpickler(io.BytesIO(f.read_bytes())).load()
-                if not isinstance(state, dict) or "generation" not in state:
-                    raise ValueError("not a checkpoint")
-            except Exception as exc:  # any damage: truncated, garbage, another program's pickle
-                damaged.append(f"{f} ({type(exc).__name__})")
+                data = read_checkpoint_file(f)
+                state = decode(data) if decode is not None else data
+            except Exception as exc:  # any damage: truncated, garbage, a planted file, bad fields
+                why = f": {' '.join(str(exc).split())[:120]}" if isinstance(exc, ValueError) else ""
+                damaged.append(f"{f.name} (damaged, {type(exc).__name__}{why})")
                 continue
-            if damaged:
-                print(f"sgr: warning: damaged checkpoint {', '.join(damaged)}; resuming from {f.name}",
-                      file=sys.stderr)
+            if damaged or skipped:
+                print(f"sgr: warning: skipped {', '.join(damaged + skipped)} in {self.ckpt_dir}; "
+                      f"resuming from {f.name}", file=sys.stderr)
             return state
-        if ckpts:
+        if ours:
             raise ValueError(f"no usable checkpoint in {self.ckpt_dir}: "
-                             f"{', '.join(f.name for f in ckpts)} are damaged")
+                             f"{', '.join(damaged + skipped)}")
         return None

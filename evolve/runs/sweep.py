@@ -180,7 +180,16 @@ class Sweep:
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        return cls(out, check_sweep(read_yaml(f), str(f)))
+        sweep = cls(out, check_sweep(read_yaml(f), str(f)))
+        old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
+               and not sweep.run_dir(r).checkpoints()]
+        if old:  # refused before any run starts (each would fail, and be retried, alone)
+            names = ", ".join(old[:3]) + (", ..." if len(old) > 3 else "")
+            raise ValueError(f"{len(old)} run(s) of {out} ({names}) "
+                             "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
+                             "which can run any code; if you trust this folder, convert them with: "
+                             f"sgr convert-checkpoints {out} --trust-pickle")
+        return sweep
 
     def run_dir(self, run: SweepRun) -> RunDir:
         """The RunDir of `run` (runs/<name>), whether or not it exists yet."""
@@ -199,7 +208,7 @@ class Sweep:
         from evolve.runs.experiment import Experiment
 
         rd = self.run_dir(run)
-        if (rd.path / "config.yaml").is_file() and list(rd.ckpt_dir.glob("gen-*.pkl")):
+        if (rd.path / "config.yaml").is_file() and rd.has_checkpoint():
             return
         if rd.path.exists():
             shutil.rmtree(rd.path)
@@ -216,6 +225,10 @@ class Sweep:
         return out
 
 
+class BackendLost(RuntimeError):
+    """The machines a sweep runs on are gone (a whole Ray cluster): the sweep stops, to be resumed."""
+
+
 def die_with_parent() -> None:
     """In a run's process: SIGKILL when the sweep process dies, so a killed sweep leaves no run
     going on alone (Linux; elsewhere the run's lock still keeps a resumed sweep from doubling it)."""
@@ -227,6 +240,8 @@ def die_with_parent() -> None:
 
 class LocalBackend:
     """Runs on this machine, `parallel` at a time, each with cpus / parallel rollout workers."""
+
+    resume_args = ""  # what `sgr sweep --resume DIR` needs besides DIR to resume on this backend
 
     def __init__(self, parallel: int = 1):
         self.parallel = parallel
@@ -309,6 +324,10 @@ def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: f
         backend.stop()
         say(f"interrupted; continue with: sgr sweep --resume {sweep.path}")
         raise
+    except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
+        backend.stop()
+        raise ValueError(f"{exc}; every run keeps its last checkpoint; continue with: "
+                         f"sgr sweep --resume {sweep.path}{getattr(backend, 'resume_args', '')}") from None
     failed = [r for r, n in failures.items() if n > RETRIES]
     say(f"{total - len(sweep.pending())}/{total} runs done"
         + (f"; failed: {', '.join(r.name for r in failed)}" if failed else "")

@@ -97,7 +97,7 @@ def test_recorded_terminations_are_reproduced(returns):
 
 
 def test_bidirectional_goals_are_evogyms_draws(folder):
-    z = np.load(folder / "returns_BidirectionalWalker-v0.npz")
+    z = np.load(folder / "returns_BidirectionalWalker-v0.npz", allow_pickle=False)
     for s, goals in zip(z["reset_seed"], z["goals_x_voxels"], strict=True):
         d = draw_goals(random.Random(int(s)))
         assert list(d["goals"][:d["n_goals"]]) == [g for g in goals if g >= 0]
@@ -108,11 +108,11 @@ def test_catcher_placement_is_evogyms_draw(folder):
     both pegs (evogym's world_objects of the trace cases) come out of the world's seeded stream."""
     import json
 
-    z = np.load(folder / "returns_Catcher-v0.npz")
+    z = np.load(folder / "returns_Catcher-v0.npz", allow_pickle=False)
     env = BatchEnv("Catcher-v0", list(z["body"]), seeds=[int(s) for s in z["reset_seed"]])
     assert np.array_equal(env.task_state["offset"], z["offset_xy"])
     for f in sorted(folder.glob("trace_Catcher-v0_*.npz")):
-        t = np.load(f)
+        t = np.load(f, allow_pickle=False)
         e = BatchEnv("Catcher-v0", [t["body"]], seeds=[int(t["reset_seed"])])
         for o in json.loads(str(t["world_objects"]))[1:]:
             if o["name"] == "ground":
@@ -134,7 +134,7 @@ def test_catcher_placement_is_evogyms_draw(folder):
 
 
 def test_task_state_is_reset_per_world(folder):
-    z = np.load(folder / "returns_BidirectionalWalker-v0.npz")
+    z = np.load(folder / "returns_BidirectionalWalker-v0.npz", allow_pickle=False)
     bodies, seeds = list(z["body"][:3]), [int(s) for s in z["reset_seed"][:3]]
     env = BatchEnv("BidirectionalWalker-v0", bodies, seeds=seeds)
     first = env.task_state["goals"].copy()
@@ -198,7 +198,7 @@ def test_mixed_object_points_follow_evogym(folder, task):
     import json
 
     files = sorted(folder.glob(f"trace_{task}_*.npz"))
-    data = [np.load(f) for f in files]
+    data = [np.load(f, allow_pickle=False) for f in files]
     env = BatchEnv(task, [z["body"] for z in data], episode_steps=50, passive_ok=True)
     (obj,) = json.loads(str(data[0]["world_objects"]))[1:]
     world_obj = env.sim.world.object(obj["name"])

@@ -27,12 +27,12 @@ from tasks.specs import task_spec
 
 @pytest.fixture(scope="module")
 def data(data_dir):
-    return np.load(data_dir / "evogym32" / "state_cases.npz")
+    return np.load(data_dir / "evogym32" / "state_cases.npz", allow_pickle=False)
 
 
 def meta(data_dir: Path) -> list[dict]:
     """The recorded cases' descriptions (name, task, steps, seed, moves, termination step)."""
-    return json.loads(str(np.load(data_dir / "evogym32" / "state_cases.npz")["cases"]))
+    return json.loads(str(np.load(data_dir / "evogym32" / "state_cases.npz", allow_pickle=False)["cases"]))
 
 
 CASE_NAMES = [c["name"] for c in meta(Path(__file__).parents[1] / "data")]

@@ -41,7 +41,7 @@ def test_time_limit_truncates_at_the_paper_length_and_is_overridable():
 def test_robot_and_box_points_follow_evogym_point_order(data_dir, case):
     """At reset the robot's and the package's points equal, point for point, the positions evogym's
     C++ simulator held (`world_pos0`, evogym's global order); the reset observation equals evogym's."""
-    z = np.load(data_dir / "traces" / f"{case}.npz")
+    z = np.load(data_dir / "traces" / f"{case}.npz", allow_pickle=False)
     where = {o["name"]: o for o in json.loads(str(z["world_objects"]))}
 
     def evogym_points(name):

@@ -50,7 +50,7 @@ def test_observation_length_and_reset_observation(report, data_dir):
 def test_reset_observation_matches_orientation_included(data_dir):
     from tasks.env import BatchEnv
     for name in ("case06_obstacle_sample1002_sq24h12col1", "case08_climber_walker_sin40col1"):
-        z = np.load(data_dir / "traces" / f"{name}.npz")
+        z = np.load(data_dir / "traces" / f"{name}.npz", allow_pickle=False)
         env = BatchEnv(str(z["task"]), [z["body"]])
         obs, ref = env.robot_obs(0), z["obs"][0]
         keep = np.ones(len(ref), bool)

@@ -12,7 +12,7 @@ from tsim.body import BL, BR, TL, TR, build_body, check_robot, full_connectivity
 
 def _cases(data_dir):
     index = json.loads((data_dir / "traces" / "index.json").read_text())
-    return [np.load(data_dir / "traces" / c["file"]) for c in index["cases"]]
+    return [np.load(data_dir / "traces" / c["file"], allow_pickle=False) for c in index["cases"]]
 
 
 def test_point_order_and_positions_match_evogym_traces(data_dir):

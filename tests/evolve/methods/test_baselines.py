@@ -148,7 +148,7 @@ def test_nested_champion_body_is_pinned_while_absent_bodies_are_forgotten(repo_r
     assert set(problem.last_seen) == set(problem.inner)
     problem.champion(BodyPhenotype(champ, True))                   # its controller is still there
     restored = NestedProblem(cfg, neat_config)
-    restored.restore(problem.state())
+    restored.restore(NestedProblem.decode_state(json.loads(json.dumps(problem.state())), cfg))
     assert (restored.generation, restored.last_seen, restored.pinned) == \
         (problem.generation, problem.last_seen, problem.pinned)
     problem.evaluate(as_phenotypes(other))                         # 3: back, with a fresh population

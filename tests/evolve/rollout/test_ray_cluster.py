@@ -1,6 +1,6 @@
-"""Ray: a sweep's runs as Ray tasks, and one run's rollouts on Ray actors, give exactly the results of
-local processes, also when an actor is killed mid-generation. One local Ray instance (2 CPUs) for the
-module."""
+"""Ray on one local instance (2 CPUs) for the module: the sweep backend's sizing and failed tasks, and
+one run's rollouts on Ray actors, which give exactly the results of local processes, also when an
+actor is killed mid-generation. Losing whole nodes: tests/evolve/runs/test_ray_nodes.py."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ ray = pytest.importorskip("ray")
 from evolve.rollout.ray_cluster import RayRolloutPool  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
 from evolve.runs.ray_sweep import RayBackend  # noqa: E402
-from evolve.runs.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
+from evolve.runs.sweep import Sweep  # noqa: E402
 
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 
@@ -38,24 +38,8 @@ def fitness(run_path) -> list[tuple]:
 
 
 # ---------------------------------------------------------------------------------- sweep backend
-def test_a_sweep_on_ray_gives_the_local_backends_results(tmp_path, capsys):
-    sweep_file = tmp_path / "sweep.yaml"
-    sweep_file.write_text(yaml.safe_dump({
-        "methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": 1,
-        "overrides": {"generations": 3, "pop_size": 8, "episode_steps": 10, "render_champion": False,
-                      "nested": {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1}}}))
-    results = {}
-    for name, backend in (("local", LocalBackend(2)), ("ray", RayBackend(2))):
-        sweep = Sweep.create(sweep_file, tmp_path / name)
-        assert run_sweep(sweep, backend, quiet=True) == 0
-        results[name] = {run.name: fitness(sweep.run_dir(run).path) for run in sweep.runs}
-        assert sweep.pending() == []
-    assert results["ray"] == results["local"]
-    assert sorted(results["ray"]) == ["nested-Walker-v0-s0", "sgr-Walker-v0-s0"]
-    assert all(len(rows) == 3 for rows in results["ray"].values())
-    assert "2/2 runs done" in capsys.readouterr().out
-
-
+# (a sweep's results on Ray against the local backend's: tests/evolve/runs/test_ray_nodes.py, on a
+# real multi-node cluster)
 def test_ray_backend_sizes_runs_by_the_nodes_cpus_and_reports_failed_tasks(tmp_path):
     one = RayBackend(1)
     assert (one.parallel, one.cpus_per_run) == (1, 2)

@@ -8,7 +8,6 @@ counters, innovation numbers in a tracker) shows up here as a crash or as differ
 from __future__ import annotations
 
 import os
-import pickle
 import signal
 import subprocess
 import sys
@@ -18,6 +17,7 @@ from pathlib import Path
 import pytest
 import yaml
 
+from evolve.runs.checkpoint import load_checkpoint
 from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import COLUMNS, RunDir
 
@@ -99,17 +99,17 @@ def test_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path, repo_r
     full.run_all()
     full.close()
 
-    resume_from = pickle.loads(sorted(crashed.ckpt_dir.glob("gen-*.pkl"))[-1].read_bytes())
+    resume_from = load_checkpoint(crashed)
     assert resume_from["generation"] == 6
     resumed = sgr("evolve", "--resume", str(crashed.path), "--quiet")
     _, err = resumed.communicate(timeout=300)
     assert resumed.returncode == 0, err
 
-    final = crashed.latest_checkpoint()
+    final = load_checkpoint(crashed)
     assert final["generation"] == GENERATIONS
     assert max_node_key(final) > max_node_key(resume_from), "no node was added after the resume"
     assert fitness_rows(crashed) == fitness_rows(RunDir(tmp_path / "full"))
-    assert genomes_and_species(final) == genomes_and_species(RunDir(tmp_path / "full").latest_checkpoint())
+    assert genomes_and_species(final) == genomes_and_species(load_checkpoint(RunDir(tmp_path / "full")))
     assert len(crashed.rows()) == GENERATIONS
     assert crashed.champion() == RunDir(tmp_path / "full").champion()
 
@@ -123,15 +123,15 @@ def test_damaged_newest_checkpoint_falls_back_to_the_previous_one(tmp_path, repo
     damaged = Experiment.create(str(cfg), str(tmp_path / "damaged"), {"generations": 4}, quiet=True)
     damaged.run_all()  # checkpoints of generations 2 and 4
     damaged.close()
-    newest = damaged.run.ckpt_dir / "gen-00004.pkl"
+    newest = damaged.run.ckpt_dir / "gen-00004.json.gz"
     newest.write_bytes(newest.read_bytes()[:1000])  # a copy cut short
-    assert os.path.getsize(damaged.run.ckpt_dir / "gen-00002.pkl") > 1000
+    assert os.path.getsize(damaged.run.ckpt_dir / "gen-00002.json.gz") > 1000
 
     exp = Experiment.resume(str(tmp_path / "damaged"), quiet=True, generations=6)
     err = capsys.readouterr().err
     assert exp.search.generation == 2
-    assert err.count("\n") == 1 and "damaged checkpoint" in err
-    assert "gen-00004.pkl (UnpicklingError); resuming from gen-00002.pkl" in err
+    assert err.count("\n") == 1 and err.startswith("sgr: warning: skipped gen-00004.json.gz (damaged, ")
+    assert err.endswith("resuming from gen-00002.json.gz\n")
     exp.run_all()
     exp.close()
     assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))
@@ -143,13 +143,13 @@ def test_no_usable_checkpoint_is_one_error_line(tmp_path, repo_root):
     exp = Experiment.create(str(cfg), str(run.path), {}, quiet=True)
     exp.run_all()
     exp.close()
-    for f in run.ckpt_dir.glob("gen-*.pkl"):
-        f.write_bytes(b"not a pickle")
+    for f in run.ckpt_dir.glob("gen-*.json.gz"):
+        f.write_bytes(b"not a checkpoint")
     proc = sgr("evolve", "--resume", str(run.path))
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 2
     assert err.startswith("sgr: error: no usable checkpoint") and err.count("\n") == 1, err
-    assert "gen-00001.pkl" in err and "gen-00002.pkl" in err
+    assert "gen-00001.json.gz" in err and "gen-00002.json.gz" in err
 
 
 def test_a_finished_run_is_extended_exactly_by_resume_with_more_generations(tmp_path, repo_root, capsys):
@@ -192,7 +192,7 @@ def test_run_files_get_the_permissions_of_the_umask(tmp_path, repo_root):
         os.umask(old)
     files = [f for f in (tmp_path / "run").rglob("*") if f.is_file()]
     assert {f.name for f in files} >= {"config.yaml", "neat.ini", "generations.csv", "champion.json",
-                                       "gen-00001.pkl"}
+                                       "gen-00001.json.gz"}
     assert {oct(f.stat().st_mode & 0o777) for f in files} == {"0o644"}
 
 
@@ -270,24 +270,3 @@ def test_generations_csv_is_appended_and_a_row_cut_short_is_no_row(tmp_path, rep
     lines = csv_path.read_text().splitlines()
     assert [r["generation"] for r in exp.run.rows()] == ["1", "2", "3", "4"]  # counted from 1
     assert len(lines) == 5 and all(line.count(",") == len(COLUMNS) - 1 for line in lines)
-
-
-def test_a_checkpoint_naming_the_old_module_paths_still_loads(tmp_path, repo_root, monkeypatch):
-    """Checkpoints written before evolve/ was split into sub-packages pickled our genome classes
-    as evolve.genome.*; they must load into the classes' new home."""
-    import evolve.search.genome as genome_module
-    from evolve.search.genome import BodyAwareGenome, FlexibleReproduction
-
-    cfg = write_config(tmp_path, repo_root, "sgr", generations=1, pop_size=8)
-    exp = Experiment.create(str(cfg), str(tmp_path / "run"), {}, quiet=True)
-    exp.close()
-    state = exp.state()
-    with monkeypatch.context() as m:  # pickle as the old layout did
-        m.setitem(sys.modules, "evolve.genome", genome_module)
-        m.setattr(BodyAwareGenome, "__module__", "evolve.genome")
-        m.setattr(FlexibleReproduction, "__module__", "evolve.genome")
-        old = pickle.dumps(state)
-    assert b"evolve.genome" in old and b"evolve.search.genome" not in old
-    (exp.run.ckpt_dir / "gen-00000.pkl").write_bytes(old)
-    loaded = RunDir(tmp_path / "run").latest_checkpoint()
-    assert all(type(g) is BodyAwareGenome for g in loaded["population"].values())

@@ -1,0 +1,45 @@
+"""What a run's checkpoint holds, as data: the NEAT search's state (evolve/search/state_codec.py)
+and the method's own (`Problem.state`), written by RunDir as gzipped JSON.
+
+    {"format": "sgr-checkpoint", "version": 1, "generation": g, "method": "sgr",
+     "search": {...}, "problem": {...}}
+
+Loading checks every field against the run's own config and neat-python INI before anything is
+built from it, and never unpickles, imports or calls anything the file names: a checkpoint can
+hold numbers, strings and lists, not code.
+"""
+
+from __future__ import annotations
+
+from evolve.methods import METHODS
+from evolve.runs.rundir import RunDir
+from evolve.search.neat_ini import load_neat_config
+from evolve.search.state_codec import StateError, decode_search_state, encode_search_state
+
+
+def checkpoint_data(search, problem) -> dict:
+    """A checkpoint's data (without format and generation, which RunDir adds) of a NeatSearch
+    and its method's Problem."""
+    return {"method": problem.name, "search": encode_search_state(search.state()),
+            "problem": problem.state()}
+
+
+def decode_checkpoint(data: dict, cfg: dict, neat_config) -> dict:
+    """A checkpoint's data as the state `Experiment` restores from: the search's (neat-python
+    objects rebuilt from `neat_config`) with the method's under "problem"; StateError naming the
+    first field that is not as written."""
+    if data.get("method") != cfg["method"]:
+        raise StateError(f"checkpoint of method {data.get('method')!r}, the run's is {cfg['method']!r}")
+    state = decode_search_state(data.get("search"), neat_config)
+    if state["generation"] != data["generation"]:
+        raise StateError("search.generation differs from the checkpoint's generation")
+    state["problem"] = METHODS[cfg["method"]].decode_state(data.get("problem"), cfg)
+    return state
+
+
+def load_checkpoint(run: RunDir, cfg: dict | None = None) -> dict | None:
+    """The newest usable checkpoint of `run`, decoded (RunDir.latest_checkpoint: damaged ones are
+    skipped with one warning line); None when there is none."""
+    cfg = run.config() if cfg is None else cfg
+    neat_config = load_neat_config(run.path / "neat.ini")
+    return run.latest_checkpoint(lambda data: decode_checkpoint(data, cfg, neat_config))
