@@ -1,33 +1,62 @@
 #!/usr/bin/env bash
-# GPU readiness in one short run (not run by CI: this project's CI has no GPU).
-#   bash bench/gpu_check.sh            # from the repository root, venv at .venv (README's install)
-# 1. physics validation on the GPU: `sgr validate` of the recorded evogym returns and traces of
-#    the paper's 4 tasks and of the returns of all 32 tasks (tests/data/evogym32: the kernel that
-#    sweeps and prunes contact pairs runs for BridgeWalker, CaveCrawler, Climber-v1, Traverser);
-#    every figure is printed beside the CPU's (the same command with SGR_ARCH=cpu), and the script
-#    fails when a task's median return error on the GPU exceeds 1e-9 (the CPU's are <= 7e-11)
-# 2. `sgr bench` on Walker-v0 at B = 1024, 8192 and 65536 on the GPU (robot-steps/s), 50 steps
-# Dry run of the script itself on a CPU: SGR_ARCH_GPU=cpu SIZES=64 bash bench/gpu_check.sh
-# Writes everything to ${OUT:-gpu-check}/ and prints a summary; exit 1 on a failed check.
+# GPU readiness in one command on a bare GPU machine (Python 3.12, no network, no taichi): not run
+# by CI, whose machines have no GPU. From the repository root, with device-wheels/ beside it
+# (bash bench/device_wheels.sh, here, before sending the tree):
+#   bash bench/gpu_check.sh
+# 1. installs the carried wheels offline (pip --no-index --target) and puts them and the project on
+#    PYTHONPATH: nothing is built, nothing downloaded;
+# 2. the GPU against this machine's own CPU backend on all 32 tasks (bench/arch_returns.py: random
+#    5x5 robots, open-loop actions; fails when a task's median |return difference| exceeds 1e-9);
+# 3. the GPU against evogym's recorded data that travelled (`sgr validate` of each folder under
+#    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
+#    evogym| exceeds 1e-9 on the GPU;
+# 4. `sgr bench` on Walker-v0 at B = 1024, 8192 and 65536 (robot-steps/s).
+# Everything goes to $OUT (default gpu-check/) as JSON and text, with a summary at the end; exit 1
+# on a failed check. Rehearsal on a CPU (what bench/gpu_rehearsal.sh does):
+#   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 PY=/path/to/python3.12 bash bench/gpu_check.sh
 set -euo pipefail
-PY=${PY:-.venv/bin/python}
+cd "$(dirname "$0")/.."
+PY=${PY:-python3}
 OUT=${OUT:-gpu-check}
+WHEELS=${WHEELS:-device-wheels}
+GPU=${SGR_ARCH_GPU:-cuda}
 mkdir -p "$OUT"
-export SGR_ARCH=${SGR_ARCH_GPU:-cuda}
-"$PY" -c "import tsim.runtime as r; r.init(); print('taichi arch:', r.ti.lang.impl.current_cfg().arch)"
+start=$(date +%s)
+if ! "$PY" -c "import taichi, neat, gymnasium" >/dev/null 2>&1; then
+  [ -d "$WHEELS" ] || { echo "gpu_check: no taichi here and no $WHEELS/ (run bench/device_wheels.sh first)"; exit 1; }
+  SITE=$(mktemp -d)
+  "$PY" -m pip install -q --no-index --no-deps --target "$SITE" "$WHEELS"/*.whl
+  export PYTHONPATH="$SITE${PYTHONPATH:+:$PYTHONPATH}"
+fi
+export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
+SGR_ARCH=$GPU "$PY" -c "import tsim.runtime as r; print('taichi arch:', r.init())" | tee "$OUT/arch.txt"
+"$PY" -c "import numpy, taichi; print('python', __import__('sys').version.split()[0], 'numpy', numpy.__version__, 'taichi', taichi.__version__)" | tee -a "$OUT/arch.txt"
+command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv | tee -a "$OUT/arch.txt" || true
+
+fail=0
+# 2. GPU against the CPU on every task
+SGR_ARCH=cpu "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_cpu.json"
+SGR_ARCH=$GPU "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_gpu.json"
+"$PY" bench/arch_returns.py --compare "$OUT/arch_cpu.json" "$OUT/arch_gpu.json" | tee "$OUT/arch_compare.txt" || fail=1
+
+# 3. recorded evogym data that travelled
 for d in tests/data/returns tests/data/traces tests/data/evogym32; do
+  [ -d "$d" ] || continue
   name=$(basename "$d")
   SGR_ARCH=cpu "$PY" -m evolve.cli validate --json "$d" > "$OUT/validate_${name}_cpu.json"
-  "$PY" -m evolve.cli validate --json "$d" > "$OUT/validate_${name}_gpu.json"
+  SGR_ARCH=$GPU "$PY" -m evolve.cli validate --json "$d" > "$OUT/validate_${name}_gpu.json"
 done
-"$PY" - "$OUT" <<'PY'
-import json, sys
+"$PY" - "$OUT" <<'PY' | tee "$OUT/validate_summary.txt" || fail=1
+import json, os, sys
 out = sys.argv[1]
-bad = []
+bad, seen = [], 0
 for name in ("returns", "traces", "evogym32"):
+    if not os.path.exists(f"{out}/validate_{name}_gpu.json"):
+        continue
     cpu = json.load(open(f"{out}/validate_{name}_cpu.json"))
     gpu = json.load(open(f"{out}/validate_{name}_gpu.json"))
     for task, g in gpu["tasks"].items():
+        seen += 1
         c = cpu["tasks"][task]
         keys = [k for k in g if isinstance(g[k], float) and ("err" in k or "diff" in k)]
         print(name, task, " ".join(f"{k} gpu {g[k]:.3g} cpu {c[k]:.3g}" for k in keys))
@@ -36,8 +65,12 @@ for name in ("returns", "traces", "evogym32"):
 if bad:
     print("FAILED:", "; ".join(bad))
     sys.exit(1)
-print("validation on the GPU: ok")
+print(f"evogym's recorded data on the GPU: ok ({seen} task records)")
 PY
+
+# 4. throughput
 for B in ${SIZES:-1024 8192 65536}; do
-  "$PY" -m evolve.cli bench --task Walker-v0 --robots "$B" --steps 50 --json | tee "$OUT/bench_$B.json"
+  SGR_ARCH=$GPU "$PY" -m evolve.cli bench --task Walker-v0 --robots "$B" --steps 50 --json | tee "$OUT/bench_$B.json"
 done
+echo "gpu_check: $(( $(date +%s) - start )) s; $([ $fail = 0 ] && echo ok || echo FAILED)" | tee "$OUT/summary.txt"
+exit $fail

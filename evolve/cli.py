@@ -116,7 +116,7 @@ def _evolve(args: argparse.Namespace) -> int:
     if args.resume:
         if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
             raise ValueError("--resume continues a run with its own config; only --generations "
-                             "(to extend it), --workers and --quiet go with it")
+                             "(to extend it), --workers, --trust-imports and --quiet go with it")
         exp = Experiment.resume(_resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
@@ -190,6 +190,9 @@ def _sweep(args: argparse.Namespace) -> int:
         config = find_config(args.config, "sweep file")  # a path, or a packaged sweep's name (paper)
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"sweep-{config.stem}-{stamp}")
+        from tasks.registry import trust_imports
+
+        trust_imports()  # the user names this sweep file: its imports go to the run processes trusted
         sweep = Sweep.create(config, out)
         print(f"sweep directory: {out}")
     if args.backend == "ray":
@@ -355,8 +358,16 @@ def main(argv: list[str] | None = None) -> int:
     cc.add_argument("--trust-pickle", action="store_true",
                     help="required: loading a pickle runs any code in it; say you trust the folder")
     cc.set_defaults(fn=_convert_checkpoints)
+    trust_help = ("import the code (imports:) that a run or sweep folder names even where someone else "
+                  "could have written it; say you trust the folder")
+    for parser in (e, sw, rp, r):
+        parser.add_argument("--trust-imports", action="store_true", help=trust_help)
     register_task_commands(sub)
     args = p.parse_args(argv)
+    if getattr(args, "trust_imports", False):
+        from tasks.registry import trust_imports
+
+        trust_imports()
     stdout, sys.stdout = sys.stdout, _ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
     try:
         return args.fn(args)

@@ -2,9 +2,8 @@
 `BatchEnv`, gymnasium's `sgr/<name>`, configs, sweeps and rollout workers all take it.
 
 Rollout workers are other processes (`python -m evolve.rollout`, or Ray actors) that know only
-sgr's tasks: a registered spec travels with each job as a cloudpickle (`spec_blob`), which carries
-functions defined in your script or in your own modules by value, and the worker registers it
-(`load_spec_blob`) before it simulates.
+sgr's tasks: a registered spec travels with each job through the pipe
+(evolve/rollout/worker.py, `spec_blob`).
 """
 
 from __future__ import annotations
@@ -12,19 +11,17 @@ from __future__ import annotations
 import hashlib
 import importlib
 import importlib.util
-import pickle
+import os
 import sys
-import sysconfig
 from pathlib import Path
 
-import cloudpickle
 import gymnasium as gym
 
 from tasks.spec import TaskSpec
 from tasks.specs import BUILTIN, TASKS, task_world
 
-_BLOBS: dict[str, tuple[TaskSpec, bytes]] = {}  # name -> (spec, its pickle), made once per spec
 _SGR = ("tasks", "tsim", "evolve")
+_TRUST_ALL = False  # --trust-imports: import code named in any file, whoever wrote it
 
 
 def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
@@ -42,7 +39,6 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
                          "replaces it")
     TASKS[spec.name] = spec
     task_world.cache_clear()
-    _BLOBS.pop(spec.name, None)
     env_id = f"sgr/{spec.name}"
     if env_id in gym.registry:
         del gym.registry[env_id]
@@ -51,58 +47,43 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
     return spec
 
 
-def _own_module(module: object) -> bool:
-    """Whether a module is the user's own code: not sgr's, not the standard library's and not an
-    installed package's (those import the same way in a worker; the user's may not be on its path)."""
-    name = getattr(module, "__name__", "")
-    f = getattr(module, "__file__", None)
-    if not f or name == "__main__" or name.split(".")[0] in _SGR:
-        return False
-    f = Path(f).resolve()
-    installed = {sysconfig.get_paths()[k] for k in ("stdlib", "platstdlib", "purelib", "platlib")}
-    return not any(f.is_relative_to(Path(p).resolve()) for p in installed)
+def trust_imports(on: bool = True) -> None:
+    """`--trust-imports`: import the code that run and sweep folders name whoever wrote them."""
+    global _TRUST_ALL
+    _TRUST_ALL = on
 
 
-def spec_blob(name: str) -> bytes | None:
-    """The pickled spec of a registered task, for a worker process; None for sgr's own tasks (every
-    process knows them). Functions of the user's own modules are pickled by value."""
-    if name in BUILTIN or name not in TASKS:
-        return None
-    spec = TASKS[name]
-    cached = _BLOBS.get(name)
-    if cached is not None and cached[0] is spec:
-        return cached[1]
-    fns = [spec.reward, spec.termination, spec.state, spec.placement, *(b.fn for b in spec.observation)]
-    for mod in {sys.modules.get(getattr(f, "__module__", None) or "") for f in fns if f is not None}:
-        if mod is not None and _own_module(mod):
-            cloudpickle.register_pickle_by_value(mod)
-    blob = cloudpickle.dumps(spec, protocol=pickle.HIGHEST_PROTOCOL)
-    _BLOBS[name] = (spec, blob)
-    return blob
+def imports_trusted() -> bool:
+    """Whether `trust_imports()` was called in this process (a sweep passes it on to its runs)."""
+    return _TRUST_ALL
 
 
-_LOADED: dict[str, bytes] = {}
+def _yours(path: Path) -> bool:
+    """Whether only you can have written `path`: you own it and neither group nor others may write
+    it (git's rule for repositories, applied to the files that name code)."""
+    st = path.stat()
+    return st.st_uid == os.getuid() and not st.st_mode & 0o022
 
 
-def load_spec_blob(blob: bytes | None) -> None:
-    """In a worker: register the spec `spec_blob` made (once per distinct blob)."""
-    if blob is None:
-        return
-    spec = pickle.loads(blob)
-    if _LOADED.get(spec.name) != blob:
-        register(spec, replace=True)
-        _LOADED[spec.name] = blob
-
-
-def import_tasks(ref: str, base: Path | None = None) -> None:
+def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = None) -> None:
     """Import the module that registers your tasks: a module name (`mytasks`) or a .py file
     (relative to `base`, default the current folder). Importing the same file twice runs it once.
-    ValueError naming `ref` when it cannot be imported."""
+    `named_in`: the file in a run or sweep folder that names `ref` (resuming, reporting); its code
+    is imported only when that file and the .py are yours alone (`_yours`) or after
+    `trust_imports()`, since a folder someone else could write must not run code. ValueError naming
+    `ref` when it cannot or may not be imported."""
+    path = None
     if ref.endswith(".py"):
         path = Path(ref) if Path(ref).is_absolute() else (base or Path.cwd()) / ref
         path = path.resolve()
         if not path.is_file():
             raise ValueError(f"task module {ref!r}: file not found: {path}")
+    if named_in is not None and not _TRUST_ALL:
+        others = [p for p in (Path(named_in), path) if p is not None and not _yours(p)]
+        if others:
+            raise ValueError(f"{named_in} names code to import ({ref}) and {others[0]} could have been "
+                             "written by someone else: if you trust it, add --trust-imports")
+    if path is not None:
         name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
         if name in sys.modules:
             return

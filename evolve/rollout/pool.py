@@ -26,9 +26,8 @@ import numpy as np
 
 from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.robust import EpisodeNoise
-from evolve.rollout.worker import read_frame, run_chunk, write_frame
+from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
 from tasks.env import BatchEnv
-from tasks.registry import spec_blob
 
 # factory(env, items) -> batched policy for the robots of env; items[i] drives robot i. With
 # workers > 1 it is pickled: a module-level function or a functools.partial of one.
@@ -63,7 +62,7 @@ def balanced_chunks(costs: Sequence[float], n: int) -> list[list[int]]:
 def chunk_job(task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
               episode_steps: int | str | None, noise: EpisodeNoise | None, chunk: list[int]) -> tuple:
     """`run_chunk`'s arguments for the robots `chunk` of a batch (what a worker is sent); a task
-    registered in this process's code travels with the job (`tasks.registry.spec_blob`)."""
+    registered in this process's code travels with the job (`evolve.rollout.worker.spec_blob`)."""
     return (task, [bodies[i] for i in chunk], [items[i] for i in chunk], factory, episode_steps,
             None if noise is None else noise.take(chunk), spec_blob(task))
 

@@ -11,23 +11,76 @@ import pickle
 import signal
 import struct
 import sys
+import sysconfig
 from collections.abc import Sequence
+from pathlib import Path
 from typing import BinaryIO
 
+import cloudpickle
 import numpy as np
 
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import EpisodeNoise
-from tasks.registry import load_spec_blob
+from tasks.registry import register
+from tasks.specs import BUILTIN, TASKS
 
 
 def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
               noise: EpisodeNoise | None = None, spec: bytes | None = None) -> np.ndarray:
     """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations);
-    `spec` is a task registered in the parent's code (`tasks.registry.spec_blob`), registered here
+    `spec` is a task registered in the parent's code (`spec_blob`), registered here
     first."""
     load_spec_blob(spec)
     return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise)
+
+
+_SGR = ("tasks", "tsim", "evolve")
+_BLOBS: dict[str, tuple[object, bytes]] = {}  # name -> (spec, its pickle), made once per spec
+
+
+def _own_module(module: object) -> bool:
+    """Whether a module is the user's own code: not sgr's, not the standard library's and not an
+    installed package's (those import the same way in a worker; the user's may not be on its path)."""
+    name = getattr(module, "__name__", "")
+    f = getattr(module, "__file__", None)
+    if not f or name == "__main__" or name.split(".")[0] in _SGR:
+        return False
+    f = Path(f).resolve()
+    installed = {sysconfig.get_paths()[k] for k in ("stdlib", "platstdlib", "purelib", "platlib")}
+    return not any(f.is_relative_to(Path(p).resolve()) for p in installed)
+
+
+
+
+def spec_blob(name: str) -> bytes | None:
+    """The pickled spec of a registered task, for a worker process; None for sgr's own tasks (every
+    process knows them). Functions of the user's own modules are pickled by value."""
+    if name in BUILTIN or name not in TASKS:
+        return None
+    spec = TASKS[name]
+    cached = _BLOBS.get(name)
+    if cached is not None and cached[0] is spec:
+        return cached[1]
+    fns = [spec.reward, spec.termination, spec.state, spec.placement, *(b.fn for b in spec.observation)]
+    for mod in {sys.modules.get(getattr(f, "__module__", None) or "") for f in fns if f is not None}:
+        if mod is not None and _own_module(mod):
+            cloudpickle.register_pickle_by_value(mod)
+    blob = cloudpickle.dumps(spec, protocol=pickle.HIGHEST_PROTOCOL)
+    _BLOBS[name] = (spec, blob)
+    return blob
+
+
+_LOADED: dict[str, bytes] = {}
+
+
+def load_spec_blob(blob: bytes | None) -> None:
+    """In a worker: register the spec `spec_blob` made (once per distinct blob)."""
+    if blob is None:
+        return
+    spec = pickle.loads(blob)
+    if _LOADED.get(spec.name) != blob:
+        register(spec, replace=True)
+        _LOADED[spec.name] = blob
 
 
 def write_frame(stream: BinaryIO, obj) -> None:

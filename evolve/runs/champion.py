@@ -40,7 +40,7 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
         from tasks.registry import import_tasks
 
         for ref in RunDir(run_dir).config().get("imports") or ():
-            import_tasks(ref)
+            import_tasks(ref, named_in=Path(run_dir) / "config.yaml")
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:

@@ -105,7 +105,7 @@ class Experiment:
         run = RunDir(out)
         cfg = run.config()
         for ref in cfg.get("imports") or ():  # the modules that register the run's own task
-            import_tasks(ref)
+            import_tasks(ref, named_in=run.path / "config.yaml")
         run.lock()
         try:
             state = load_checkpoint(run, cfg)

@@ -17,20 +17,20 @@ import time
 from pathlib import Path
 
 from evolve.rollout.ray_cluster import connect
-from evolve.runs.sweep import BackendLost, die_with_parent
+from evolve.runs.sweep import BackendLost, die_with_parent, trust_flag
 
 CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
 HEALTH_EVERY_S = 1.0
 
 
-def _run_on_node(run_path: str, workers: int) -> int:
+def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> int:
     """A Ray task: advance one run to its end in a subprocess on this node; its exit code."""
     root = str(Path(__file__).resolve().parents[2])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
     with open(Path(run_path) / "log.txt", "ab") as log:
         # the run dies with this worker (a cancelled task, a sweep that stopped): no run goes on alone
         proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--resume", run_path,
-                                 "--workers", str(workers), "--quiet"],
+                                 "--workers", str(workers), "--quiet", *flags],
                                 stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
     return proc.wait()
 
@@ -62,7 +62,7 @@ class RayBackend:
         self._wait_for_cluster()  # a task submitted to a cluster that is gone could wait for ever
         path = sweep.run_dir(run).path.resolve()  # the same path on every node
         self._logs[run] = path / "log.txt"
-        self.procs[run] = self._task.remote(str(path), self.cpus_per_run)
+        self.procs[run] = self._task.remote(str(path), self.cpus_per_run, tuple(trust_flag()))
 
     def poll(self) -> dict:
         """Runs that ended since the last call, with their exit codes (-1: the task failed; why is

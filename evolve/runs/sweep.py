@@ -67,10 +67,11 @@ def load_sweep(path: str | Path) -> dict:
     return check_sweep(read_yaml(path, "sweep file"), str(path), path.parent)
 
 
-def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
+def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: Path | None = None) -> dict:
     """Check a parsed sweep and resolve it (a seed count becomes a list, `configs` an absolute
     folder, relative to `base` or the cwd); every run's config is loaded, so a bad one fails before
-    any run starts. ValueError naming `source`."""
+    any run starts. ValueError naming `source`. `named_in`: the sweep folder's file the sweep was read
+    from (its imports are code: `tasks.registry.import_tasks`)."""
     if not isinstance(raw, dict):
         raise _fail(source, "a sweep must be a mapping with methods, tasks and seeds")
     unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides", "imports"}
@@ -88,7 +89,7 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None) -> dict:
                else m for m in imports]
     for ref in imports:  # the user's tasks are registered before the task names are checked
         try:
-            import_tasks(ref)
+            import_tasks(ref, named_in=named_in)
         except ValueError as exc:
             raise _fail(source, f"key 'imports': {exc}") from None
     if not isinstance(methods, list) or not methods or any(m not in METHODS for m in methods):
@@ -180,7 +181,7 @@ class Sweep:
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        sweep = cls(out, check_sweep(read_yaml(f), str(f)))
+        sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f))
         old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
                and not sweep.run_dir(r).checkpoints()]
         if old:  # refused before any run starts (each would fail, and be retried, alone)
@@ -229,6 +230,13 @@ class BackendLost(RuntimeError):
     """The machines a sweep runs on are gone (a whole Ray cluster): the sweep stops, to be resumed."""
 
 
+def trust_flag() -> list[str]:
+    """`--trust-imports` for a run's process when this sweep was trusted with its imports."""
+    from tasks.registry import imports_trusted
+
+    return ["--trust-imports"] if imports_trusted() else []
+
+
 def die_with_parent() -> None:
     """In a run's process: SIGKILL when the sweep process dies, so a killed sweep leaves no run
     going on alone (Linux; elsewhere the run's lock still keeps a resumed sweep from doubling it)."""
@@ -256,7 +264,7 @@ class LocalBackend:
         log = open(sweep.run_dir(run).path / "log.txt", "ab")  # noqa: SIM115 (closed by the process)
         self.procs[run] = subprocess.Popen(
             [sys.executable, "-m", "evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
-             "--workers", str(workers), "--quiet"],
+             "--workers", str(workers), "--quiet", *trust_flag()],
             stdout=log, stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
         log.close()
 

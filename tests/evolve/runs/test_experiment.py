@@ -143,7 +143,7 @@ def test_ctrl_c_writes_a_checkpoint_and_every_generation_number_agrees(tmp_path,
     console = [int(g) for g in re.findall(r"^gen +(\d+)/1000", out, re.M)]
     assert console == list(range(1, n + 1))
     assert f"stopped after generation {n} of 1000, with a checkpoint" in err
-    assert (run.ckpt_dir / f"gen-{n:05d}.pkl").is_file()  # written at the stop, not by the schedule
+    assert (run.ckpt_dir / f"gen-{n:05d}.json.gz").is_file()  # written at the stop, not by the schedule
     champ = json.loads((run.path / "champion.json").read_text())
     first_best = next(int(r["generation"]) for r in rows if float(r["best"]) == champ["fitness"])
     assert champ["generation"] == first_best

@@ -66,3 +66,31 @@ def test_an_imports_entry_that_fails_names_the_config_and_the_file(tmp_path):
     r = sgr("evolve", "--config", "run.yaml", "--out", "r", cwd=tmp_path)
     assert r.returncode == 2 and r.stderr.count("\n") == 1, r.stderr
     assert "run.yaml: key 'imports'" in r.stderr and "missing.py" in r.stderr
+
+
+def test_code_named_by_a_folder_others_could_write_runs_only_with_trust_imports(tmp_path):
+    """Resuming, reporting or rendering a run folder imports the code its config names only when
+    that config and the .py are yours alone (git's ownership rule); a .py that others may write is
+    refused in one line naming --trust-imports, and nothing of it runs."""
+    marker = tmp_path / "ran"
+    (tmp_path / "my_tasks.py").write_text(TASK_FILE + f"\nopen({str(marker)!r}, 'a').close()\n")
+    os.chmod(tmp_path / "my_tasks.py", 0o644)
+    (tmp_path / "run.yaml").write_text(yaml.safe_dump({**RUN, "workers": 1}))
+    assert sgr("evolve", "--config", "run.yaml", "--out", "r", "--quiet", cwd=tmp_path).returncode == 0
+    assert marker.exists()  # the user named the config: its code ran
+    marker.unlink()
+    r = sgr("evolve", "--resume", "r", "--generations", "3", "--quiet", cwd=tmp_path)
+    assert r.returncode == 0 and marker.exists(), r.stderr  # your own folder: as before
+
+    marker.unlink()
+    os.chmod(tmp_path / "my_tasks.py", 0o664)  # a colleague (the group) could have changed it
+    for args in (("evolve", "--resume", "r", "--generations", "4", "--quiet"),
+                 ("render", "r", "--out", "c.gif"), ("report", ".", "--replays", "1", "--no-gallery")):
+        r = sgr(*args, cwd=tmp_path)
+        assert r.returncode == 2 and r.stderr.count("\n") == 1, (args, r.stderr)
+        assert "names code to import" in r.stderr and "--trust-imports" in r.stderr, r.stderr
+        assert not marker.exists(), args
+    assert len(RunDir(tmp_path / "r").rows()) == 3
+    r = sgr("evolve", "--resume", "r", "--generations", "4", "--quiet", "--trust-imports", cwd=tmp_path)
+    assert r.returncode == 0 and marker.exists(), r.stderr
+    assert len(RunDir(tmp_path / "r").rows()) == 4
