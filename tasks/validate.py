@@ -230,7 +230,8 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
             "term_step": term_step, "term_step_evogym": z["term_step"],
             "term_agree": int((term_step == z["term_step"]).sum()),
             "obs_len_ok": all(same_len), "obs_err": float(max(obs_err)),
-            "obs_err_orientation": float(max(obs_err_ort)), "com_err_max": float(max(com_err)),
+            "obs_err_orientation": float(max(obs_err_ort)), "com_err": np.array(com_err),
+            "com_err_max": float(max(com_err)),
             "com_err_median": float(np.median(com_err))}
 
 
