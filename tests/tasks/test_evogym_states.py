@@ -75,17 +75,17 @@ def replay(z, case: dict) -> dict:
     env.observe()
     moved = {name: (env.sim.robot_pos(0) if name == "robot" else env.sim.object_pos(0, name))
              for name, _, _ in case["moves"]}
-    package = case["task"] == "Catcher-v0"
+    tracked = env.spec.tracked[0] if env.spec.tracked else None  # the package or the beam
     rewards, obs, coms = [], [], [env.sim.robot_com()[0]]
-    other = [env.sim.object_pos(0, "package").mean(axis=1)] if package else []
+    other = [env.sim.object_pos(0, tracked).mean(axis=1)] if tracked else []
     term_step = -1
     for t, a in enumerate(z[pre + "actions"]):
         o, r, term, _, _ = env.step([a])
         rewards.append(r[0])
         obs.append(o[0, :env.obs_dims[0]])
         coms.append(env.sim.robot_com()[0])
-        if package:
-            other.append(env.sim.object_pos(0, "package").mean(axis=1))
+        if tracked:
+            other.append(env.sim.object_pos(0, tracked).mean(axis=1))
         if term[0]:
             term_step = t
             break
