@@ -1,13 +1,16 @@
 """Catch rate of the fast tests: apply one-line breaks, one at a time, to a temporary copy of the
 tree, run the fast test files on each, and record which files fail (catch it).
 
-    .venv/bin/python bench/break_catch.py                  # every break, every file (~30 min)
+    .venv/bin/python bench/break_catch.py                  # every break: its guards + fast files
+    .venv/bin/python bench/break_catch.py --all            # every break, every file
     .venv/bin/python bench/break_catch.py --only drag --files tests/tsim/test_physics.py
 
 Each break replaces one exact line fragment (found exactly once) in one file. Each names the test
-files that claim to guard it; a break that none of them catches is reported as MISSED and the
-script exits 1. The table (markdown) goes to stdout and, with --out, to a file; docs/VALIDATION.md
-holds the last run's. Taichi's offline cache goes to a fresh folder per break, so no kernel
+files that claim to guard it; by default a break runs the two quickest files (test_physics.py,
+test_env_rules.py) and its guards ("-" in the table: not run). A break that none of its guards
+catches is reported as MISSED and the script exits 1. Each file stops at its first failure (-x).
+The table (markdown) goes to stdout and, with --out, to a file; docs/VALIDATION.md holds the last
+run's. Taichi's offline cache goes to a fresh folder per break, so no kernel
 compiled from the unbroken source is reused.
 """
 
@@ -125,6 +128,7 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--only", nargs="*", help="break names (default: all)")
     ap.add_argument("--files", nargs="*", help="test files (default: the fast ones)")
+    ap.add_argument("--all", action="store_true", help="run every fast file on every break")
     ap.add_argument("--out", help="also write the markdown table here")
     args = ap.parse_args()
     breaks = [b for b in BREAKS if not args.only or b.name in args.only]
@@ -144,7 +148,9 @@ def main() -> int:
             if str(tree) not in where:
                 raise SystemExit(f"the copy's packages are not the ones imported: {where}")
             caught = {}
-            for f in files:
+            run = files if args.files or args.all else [f for f in files
+                                                        if f in FILES[:2] or f in b.guards]
+            for f in run:
                 c, sec, first = run_file(tree, f, env)
                 caught[f] = (c, first)
                 print(f"{b.name:20s} {f:42s} {'CAUGHT' if c else 'passed'} {sec:5.0f} s {first}",
@@ -156,7 +162,8 @@ def main() -> int:
     head = "| break | file changed | " + " | ".join(Path(f).name for f in files) + " | guarded by |"
     lines = [head, "|" + "---|" * (len(files) + 3)]
     for b, caught, ok in rows:
-        cells = ["**caught**" if caught[f][0] else "passes" for f in files]
+        cells = ["-" if f not in caught else "**caught**" if caught[f][0] else "passes"
+                 for f in files]
         guards = ", ".join(Path(g).name for g in b.guards)
         lines.append(f"| `{b.name}`: {b.what} | `{b.file}` | " + " | ".join(cells)
                      + f" | {guards}{'' if ok else ' (MISSED)'} |")

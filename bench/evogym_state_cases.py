@@ -2,16 +2,23 @@
 robots of `evogym_reference.py` never reach: a robot's COM just past / just short of a goal
 (BridgeWalker-v0, CaveCrawler-v0, Climber-v0, Climber-v1, Traverser-v0), a robot standing on
 Traverser-v0's loose blocks (floor sight over moving objects), Catcher-v0's package falling through
-y = 0.5, a robot left of the start of Walker-v0's ground, on evogym's built-in ground plane (y < 0).
+y = 0.5, a robot left of the start of Walker-v0's ground, on evogym's built-in ground plane (y < 0);
+and (issue 28) every other reward and termination branch of every task on both sides of its line:
+the goals of 8 more tasks, falls through a height line (Lifter-v0's robot below 0.3, GapJumper-v0
+and PlatformJumper-v0 below 0.4, Carrier-v1's package below 0.4), x lines (Flipper-v0 0.1,
+Thrower-v0 0, the beams' 0.2, Carrier-v1's package at 2.0), both orientation limits of the five
+tasks that end when the robot falls over, BidirectionalWalker-v0's 0.2 to a goal, and Pusher's
+package put into the ground plane (which throws it above y = 0 within one step).
 
 Run under the evogym venv (sgr never imports evogym):
 
     /root/.cache/evogym-venv/bin/python bench/evogym_state_cases.py
 
-Each case: the body, seed and actions of trace case 1 of the task (tests/data/evogym32), a fresh
-env, `reset` as in `evogym_reference.py`, then evogym's own `Sim.translate_object(dx, dy, name)`
-(the C++ simulator adds (dx, dy) to every point of the object and re-saves the time-0 snapshot)
-for each listed move, then `env.step(actions[t])` until termination or the case's step count.
+Each case: the body, seed and actions of trace case 1 of the task (tests/data/evogym32), or another
+body (BODIES) with the program of that seed, a fresh env, `reset` as in `evogym_reference.py`, then
+evogym's own `Sim.translate_object(dx, dy, name)` (the C++ simulator adds (dx, dy) to every point
+of the object and re-saves the time-0 snapshot) for each listed move, then `env.step(actions[t])`
+until termination or the case's step count.
 Writes tests/data/evogym32/state_cases.npz (deterministic bytes; README there has the keys).
 """
 
