@@ -36,7 +36,9 @@ def _npz(path: Path):
 def validate_traces(folder: Path) -> dict:
     """Replay every trace case of `folder` with evogym's recorded actions, one batch per task: per
     case COM (world units), step-0 observation and return errors; per task the median COM errors
-    and, with chaos_floor.json, evogym's own spread under tiny perturbations (chaos_median)."""
+    and, with chaos_floor.json, evogym's own spread under tiny perturbations (chaos_median); and
+    per case the largest observation error over the first 50 steps, the orientation entries apart
+    (`obs_err_max50`, `obs_err_orientation_max50`)."""
     index = _json(folder / "index.json")
     chaos_file = folder / "chaos_floor.json"
     chaos = _json(chaos_file) if chaos_file.exists() else None
@@ -53,10 +55,14 @@ def validate_traces(folder: Path) -> dict:
         com = np.zeros((len(data), steps + 1, 2))
         ret = np.zeros(len(data))
         com[:, 0] = env.sim.robot_com()
+        obs50 = [[o] for o in obs0]
         for t in range(steps):
             _, r, _, _, _ = env.step([z["actions"][t] for z in data])
             ret += r
             com[:, t + 1] = env.sim.robot_com()
+            if t < 50:
+                for w in range(env.n_worlds):
+                    obs50[w].append(env.robot_obs(w))
         errs_final, errs_50 = [], []
         for k, (c, z) in enumerate(zip(cases, data, strict=False)):
             err = np.linalg.norm(com[k] - z["com"], axis=1)
@@ -66,6 +72,16 @@ def validate_traces(folder: Path) -> dict:
                    "obs_err_step0": (float(np.abs(obs0[k] - z["obs"][0]).max())
                                      if len(obs0[k]) == z["obs"].shape[1] else float("inf")),
                    "return_err": float(abs(ret[k] - z["reward"].sum()))}
+            o = np.array(obs50[k])
+            if o.shape == z["obs"][:len(o)].shape:
+                d = np.abs(o - z["obs"][:len(o)])
+                oc = _orientation_columns(env, k)
+                keep = np.ones(d.shape[1], bool)
+                keep[oc] = False
+                row["obs_err_max50"] = float(d[:, keep].max())
+                row["obs_err_orientation_max50"] = float(d[:, oc].max()) if len(oc) else 0.0
+            else:
+                row["obs_err_max50"] = row["obs_err_orientation_max50"] = float("inf")
             cases_out.append(row)
             errs_final.append(row["com_err_final"])
             errs_50.append(row["com_err_max50"])
@@ -230,7 +246,8 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
             "term_step": term_step, "term_step_evogym": z["term_step"],
             "term_agree": int((term_step == z["term_step"]).sum()),
             "obs_len_ok": all(same_len), "obs_err": float(max(obs_err)),
-            "obs_err_orientation": float(max(obs_err_ort)), "com_err_max": float(max(com_err)),
+            "obs_err_orientation": float(max(obs_err_ort)), "com_err": np.array(com_err),
+            "com_err_max": float(max(com_err)),
             "com_err_median": float(np.median(com_err))}
 
 

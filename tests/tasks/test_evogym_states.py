@@ -1,13 +1,16 @@
 """Task branches the random robots of tests/data/evogym32 never reach (goals of BridgeWalker-v0,
 CaveCrawler-v0, Climber-v0/-v1 and Traverser-v0, Traverser-v0's floor sight over its blocks,
-Catcher-v0's package below y = 0.5, evogym's built-in ground plane y < 0), against evogym 2.0.0
-episodes that start from a moved state
+Catcher-v0's package below y = 0.5, evogym's built-in ground plane y < 0; and since issue 28 every
+other reward and termination branch of every task, both sides of its line, listed in
+test_evogym_branches.py and docs/VALIDATION.md), against evogym 2.0.0 episodes that start from a
+moved state
 (`state_cases.npz`, recorded by bench/evogym_state_cases.py; README there): evogym's own
-`Sim.translate_object` moved the robot (or Catcher-v0's package) right after reset, and we move ours
+`Sim.translate_object` moved the robot (or a package or beam) right after reset, and we move ours
 by the same (dx, dy) in `env.sim.state`, then replay the same actions.
 
 Per case: the moved points equal evogym's, and every step's reward, observation (floor and ceiling
-sight included), robot COM (and package COM) and the termination step match evogym. The goal cases
+sight included), robot COM (and the package's or beam's COM) and the termination step match
+evogym. The goal cases
 come in pairs, the COM put 0.005 (a twentieth of a voxel) past and short of the goal line, so a goal
 or top-of-pipe threshold off by a voxel in either direction fails one of them.
 """
@@ -75,17 +78,17 @@ def replay(z, case: dict) -> dict:
     env.observe()
     moved = {name: (env.sim.robot_pos(0) if name == "robot" else env.sim.object_pos(0, name))
              for name, _, _ in case["moves"]}
-    package = case["task"] == "Catcher-v0"
+    tracked = env.spec.tracked[0] if env.spec.tracked else None  # the package or the beam
     rewards, obs, coms = [], [], [env.sim.robot_com()[0]]
-    other = [env.sim.object_pos(0, "package").mean(axis=1)] if package else []
+    other = [env.sim.object_pos(0, tracked).mean(axis=1)] if tracked else []
     term_step = -1
     for t, a in enumerate(z[pre + "actions"]):
         o, r, term, _, _ = env.step([a])
         rewards.append(r[0])
         obs.append(o[0, :env.obs_dims[0]])
         coms.append(env.sim.robot_com()[0])
-        if package:
-            other.append(env.sim.object_pos(0, "package").mean(axis=1))
+        if tracked:
+            other.append(env.sim.object_pos(0, tracked).mean(axis=1))
         if term[0]:
             term_step = t
             break
