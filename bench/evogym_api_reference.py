@@ -1,0 +1,162 @@
+"""Record reference data for `sgr.evogym` (evogym's own API on sgr) from evogym itself.
+
+Runs ONLY under the evogym virtual environment (shared/tools/setup_evogym.sh: Python 3.10,
+evogym 2.0.0); sgr never imports this file and never depends on evogym. It writes
+tests/data/evogym_api/:
+
+  samples.json     evogym's `sample_robot` after `random.seed(s)`, s = 0..19 (5x5, default pd),
+                   one (4, 6) robot with a custom pd after random.seed(3), and 50 `draw`s of
+                   [0.2, 0.3, 0.5] after random.seed(5): a seeded script must sample the same robots.
+  world_ops.txt    what evogym prints for `world_ops` below (pretty_print, objects, errors) over
+                   tutorials/world_data/simple_environment.json (copied here).
+  simple_env.npz   evogym's tutorial env (tutorials/envs/simple_env.py over
+                   tutorials/world_data/simple_walker_env.json, copied into tests/data/evogym_api/)
+                   with the robot of random.seed(11): observation after reset and every step's
+                   observation, reward and done over 500 steps of actions
+                   a_j(t) = 1.1 + 0.45 sin(2 pi t / 37 + 0.7 j) (some outside [0.6, 1.6]: the env clips).
+  multi_world.npz  a world of our own (multi_world.json here): terrain, a box, a mixed object with
+                   fixed voxels, two robots; 300 EvoSim steps of sinusoids sent with set_action
+                   unclipped; every step's pos_at_time, vel_at_time, orientation of each object and
+                   unstable flag.
+
+    /root/.cache/evogym-venv/bin/python bench/evogym_api_reference.py --tutorials DIR
+
+where DIR is a copy of evogym's tutorials/ folder (fetch github:EvolutionGym/evogym).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import random
+import shutil
+import sys
+from pathlib import Path
+
+import numpy as np
+
+OUT = Path(__file__).resolve().parents[1] / "tests" / "data" / "evogym_api"
+
+
+def samples() -> None:
+    from evogym import draw, sample_robot
+    out = {"seeds": [], "custom": None, "draws": None}
+    for seed in range(20):
+        random.seed(seed)
+        body, conn = sample_robot((5, 5))
+        out["seeds"].append({"seed": seed, "body": body.tolist(), "connections": conn.tolist()})
+    random.seed(3)
+    body, conn = sample_robot((4, 6), np.array([0.1, 0.3, 0.0, 0.5, 0.1]))
+    out["custom"] = {"seed": 3, "pd": [0.1, 0.3, 0.0, 0.5, 0.1], "body": body.tolist(),
+                     "connections": conn.tolist()}
+    random.seed(5)
+    out["draws"] = {"seed": 5, "pd": [0.2, 0.3, 0.5], "values": [draw([0.2, 0.3, 0.5]) for _ in range(50)]}
+    (OUT / "samples.json").write_text(json.dumps(out) + "\n")
+
+
+def world_ops(evogym) -> str:
+    """EvoWorld edits and their printed result; run by the tests with sgr.evogym as `evogym`."""
+    import contextlib
+    import io
+    buf = io.StringIO()
+    with contextlib.redirect_stdout(buf):
+        w = evogym.EvoWorld.from_json(str(OUT / "simple_environment.json"))
+        random.seed(1)
+        body, conn = evogym.sample_robot((5, 5))
+        w.add_from_array("robot", body, 3, 1, connections=conn)
+        w.translate_object("box", 1, 1)
+        w.move_object("box", 12, 6)
+        w.add_from_array("extra", np.array([[5, 5], [0, 5]]), 25, 12)
+        w.pretty_print(voxels_per_line=13)
+        for name, o in sorted(w.objects.items()):
+            print(name, o, o.get_pos(), o.get_structure().tolist(),
+                  sorted(map(tuple, o.get_connections().T.tolist())))
+        print(w.grid.shape, w.grid_size)
+        removed = w.remove_object("extra")
+        print(removed, w.grid.shape, int(np.sum(w.grid)))
+        for bad in (lambda: w.add_from_array("robot", body, 0, 0), lambda: w.move_object("nope", 1, 1),
+                    lambda: w.add_from_array("x", body, 3, 1), lambda: w.translate_object("box", -20, 0)):
+            try:
+                bad()
+            except ValueError as e:
+                print("ValueError:", e)
+    return buf.getvalue()
+
+
+def actions(t: int, n: int) -> np.ndarray:
+    """The open-loop program both sides drive their robots with."""
+    return 1.1 + 0.45 * np.sin(2 * np.pi * t / 37 + 0.7 * np.arange(n))
+
+
+def simple_env(tutorials: Path) -> None:
+    from evogym import sample_robot
+    shutil.copy(tutorials / "world_data" / "simple_walker_env.json", OUT / "simple_walker_env.json")
+    cwd = os.getcwd()
+    os.chdir(tutorials)
+    sys.path.insert(0, str(tutorials))
+    try:
+        from envs.simple_env import SimpleWalkerEnvClass
+        random.seed(11)
+        body, conn = sample_robot((5, 5))
+        env = SimpleWalkerEnvClass(body, conn)
+        obs0, _ = env.reset()
+        n = env.action_space.shape[0]
+        obs, rew, done = [], [], []
+        for t in range(500):
+            o, r, d, _, _ = env.step(actions(t, n))
+            obs.append(o)
+            rew.append(r)
+            done.append(d)
+    finally:
+        os.chdir(cwd)
+    np.savez(OUT / "simple_env.npz", body=body, connections=conn, obs0=obs0, obs=np.array(obs),
+             reward=np.array(rew), done=np.array(done))
+
+
+def multi_world() -> None:
+    from evogym import EvoSim, EvoWorld
+    world = EvoWorld.from_json(str(OUT / "multi_world.json"))
+    walker = np.array([[3, 1, 3], [4, 0, 4]])
+    world.add_from_array("walker", walker, 2, 1)
+    hopper = np.array([[2, 4, 2], [2, 3, 2], [1, 0, 1]])
+    world.add_from_array("hopper", hopper, 18, 1)
+    sim = EvoSim(world)
+    sim.reset()
+    names = sorted(world.objects)
+    pos, vel, ort, unstable, times = [], [], [], [], []
+    for t in range(300):
+        sim.set_action("walker", actions(t, sim.get_dim_action_space("walker")))
+        sim.set_action("hopper", actions(t + 5, sim.get_dim_action_space("hopper")) + 0.1)
+        unstable.append(sim.step())
+        now = sim.get_time()
+        times.append(now)
+        pos.append(sim.pos_at_time(now))
+        vel.append(sim.vel_at_time(now))
+        ort.append([sim.object_orientation_at_time(now, n) for n in names])
+    obj_pos = {f"objpos_{n}": sim.object_pos_at_time(150, n) for n in names}
+    np.savez(OUT / "multi_world.npz", names=np.array(names), pos=np.array(pos), vel=np.array(vel),
+             orientation=np.array(ort), unstable=np.array(unstable), time=np.array(times),
+             pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"),
+             act_hopper=sim.get_actuator_indices("hopper"), **obj_pos)
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--tutorials", type=Path, required=True, help="copy of evogym's tutorials/")
+    p.add_argument("--only", nargs="*", default=["samples", "simple_env", "multi_world"])
+    args = p.parse_args()
+    OUT.mkdir(parents=True, exist_ok=True)
+    if "samples" in args.only:
+        samples()
+        import evogym
+        shutil.copy(args.tutorials / "world_data" / "simple_environment.json", OUT)
+        (OUT / "world_ops.txt").write_text(world_ops(evogym))
+    if "simple_env" in args.only:
+        simple_env(args.tutorials.resolve())
+    if "multi_world" in args.only:
+        multi_world()
+
+
+if __name__ == "__main__":
+    main()
