@@ -14,10 +14,11 @@ tests/data/evogym_api/:
                    with the robot of random.seed(11): observation after reset and every step's
                    observation, reward and done over 500 steps of actions
                    a_j(t) = 1.1 + 0.45 sin(2 pi t / 37 + 0.7 j) (some outside [0.6, 1.6]: the env clips).
-  multi_world.npz  a world of our own (multi_world.json here): terrain, a box, a mixed object with
-                   fixed voxels, two robots; 300 EvoSim steps of sinusoids sent with set_action
-                   unclipped; every step's pos_at_time, vel_at_time, orientation of each object and
-                   unstable flag.
+  multi_world.npz  a world of our own (multi_world.json here, `multi_world_layout`): terrain with a
+                   step, a rigid box, a lever held by a fixed voxel, a falling ball and a robot with
+                   custom connections; 300 EvoSim steps of sinusoids + 0.1 sent with set_action
+                   unclipped (up to 1.65); every step's pos_at_time, vel_at_time, orientation of
+                   each object and unstable flag, and each object's points at step 150.
 
     /root/.cache/evogym-venv/bin/python bench/evogym_api_reference.py --tutorials DIR
 
@@ -114,20 +115,26 @@ def simple_env(tutorials: Path) -> None:
              reward=np.array(rew), done=np.array(done))
 
 
+def multi_world_layout(EvoWorld):
+    """Our world with several objects: fixed terrain with a step, a rigid box, a lever (one fixed
+    voxel holding four rigid ones), a falling rigid ball, and a robot added from an array with
+    connections that leave one pair of adjacent voxels unglued."""
+    world = EvoWorld.from_json(str(OUT / "multi_world.json"))
+    walker = np.array([[3, 1, 3, 2], [4, 0, 4, 2]])
+    conn = np.array([[0, 1, 2, 0, 2, 3], [1, 2, 3, 4, 6, 7]])  # 6-7 glued, 3-7 glued, 2-3 glued
+    world.add_from_array("walker", walker, 3, 1, connections=conn)
+    return world
+
+
 def multi_world() -> None:
     from evogym import EvoSim, EvoWorld
-    world = EvoWorld.from_json(str(OUT / "multi_world.json"))
-    walker = np.array([[3, 1, 3], [4, 0, 4]])
-    world.add_from_array("walker", walker, 2, 1)
-    hopper = np.array([[2, 4, 2], [2, 3, 2], [1, 0, 1]])
-    world.add_from_array("hopper", hopper, 18, 1)
+    world = multi_world_layout(EvoWorld)
     sim = EvoSim(world)
     sim.reset()
     names = sorted(world.objects)
     pos, vel, ort, unstable, times = [], [], [], [], []
     for t in range(300):
-        sim.set_action("walker", actions(t, sim.get_dim_action_space("walker")))
-        sim.set_action("hopper", actions(t + 5, sim.get_dim_action_space("hopper")) + 0.1)
+        sim.set_action("walker", actions(t, sim.get_dim_action_space("walker")) + 0.1)
         unstable.append(sim.step())
         now = sim.get_time()
         times.append(now)
@@ -137,8 +144,7 @@ def multi_world() -> None:
     obj_pos = {f"objpos_{n}": sim.object_pos_at_time(150, n) for n in names}
     np.savez(OUT / "multi_world.npz", names=np.array(names), pos=np.array(pos), vel=np.array(vel),
              orientation=np.array(ort), unstable=np.array(unstable), time=np.array(times),
-             pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"),
-             act_hopper=sim.get_actuator_indices("hopper"), **obj_pos)
+             pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"), **obj_pos)
 
 
 def main() -> None:

@@ -144,6 +144,14 @@ def load_world(path: str | Path) -> World:
     return World(name=path.stem, grid_w=grid_w, grid_h=grid_h, objects=objects, terrain=terrain)
 
 
+def make_world(name: str, grid_w: int, grid_h: int, objects: tuple[WorldObject, ...]) -> World:
+    """A world built in code rather than read from a file (evogym's `EvoWorld`, for sgr.evogym):
+    the objects in load order (sorted by name) and the static terrain of the fixed ones."""
+    objects = tuple(sorted(objects, key=lambda o: o.name))
+    return World(name=name, grid_w=grid_w, grid_h=grid_h, objects=objects,
+                 terrain=_build_terrain(objects, grid_w, grid_h))
+
+
 def load_object(path: str | Path) -> WorldObject:
     """The one object of an evogym object file (e.g. `rigid_2x2.json`), as it sits in that file;
     `WorldObject.placed` renames and moves it (evogym's `WorldObject.from_json`)."""

@@ -5,6 +5,7 @@ BenchmarkBase and the 32 tasks under evogym's bare gym ids), `.utils`, `.world`,
 docs/EVOGYM_COMPAT.md lists every public name of evogym and its status here.
 """
 
+from sgr.evogym.sim import EvoSim
 from sgr.evogym.utils import (
     BASELINE_ENV_NAMES,
     VOXEL_TYPES,
@@ -18,8 +19,10 @@ from sgr.evogym.utils import (
     is_connected,
     sample_robot,
 )
+from sgr.evogym.viewer import EvoViewer
 from sgr.evogym.world import EvoWorld, WorldObject
 
-__all__ = ["BASELINE_ENV_NAMES", "VOXEL_TYPES", "EvoWorld", "Pair", "Timer", "WorldObject", "draw",
+__all__ = ["BASELINE_ENV_NAMES", "VOXEL_TYPES", "EvoSim", "EvoViewer", "EvoWorld", "Pair", "Timer",
+           "WorldObject", "draw",
            "get_full_connectivity", "get_uniform", "has_actuator", "hashable", "is_connected",
            "sample_robot"]
