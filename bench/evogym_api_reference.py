@@ -9,6 +9,7 @@ tests/data/evogym_api/:
                    [0.2, 0.3, 0.5] after random.seed(5): a seeded script must sample the same robots.
   world_ops.txt    what evogym prints for `world_ops` below (pretty_print, objects, errors) over
                    tutorials/world_data/simple_environment.json (copied here).
+  registry.json    evogym's 32 gym ids: max_episode_steps and the env classes' keyword arguments.
   simple_env.npz   evogym's tutorial env (tutorials/envs/simple_env.py over
                    tutorials/world_data/simple_walker_env.json, copied into tests/data/evogym_api/)
                    with the robot of random.seed(11): observation after reset and every step's
@@ -85,6 +86,22 @@ def world_ops(evogym) -> str:
     return buf.getvalue()
 
 
+def registry() -> None:
+    """evogym's gym registration of its 32 ids: episode length and the env's keyword arguments."""
+    import inspect
+
+    import evogym
+    import evogym.envs  # noqa: F401  (registers)
+    import gymnasium as gym
+    out = {}
+    for name in evogym.BASELINE_ENV_NAMES:
+        spec = gym.spec(name)
+        cls = gym.envs.registration.load_env_creator(spec.entry_point)
+        out[name] = {"max_episode_steps": spec.max_episode_steps,
+                     "kwargs": list(inspect.signature(cls.__init__).parameters)[1:]}
+    (OUT / "registry.json").write_text(json.dumps(out, indent=1) + "\n")
+
+
 def actions(t: int, n: int) -> np.ndarray:
     """The open-loop program both sides drive their robots with."""
     return 1.1 + 0.45 * np.sin(2 * np.pi * t / 37 + 0.7 * np.arange(n))
@@ -150,7 +167,7 @@ def multi_world() -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--tutorials", type=Path, required=True, help="copy of evogym's tutorials/")
-    p.add_argument("--only", nargs="*", default=["samples", "simple_env", "multi_world"])
+    p.add_argument("--only", nargs="*", default=["samples", "registry", "simple_env", "multi_world"])
     args = p.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     if "samples" in args.only:
@@ -158,6 +175,8 @@ def main() -> None:
         import evogym
         shutil.copy(args.tutorials / "world_data" / "simple_environment.json", OUT)
         (OUT / "world_ops.txt").write_text(world_ops(evogym))
+    if "registry" in args.only:
+        registry()
     if "simple_env" in args.only:
         simple_env(args.tutorials.resolve())
     if "multi_world" in args.only:

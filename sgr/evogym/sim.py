@@ -192,6 +192,14 @@ class EvoSim:
             raise ValueError(f"{name} is not a valid object name (objects: "
                              f"{', '.join(sorted(self._object_names))})")
 
+    def _render_scene(self):
+        """What EvoViewer draws now: tsim's world, the lead body, its points and the other
+        simulated objects' points (world units)."""
+        snap = self._history[self._time]
+        lead = snap[:self._bs.n_robot_points[0], 0:2].T
+        objects = {o.name: snap[self._slices[o.name], 0:2].T for o in self._bs.free_objects}
+        return self._bs.world, self._bs.bodies[0], lead, objects
+
     def _points(self, time: int, col: int) -> np.ndarray:
         """(n_all, 2) positions (col 0) or velocities (col 2) of every point at `time`, our
         layout (simulated points, then terrain)."""

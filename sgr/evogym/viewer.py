@@ -55,7 +55,7 @@ class EvoViewer:
     def __init__(self, sim_to_view: EvoSim, target_rps: int | None = 50,
                  pos: tuple[float, float] = (12, 4), view_size: tuple[float, float] = (40, 20),
                  resolution: tuple[int, int] = (1200, 600)) -> None:
-        if not isinstance(sim_to_view, EvoSim):
+        if not hasattr(sim_to_view, "_render_scene"):  # an EvoSim (or a bare-id env's scene)
             raise TypeError(f"EvoViewer needs an EvoSim, got {type(sim_to_view).__name__}")
         self._sim = sim_to_view
         self._tracking_objects: list[str] = []
@@ -155,20 +155,14 @@ class EvoViewer:
         self.pos, self.view_size = (float(x), float(y)), (float(w), float(h))
 
     def _image(self, hide_background: bool, hide_grid: bool) -> np.ndarray:
-        sim = self._sim
-        bs = sim._bs
+        world, body, lead, objects = self._sim._render_scene()
         w_px, h_px = self.resolution
         r = self._renderer
-        if r is None or r.width != w_px:
-            r = self._renderer = Renderer(bs.world, bs.bodies[0], w_px, h_px, view_voxels=40.0)
+        if r is None:
+            r = self._renderer = Renderer(world, body, w_px, h_px, view_voxels=40.0)
             r.camera = _FixedCamera(self)
         r.scale = w_px / (self.view_size[0] * C.CELL)
-        r.height = h_px
         r.grid = not hide_grid
-        t = sim.get_time()
-        state = sim._history[t]
-        lead = state[:bs.n_robot_points[0], 0:2].T
-        objects = {o.name: state[sim._slices[o.name], 0:2].T for o in bs.free_objects}
         idx = r.frame_indexed(lead, objects)
         pal = PALETTE.copy()
         if hide_background:
