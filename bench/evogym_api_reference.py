@@ -16,10 +16,14 @@ tests/data/evogym_api/:
                    observation, reward and done over 500 steps of actions
                    a_j(t) = 1.1 + 0.45 sin(2 pi t / 37 + 0.7 j) (some outside [0.6, 1.6]: the env clips).
   multi_world.npz  a world of our own (multi_world.json here, `multi_world_layout`): terrain with a
-                   step, a rigid box, a lever held by a fixed voxel, a falling ball and a robot with
-                   custom connections; 300 EvoSim steps of sinusoids + 0.1 sent with set_action
-                   unclipped (up to 1.65); every step's pos_at_time, vel_at_time, orientation of
-                   each object and unstable flag, and each object's points at step 150.
+                   step, a rigid box, a lever held by a fixed voxel, a falling ball, a robot with
+                   custom connections and a second robot; 300 EvoSim steps of sinusoids + 0.1
+                   sent with set_action unclipped (up to 1.65); every step's pos_at_time,
+                   vel_at_time, orientation of each object and unstable flag, and each object's
+                   points at step 150.
+  second_robot.npz the robot evogym flags unstable at step 37 in Lifter-v0 (evogym32 case 4), as
+                   the second robot of a world (`second_robot_world`): unstable flag and time of
+                   45 steps, and the points at the end.
 
     /root/.cache/evogym-venv/bin/python bench/evogym_api_reference.py --tutorials DIR
 
@@ -140,7 +144,40 @@ def multi_world_layout(EvoWorld):
     walker = np.array([[3, 1, 3, 2], [4, 0, 4, 2]])
     conn = np.array([[0, 1, 2, 0, 2, 3], [1, 2, 3, 4, 6, 7]])  # 6-7 glued, 3-7 glued, 2-3 glued
     world.add_from_array("walker", walker, 3, 1, connections=conn)
+    hopper = np.array([[2, 4, 2], [2, 3, 2], [1, 0, 1]])
+    world.add_from_array("hopper", hopper, 23, 1)
     return world
+
+
+def drive(sim, t: int) -> None:
+    """Both robots' actions at step t (sent unclipped: up to 1.65)."""
+    sim.set_action("walker", actions(t, sim.get_dim_action_space("walker")) + 0.1)
+    sim.set_action("hopper", actions(t + 5, sim.get_dim_action_space("hopper")) + 0.1)
+
+
+def second_robot_world(EvoWorld, worlds: Path):
+    """Lifter-v0's world with the robot of case 4 of tests/data/evogym32/returns_Lifter-v0.npz
+    (evogym flags it unstable at step 37) as a second robot: a one-voxel robot 'aaa' sorts
+    first and leads."""
+    world = EvoWorld.from_json(str(worlds / "Lifter-v0.json"))
+    d = np.load(OUT.parent / "evogym32" / "returns_Lifter-v0.npz", allow_pickle=True)
+    world.add_from_array("robot", d["body"][4], 2, 3)
+    world.add_from_array("aaa", np.array([[3]]), 0, 8)
+    return world, d["actions"][4, :, :d["n_act"][4]]
+
+
+def second_robot() -> None:
+    from evogym import EvoSim, EvoWorld
+    world, acts = second_robot_world(EvoWorld, Path(__file__).resolve().parents[1] / "tasks" / "worlds")
+    sim = EvoSim(world)
+    flags, times = [], []
+    for t in range(45):
+        sim.set_action("aaa", np.array([1.0]))
+        sim.set_action("robot", np.clip(acts[t], 0.6, 1.6))
+        flags.append(sim.step())
+        times.append(sim.get_time())
+    np.savez(OUT / "second_robot.npz", unstable=np.array(flags), time=np.array(times),
+             pos=sim.pos_at_time(sim.get_time()))
 
 
 def multi_world() -> None:
@@ -151,7 +188,7 @@ def multi_world() -> None:
     names = sorted(world.objects)
     pos, vel, ort, unstable, times = [], [], [], [], []
     for t in range(300):
-        sim.set_action("walker", actions(t, sim.get_dim_action_space("walker")) + 0.1)
+        drive(sim, t)
         unstable.append(sim.step())
         now = sim.get_time()
         times.append(now)
@@ -161,13 +198,15 @@ def multi_world() -> None:
     obj_pos = {f"objpos_{n}": sim.object_pos_at_time(150, n) for n in names}
     np.savez(OUT / "multi_world.npz", names=np.array(names), pos=np.array(pos), vel=np.array(vel),
              orientation=np.array(ort), unstable=np.array(unstable), time=np.array(times),
-             pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"), **obj_pos)
+             pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"),
+             act_hopper=sim.get_actuator_indices("hopper"), **obj_pos)
 
 
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--tutorials", type=Path, required=True, help="copy of evogym's tutorials/")
-    p.add_argument("--only", nargs="*", default=["samples", "registry", "simple_env", "multi_world"])
+    p.add_argument("--only", nargs="*",
+                   default=["samples", "registry", "simple_env", "multi_world", "second_robot"])
     args = p.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     if "samples" in args.only:
@@ -181,6 +220,8 @@ def main() -> None:
         simple_env(args.tutorials.resolve())
     if "multi_world" in args.only:
         multi_world()
+    if "second_robot" in args.only:
+        second_robot()
 
 
 if __name__ == "__main__":

@@ -4,7 +4,8 @@ reset and read back at any past step in evogym's units (voxels: positions / 0.1)
 evogym loads the objects of a world in this order: robots (objects with an actuator) sorted by
 name, then the others sorted by name; `pos_at_time` lists every point in that order, terrain
 included. BatchSim keeps all-fixed objects as static terrain (their points never move) and
-simulates the robot and the other objects; this module keeps the history evogym keeps (every
+simulates the robots and the other objects (the first robot as BatchSim's robot, the others as
+actuated objects); this module keeps the history evogym keeps (every
 step's positions and velocities of the simulated points, a copy per step, ~1 us) and puts terrain
 points back in their place when read. Worlds evogym accepts but sgr cannot simulate raise one
 `ValueError` that names what is missing.
@@ -62,16 +63,14 @@ class EvoSim:
             raise TypeError(f"EvoSim needs an EvoWorld, got {type(world).__name__}")
         names = sorted(world.objects, key=lambda n: (0 if _is_robot(world.objects[n].grid) else 1, n))
         robots = [n for n in names if _is_robot(world.objects[n].grid)]
-        if len(robots) > 1:
-            raise ValueError(f"sgr cannot simulate several robots in one world yet (robots: "
-                             f"{', '.join(robots)}); sgr's simulator drives one robot per world")
         parts: dict[str, _Placed] = {}
         for n in names:
             obj = world.objects[n]
             structure = np.flipud(obj.grid)
             body = _body(n, structure, _connections(obj), n in robots)
             cell = (obj.pos.x, obj.pos.y)
-            parts[n] = _Placed(name=n, body=body, cell=cell, pos0=body.place(*cell))
+            parts[n] = _Placed(name=n, body=body, cell=cell, pos0=body.place(*cell),
+                               actuated=n in robots[1:])
         simulated = [n for n in names if n in robots or not parts[n].is_terrain]
         if not simulated:
             raise ValueError("sgr cannot simulate a world whose objects are all fixed (material 5): "
@@ -89,6 +88,21 @@ class EvoSim:
             self._bs._counts0[:, K.N_SURF_ROBOT] = 0
             self._bs.counts[:, K.N_SURF_ROBOT] = 0
         self._robots = {n: parts[n].body for n in robots}
+        # action columns of each robot in BatchSim.actions: the lead's first, then the others'
+        self._act_cols, col = {}, 0
+        for n in robots:
+            self._act_cols[n] = col
+            col += parts[n].body.n_actuators
+        # evogym's instability rule for the robots after the first (BatchSim's kernel applies it
+        # to the lead robot at every substep): their surface voxels' corners and grid cells
+        self._extra_rule = []
+        for n in robots[1:]:
+            b = parts[n].body
+            surf = np.nonzero(b.voxel_is_surface)[0]
+            rc = b.voxel_rc[surf]
+            near = ((np.abs(rc[:, None, 0] - rc[None, :, 0]) <= 1)
+                    & (np.abs(rc[:, None, 1] - rc[None, :, 1]) <= 1))
+            self._extra_rule.append((n, b.voxel_points[surf], near, len(surf)))
         self._object_names = set(names)
         # where each object's points sit: simulated ones in BatchSim's state, terrain after them
         offsets = {lead: 0}
@@ -142,7 +156,8 @@ class EvoSim:
                              f"{a.size} values for {robot_name}")
         if not np.all(np.isfinite(a)):
             raise ValueError(f"non-finite action for {robot_name}: {a[~np.isfinite(a)][:3]}")
-        self._bs.actions[0, :body.n_actuators] = a
+        col = self._act_cols[robot_name]
+        self._bs.actions[0, col:col + body.n_actuators] = a
 
     def step(self) -> bool:
         """One step (30 substeps of dt = 1e-4). True when evogym's instability rule fired: then
@@ -157,8 +172,25 @@ class EvoSim:
         self._bs.step()
         if self._bs.unstable[0]:
             return True
+        if self._extra_unstable():
+            self.revert(self._time)  # evogym keeps the last snapshot
+            self._bs.counts[0, K.STATUS] = K.UNSTABLE
+            return True
         self._time += 1
         self._history.append(self._snapshot())
+        return False
+
+    def _extra_unstable(self) -> bool:
+        """evogym's rule for the robots after the first, at the end of the step: more ordered
+        pairs of non-adjacent surface voxels of one robot with touching bounding boxes than the
+        robot has surface voxels. (evogym tests it at every substep: a robot that crosses the
+        threshold and comes back within one step is not caught; see docs/EVOGYM_COMPAT.md.)"""
+        for name, corners, near, n_surf in self._extra_rule:
+            pts = self._bs.state[0, self._slices[name][corners], 0:2]  # (n_surf, 4, 2)
+            lo, hi = pts.min(axis=1), pts.max(axis=1)
+            touch = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
+            if int(np.sum(touch & ~near)) > n_surf:
+                return True
         return False
 
     def get_time(self) -> int:
