@@ -9,7 +9,7 @@ tests/data/evogym_api/:
                    [0.2, 0.3, 0.5] after random.seed(5): a seeded script must sample the same robots.
   world_ops.txt    what evogym prints for `world_ops` below (pretty_print, objects, errors) over
                    tutorials/world_data/simple_environment.json (copied here).
-  registry.json    evogym's 32 gym ids: max_episode_steps and the env classes' keyword arguments.
+  registry.json    evogym's 32 gym ids: max_episode_steps, the env class and its keyword arguments.
   simple_env.npz   evogym's tutorial env (tutorials/envs/simple_env.py over
                    tutorials/world_data/simple_walker_env.json, copied into tests/data/evogym_api/)
                    with the robot of random.seed(11): observation after reset and every step's
@@ -101,7 +101,7 @@ def registry() -> None:
     for name in evogym.BASELINE_ENV_NAMES:
         spec = gym.spec(name)
         cls = gym.envs.registration.load_env_creator(spec.entry_point)
-        out[name] = {"max_episode_steps": spec.max_episode_steps,
+        out[name] = {"max_episode_steps": spec.max_episode_steps, "class": cls.__name__,
                      "kwargs": list(inspect.signature(cls.__init__).parameters)[1:]}
     (OUT / "registry.json").write_text(json.dumps(out, indent=1) + "\n")
 

@@ -20,7 +20,23 @@ from tasks.gym_env import SgrEnv, SgrVectorEnv
 from tasks.specs import TASKS
 from tsim.body import build_body
 
-__all__ = ["TaskEnv", "TaskVectorEnv", "register_bare_ids"]
+# evogym's env class of each task (what its registration's entry point names)
+EVOGYM_CLASSES = {
+    "Walker-v0": "WalkingFlat", "BridgeWalker-v0": "SoftBridge", "BidirectionalWalker-v0": "BiWalk",
+    "Carrier-v0": "CarrySmallRect", "Carrier-v1": "CarrySmallRectToTable", "Pusher-v0": "PushSmallRect",
+    "Pusher-v1": "PushSmallRectOnOppositeSide", "Thrower-v0": "ThrowSmallRect",
+    "Catcher-v0": "CatchSmallRect", "BeamToppler-v0": "ToppleBeam", "BeamSlider-v0": "SlideBeam",
+    "Lifter-v0": "LiftSmallRect", "Climber-v0": "Climb0", "Climber-v1": "Climb1", "Climber-v2": "Climb2",
+    "UpStepper-v0": "StepsUp", "DownStepper-v0": "StepsDown", "ObstacleTraverser-v0": "WalkingBumpy",
+    "ObstacleTraverser-v1": "WalkingBumpy2", "Hurdler-v0": "VerticalBarrier",
+    "PlatformJumper-v0": "FloatingPlatform", "GapJumper-v0": "Gaps", "Traverser-v0": "BlockSoup",
+    "CaveCrawler-v0": "Duck", "AreaMaximizer-v0": "MaximizeShape", "AreaMinimizer-v0": "MinimizeShape",
+    "WingspanMazimizer-v0": "MaximizeXShape", "HeightMaximizer-v0": "MaximizeYShape",
+    "Flipper-v0": "Flipping", "Jumper-v0": "StationaryJump", "Balancer-v0": "Balance",
+    "Balancer-v1": "BalanceJump",
+}
+
+__all__ = ["EVOGYM_CLASSES", "TaskEnv", "TaskVectorEnv", "register_bare_ids", "task_classes"]
 
 
 def _robot(body: Any, connections: Any):
@@ -126,3 +142,15 @@ def register_bare_ids() -> None:
         gym.register(name, entry_point="sgr.evogym.envs.benchmark:TaskEnv",
                      vector_entry_point="sgr.evogym.envs.benchmark:TaskVectorEnv",
                      kwargs={"task": name}, max_episode_steps=spec.evogym_steps)
+
+
+def task_classes() -> dict[str, type]:
+    """evogym's env classes by name (`WalkingFlat(body)` is Walker-v0 without gym's wrappers), each
+    a `TaskEnv` bound to its task."""
+    def init(self, body=None, connections=None, render_mode=None, render_options=None):
+        TaskEnv.__init__(self, body, connections, render_mode, render_options, task=self.TASK)
+
+    return {cls_name: type(cls_name, (TaskEnv,), {
+        "TASK": task, "__init__": init, "__module__": __name__,
+        "__doc__": f"evogym's {cls_name}: the task {task} (see TaskEnv)."})
+        for task, cls_name in EVOGYM_CLASSES.items()}

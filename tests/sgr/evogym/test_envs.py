@@ -25,6 +25,14 @@ def test_every_bare_id_is_registered_with_evogyms_episode_length():
         assert ref["kwargs"] == ["body", "connections", "render_mode", "render_options"]
 
 
+def test_evogyms_env_classes_are_importable_by_name_and_bound_to_their_task():
+    for name, ref in REGISTRY.items():
+        cls = getattr(sgr.evogym.envs, ref["class"])
+        assert cls.TASK == name and issubclass(cls, TaskEnv)
+    env = sgr.evogym.envs.Climb2(BODY, render_mode="img")
+    assert env.task == "Climber-v2" and env.render().shape == (600, 1200, 3)
+
+
 @pytest.mark.parametrize("task", ["Walker-v0", "Pusher-v0", "Thrower-v0", "Climber-v1", "Traverser-v0"])
 def test_gym_make_of_a_bare_id_earns_evogyms_rewards(task):
     d = np.load(DATA / "evogym32" / f"returns_{task}.npz", allow_pickle=True)
