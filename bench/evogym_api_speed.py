@@ -168,11 +168,13 @@ def main() -> None:
         sys.path.insert(0, str(HERE.parent))
     evogym = importlib.import_module("evogym" if args.lib == "evogym" else "sgr.evogym")
     bodies = _bodies(evogym, args.robots)
-    for path in ("make", "custom", "sim"):  # warm-up, untimed: sgr compiles its kernel on first use
+    # warm-up, untimed: sgr compiles a kernel for each capacity tier its bodies need on first use
+    # (once per process, ~2-4 s each); every body takes one step first
+    for path in ("make", "custom", "sim"):
         if path in args.paths:
-            {"make": lambda: bench_make(evogym, args.task, bodies[:1], 2),
-             "custom": lambda: bench_custom(evogym, bodies[:1], 2),
-             "sim": lambda: bench_sim(evogym, bodies[:1], 2)}[path]()
+            {"make": lambda: bench_make(evogym, args.task, bodies, 1),
+             "custom": lambda: bench_custom(evogym, bodies, 1),
+             "sim": lambda: bench_sim(evogym, bodies, 1)}[path]()
     out = {}
     for path in args.paths:
         if path == "make":
