@@ -43,6 +43,8 @@ def _connections(obj) -> np.ndarray:
 
 
 def _body(name: str, structure: np.ndarray, conn: np.ndarray, robot: bool) -> Body:
+    if not np.any(np.asarray(structure) != 0):
+        raise ValueError(f"cannot simulate object {name!r}: it has no voxels")
     try:
         return build_body(structure, conn, allow_fixed=not robot)
     except ValueError as exc:
@@ -71,11 +73,15 @@ class EvoSim:
             cell = (obj.pos.x, obj.pos.y)
             parts[n] = _Placed(name=n, body=body, cell=cell, pos0=body.place(*cell),
                                actuated=n in robots[1:])
-        simulated = [n for n in names if n in robots or not parts[n].is_terrain]
-        if not simulated:
-            raise ValueError("sgr cannot simulate a world whose objects are all fixed (material 5): "
-                             "nothing in it moves")
-        lead = simulated[0]  # the robot, or (no robot) the first object in evogym's order
+        # BatchSim's robot: the first robot, or (no robot) the first object without fixed voxels
+        # (BatchSim fixes points of its objects only), in evogym's order
+        leads = robots or [n for n in names if not np.any(parts[n].body.voxel_type == VOXEL_TYPES["FIXED"])]
+        if not leads:
+            what = ("all fixed (material 5): nothing in it moves" if all(p.is_terrain for p in parts.values())
+                    else "fixed voxels in every object, and no robot (sgr needs one object without "
+                    "fixed voxels to lead the simulation)")
+            raise ValueError(f"sgr cannot simulate this world: its objects have {what}")
+        lead = leads[0]
         others = tuple(parts[n] for n in names if n != lead)
         grid = world.grid_size
         self._world_layout = make_world("EvoWorld", grid.x, grid.y, others)

@@ -131,6 +131,13 @@ def test_worlds_sgr_cannot_simulate_say_what_is_missing():
     only_ground.add_from_array("ground", np.array([[5, 5, 5]]), 0, 0)
     with pytest.raises(ValueError, match="all fixed"):
         EvoSim(only_ground)
+    only_ground.add_from_array("lever", np.array([[1, 1], [5, 0]]), 0, 1)
+    with pytest.raises(ValueError, match="fixed voxels in every object, and no robot"):
+        EvoSim(only_ground)
+    empty = EvoWorld()
+    empty.add_from_array("ghost", np.zeros((2, 2)), 0, 0)
+    with pytest.raises(ValueError, match="'ghost': it has no voxels"):
+        EvoSim(empty)
 
 
 def test_a_world_without_robot_simulates_its_objects():
