@@ -154,7 +154,8 @@ class EvoViewer:
             h = w / aspect
         self.pos, self.view_size = (float(x), float(y)), (float(w), float(h))
 
-    def _image(self, hide_background: bool, hide_grid: bool) -> np.ndarray:
+    def _image(self, hide_background: bool, hide_grid: bool, hide_edges: bool,
+               hide_voxels: bool) -> np.ndarray:
         world, body, lead, objects = self._sim._render_scene()
         w_px, h_px = self.resolution
         r = self._renderer
@@ -163,6 +164,8 @@ class EvoViewer:
             r.camera = _FixedCamera(self)
         r.scale = w_px / (self.view_size[0] * C.CELL)
         r.grid = not hide_grid
+        r.draw_edges = not hide_edges
+        r.draw_voxels = not hide_voxels
         idx = r.frame_indexed(lead, objects)
         pal = PALETTE.copy()
         if hide_background:
@@ -177,11 +180,8 @@ class EvoViewer:
         in a window (RuntimeError where no display exists). Paced to the target rps."""
         if mode not in MODES:
             raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
-        if hide_edges or hide_voxels:
-            raise ValueError("sgr's viewer cannot hide edges or voxels (hide_edges / hide_voxels); "
-                             "only hide_background and hide_grid")
         self._update_tracking()
-        img = self._image(hide_background, hide_grid)
+        img = self._image(hide_background, hide_grid, hide_edges, hide_voxels)
         out = None
         if mode in ("img", "rgb_array"):
             out = img

@@ -33,6 +33,14 @@ def test_img_is_the_view_at_the_resolution_and_moves_with_the_camera():
     np.testing.assert_array_equal(v.render("img"), a)  # the same view draws the same picture
     white = v.render("img", hide_background=True, hide_grid=True)
     assert (white == 255).all(axis=2).mean() > (a == 255).all(axis=2).mean() + 0.3
+    outline = np.array([0, 63, 92])  # evogym's edge colour
+    edges = (a == outline).all(axis=2).sum()
+    assert edges > 100
+    assert (v.render("img", hide_edges=True) == outline).all(axis=2).sum() == 0
+    only_edges = v.render("img", hide_voxels=True)
+    assert (only_edges == outline).all(axis=2).sum() > 0.8 * edges
+    rigid = np.array([38, 38, 38])  # evogym's rigid / fixed fill, drawn only with voxels
+    assert (a == rigid).all(axis=2).sum() > 500 and (only_edges == rigid).all(axis=2).sum() == 0
 
 
 def test_tracking_keeps_the_robot_in_the_middle():
@@ -56,8 +64,6 @@ def test_bad_viewer_input_is_one_clear_error(monkeypatch):
         v.track_objects("nope")
     with pytest.raises(ValueError, match="unknown tracking setting 'zoom'"):
         v.set_tracking_settings(zoom=2)
-    with pytest.raises(ValueError, match="cannot hide edges or voxels"):
-        v.render("img", hide_edges=True)
     with pytest.raises(TypeError, match="resolution must be a tuple"):
         v.set_resolution([3, 4])
     monkeypatch.delenv("DISPLAY", raising=False)
