@@ -24,6 +24,9 @@ tests/data/evogym_api/:
   second_robot.npz the robot evogym flags unstable at step 37 in Lifter-v0 (evogym32 case 4), as
                    the second robot of a world (`second_robot_world`): unstable flag and time of
                    45 steps, and the points at the end.
+  camera.npz       evogym's viewer camera (pos, view_size) tracking the robot and box of the
+                   tutorial world with padding (4, 2) and scale (0.3, 0.1), one update a step, 150
+                   steps (`camera`).
 
     /root/.cache/evogym-venv/bin/python bench/evogym_api_reference.py --tutorials DIR
 
@@ -180,6 +183,31 @@ def second_robot() -> None:
              pos=sim.pos_at_time(sim.get_time()))
 
 
+def camera() -> None:
+    """evogym's viewer camera tracking the robot and the box of the basic_api tutorial world as
+    render('img') after every step would move it, without drawing (no OpenGL here)."""
+    from evogym import EvoSim, EvoViewer, EvoWorld
+    world = EvoWorld.from_json(str(OUT / "simple_environment.json"))
+    random.seed(2)
+    from evogym import sample_robot
+    body, conn = sample_robot((5, 5))
+    world.add_from_array("robot", body, 3, 1, connections=conn)
+    sim = EvoSim(world)
+    viewer = EvoViewer(sim)
+    viewer.track_objects("robot", "box")
+    viewer.set_tracking_settings(padding=(4, 2), scale=(0.3, 0.1))
+    out = []
+    for t in range(150):
+        sim.set_action("robot", actions(t, sim.get_dim_action_space("robot")))
+        sim.step()
+        # what evogym's render does before drawing: one tracking update per step since the last
+        while viewer._last_rendered < sim.get_time():
+            viewer._update_tracking()
+            viewer._last_rendered += 1
+        out.append([*viewer.pos, *viewer.view_size])
+    np.savez(OUT / "camera.npz", body=body, connections=conn, track=np.array(out))
+
+
 def multi_world() -> None:
     from evogym import EvoSim, EvoWorld
     world = multi_world_layout(EvoWorld)
@@ -206,7 +234,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--tutorials", type=Path, required=True, help="copy of evogym's tutorials/")
     p.add_argument("--only", nargs="*",
-                   default=["samples", "registry", "simple_env", "multi_world", "second_robot"])
+                   default=["samples", "registry", "simple_env", "multi_world", "second_robot", "camera"])
     args = p.parse_args()
     OUT.mkdir(parents=True, exist_ok=True)
     if "samples" in args.only:
@@ -222,6 +250,8 @@ def main() -> None:
         multi_world()
     if "second_robot" in args.only:
         second_robot()
+    if "camera" in args.only:
+        camera()
 
 
 if __name__ == "__main__":

@@ -2,9 +2,10 @@
 OpenGL), and a Taichi GUI window for 'screen' / 'human' where a display exists.
 
 The camera is evogym's: `pos` is the view's centre and `view_size` its extent, both in voxels; with
-tracked objects it centres on their bounding box (padding (5, 3) voxels, then `multiplier` of
-the span), easing toward it each frame. Drawing follows tsim's renderer, so colours and the
-actuator shading are evogym's but pixels are not identical to evogym's OpenGL output.
+tracked objects it follows their bounding box with evogym's PID, one update per simulation step
+(tests/data/evogym_api/camera.npz: the same positions and sizes as evogym's viewer). Drawing
+follows tsim's renderer, so colours and the actuator shading are evogym's but pixels are not
+identical to evogym's OpenGL output.
 """
 
 from __future__ import annotations
@@ -62,6 +63,10 @@ class EvoViewer:
         self._tracking_padding = (5, 3)
         self._tracking_multiplier = (0.2, 0.2)
         self._tracking_lock = {"x": False, "y": False, "width": False, "height": False}
+        self._old_targets = None  # evogym's camera state (see _update_tracking)
+        self._history = self._history2 = None
+        self._sum = [0.0, 0.0, 0.0, 0.0]
+        self._last_rendered = -1
         self._renderer: Renderer | None = None
         self._gui = None
         self.set_target_rps(target_rps)
@@ -130,29 +135,69 @@ class EvoViewer:
 
     # ------------------------------------------------------------------ drawing
     def _update_tracking(self) -> None:
+        """One step of evogym's camera: the tracked objects' bounding box, padded by `padding`
+        voxels and widened by `scale` of its span, is the target (centre and size, each held while
+        it moves by less than 1 voxel or 30 %); the view follows it with evogym's PID (kp 0.04,
+        ki 0.005 on a sum decaying by 0.9, kd 0.08), then widens to the image's aspect."""
         if not self._tracking_objects:
             return
         t = self._sim.get_time()
         pts = np.concatenate([self._sim.object_pos_at_time(t, n) for n in self._tracking_objects], axis=1)
-        lo = pts.min(axis=1) - self._tracking_padding
-        hi = pts.max(axis=1) + self._tracking_padding
-        span = (hi - lo) * (1 + np.array(self._tracking_multiplier))
-        centre = (lo + hi) / 2
-        x, y = self.pos
-        w, h = self.view_size
-        x, y = x + 0.2 * (centre[0] - x), y + 0.2 * (centre[1] - y)
-        w, h = w + 0.2 * (span[0] - w), h + 0.2 * (span[1] - h)
-        lock = self._tracking_lock
-        x = x if isinstance(lock["x"], bool) else lock["x"]
-        y = y if isinstance(lock["y"], bool) else lock["y"]
-        w = w if isinstance(lock["width"], bool) else lock["width"]
-        h = h if isinstance(lock["height"], bool) else lock["height"]
-        aspect = self.resolution[0] / self.resolution[1]  # keep the image's aspect
+        px, py = self._tracking_padding
+        mx, my = self._tracking_multiplier
+        x0, y0 = float(np.min(pts[0])) - px, float(np.min(pts[1])) - py
+        x1, y1 = float(np.max(pts[0])) + px, float(np.max(pts[1])) + py
+        x0 -= mx * (x1 - x0) / 2  # evogym widens the low side first, then the high side from it
+        y0 -= my * (y1 - y0) / 2
+        x1 += mx * (x1 - x0) / 2
+        y1 += my * (y1 - y0) / 2
+        target = [(x0 + x1) / 2.0, (y0 + y1) / 2.0, x1 - x0, y1 - y0]
+        if self._old_targets is None:
+            self.pos, self.view_size = (target[0], target[1]), (target[2], target[3])
+            self._old_targets = tuple(target)
+        old = self._old_targets
+        for i in (0, 1):  # hold the centre while it moves less than a voxel
+            if abs(old[i] - target[i]) < 1.0:
+                target[i] = old[i]
+        for i in (2, 3):  # and the size while it changes by less than 30 %
+            if abs(1 - old[i] / target[i]) < 0.3:
+                target[i] = old[i]
+        self._old_targets = tuple(target)
+        if self._history is None:
+            self._history = tuple(target)
+        if self._history2 is None:
+            self._history2 = tuple(target)
+        now = (self.pos[0], self.pos[1], self.view_size[0], self.view_size[1])
+        out = []
+        for i in range(4):
+            self._sum[i] += target[i] - self._history[i]
+        for i in range(4):
+            self._sum[i] *= 0.9
+        for i in range(4):
+            rate = self._history[i] - self._history2[i]
+            out.append(now[i] + 0.04 * (target[i] - self._history[i]) + 0.08 * rate + 0.005 * self._sum[i])
+        for i, key in enumerate(("x", "y", "width", "height")):
+            if not isinstance(self._tracking_lock[key], bool):
+                out[i] = self._tracking_lock[key]
+        self._history2 = self._history
+        self._history = tuple(out)
+        w, h = out[2], out[3]
+        aspect = self.resolution[0] / self.resolution[1]
         if w / h < aspect:
-            w = h * aspect
-        else:
-            h = w / aspect
-        self.pos, self.view_size = (float(x), float(y)), (float(w), float(h))
+            w *= (h / w) * aspect
+        elif w / h > aspect:
+            h /= (h / w) * aspect
+        self.pos, self.view_size = (out[0], out[1]), (w, h)
+
+    def _follow(self) -> None:
+        """Advance the camera one tracking step per simulation step since the last render (50
+        after the simulation went back in time), as evogym's render does."""
+        now = self._sim.get_time()
+        if now < self._last_rendered:
+            self._last_rendered = now - 50
+        while self._last_rendered < now:
+            self._update_tracking()
+            self._last_rendered += 1
 
     def _image(self, hide_background: bool, hide_grid: bool, hide_edges: bool,
                hide_voxels: bool) -> np.ndarray:
@@ -180,7 +225,7 @@ class EvoViewer:
         in a window (RuntimeError where no display exists). Paced to the target rps."""
         if mode not in MODES:
             raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
-        self._update_tracking()
+        self._follow()
         img = self._image(hide_background, hide_grid, hide_edges, hide_voxels)
         out = None
         if mode in ("img", "rgb_array"):
