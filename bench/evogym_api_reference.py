@@ -224,7 +224,7 @@ def multi_world() -> None:
         vel.append(sim.vel_at_time(now))
         ort.append([sim.object_orientation_at_time(now, n) for n in names])
     obj_pos = {f"objpos_{n}": sim.object_pos_at_time(150, n) for n in names}
-    np.savez(OUT / "multi_world.npz", names=np.array(names), pos=np.array(pos), vel=np.array(vel),
+    np.savez_compressed(OUT / "multi_world.npz", names=np.array(names), pos=np.array(pos), vel=np.array(vel),
              orientation=np.array(ort), unstable=np.array(unstable), time=np.array(times),
              pos0=sim.pos_at_time(0), act_walker=sim.get_actuator_indices("walker"),
              act_hopper=sim.get_actuator_indices("hopper"), **obj_pos)
