@@ -20,6 +20,8 @@ from gymnasium.vector import AutoresetMode, VectorEnv
 from tasks.env import BatchEnv
 from tasks.specs import TASKS
 from tsim import constants as C
+from tsim.body import build_body
+from tsim.render import Renderer
 
 OBS_BOUND = 100.0
 _NO_LIMIT = 2**62  # BatchEnv's own limit is disabled; TimeLimit / episode_steps decides
@@ -37,14 +39,24 @@ def _action_space(n: int) -> gym.spaces.Box:
 class SgrEnv(gym.Env):
     """One evogym task with one robot. `body` is the 5x5 (or any) voxel matrix."""
 
-    metadata = {"render_modes": [], "render_fps": 50}
+    metadata = {"render_modes": ["rgb_array", "img"], "render_fps": 50}
 
     def __init__(self, task: str, body: Any, episode_steps: int | None = None,
-                 render_mode: str | None = None):
-        if render_mode is not None:
-            raise ValueError(f"render_mode {render_mode!r} is not supported; use tsim.render")
+                 render_mode: str | None = None, connections: Any = None,
+                 render_options: dict | None = None):
+        """evogym's keyword arguments: `connections` (2, k) glue the body's voxels (default: every
+        adjacent pair); `render_mode` 'rgb_array' / 'img' make `render()` return an image
+        (`render_options` {'hide_grid': True} drops the grid); windows: sgr.evogym's bare ids."""
+        if render_mode not in (None, "rgb_array", "img"):
+            raise ValueError(f"render_mode {render_mode!r} is not supported here (None, 'rgb_array', "
+                             "'img'); for a window use the bare ids of sgr.evogym.envs")
+        if connections is not None:
+            body = build_body(np.asarray(body), np.asarray(connections))
         self._env = BatchEnv(task, [body], episode_steps=_NO_LIMIT if episode_steps is None
                              else episode_steps)
+        self.render_mode = render_mode
+        self._render_options = render_options or {}
+        self._renderer: Renderer | None = None
         self.task = task
         self.observation_space = _obs_space(int(self._env.obs_dims[0]))
         self.action_space = _action_space(int(self._env.n_actuators[0]))
@@ -67,6 +79,18 @@ class SgrEnv(gym.Env):
         obs, r, term, trunc, info = self._env.step(a[None, :])
         return (obs[0, :self.observation_space.shape[0]].copy(), float(r[0]), bool(term[0]),
                 bool(trunc[0]), {"unstable": bool(info["unstable"][0])})
+
+    def render(self) -> np.ndarray | None:
+        """None without a render mode, else an (H, W, 3) uint8 image of the robot and the world's
+        objects now (tsim's renderer, the camera following the robot)."""
+        if self.render_mode is None:
+            return None
+        sim = self._env.sim
+        if self._renderer is None:
+            self._renderer = Renderer(sim.world, sim.bodies[0],
+                                      grid=not self._render_options.get("hide_grid", False))
+        return self._renderer.frame(sim.robot_pos(0),
+                                    {o.name: sim.object_pos(0, o.name) for o in sim.free_objects})
 
     def robot_points(self) -> np.ndarray:
         """(2, N) robot point positions in evogym's point order, world units."""
@@ -96,9 +120,16 @@ class SgrVectorEnv(VectorEnv):
     metadata = {"autoreset_mode": AutoresetMode.SAME_STEP}
 
     def __init__(self, task: str, bodies: Sequence[Any] | None = None, *, body: Any = None,
-                 num_envs: int | None = None, max_episode_steps: int | None = None):
+                 num_envs: int | None = None, max_episode_steps: int | None = None,
+                 connections: Any = None):
+        """`bodies` (one per robot), or `body` (with evogym's `connections`, optional) repeated
+        `num_envs` times."""
         if (bodies is None) == (body is None):
             raise ValueError("give either bodies=[...] (one per robot) or body= with num_envs")
+        if connections is not None:
+            if body is None:
+                raise ValueError("connections= goes with body=; give bodies=[...] as built bodies")
+            body = build_body(np.asarray(body), np.asarray(connections))
         if bodies is None:
             bodies = [body] * (1 if num_envs is None else int(num_envs))
         elif num_envs not in (None, 1, len(bodies)):  # make_vec passes num_envs=1 by default

@@ -1,12 +1,13 @@
 """The layers: no import cycle among the project's modules (module-level or inside functions), and
-each layer imports only the layers above it (tsim <- tasks <- evolve)."""
+each layer imports only the layers above it (tsim <- tasks <- evolve <- sgr: sgr, the face users
+import, sits on top and nothing imports it)."""
 
 import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tsim", "tasks", "evolve")
-LAYER = {"tsim": 0, "tasks": 1, "evolve": 2}
+PACKAGES = ("tsim", "tasks", "evolve", "sgr")
+LAYER = {"tsim": 0, "tasks": 1, "evolve": 2, "sgr": 3}
 
 
 def modules() -> dict[str, Path]:
@@ -78,4 +79,13 @@ def test_the_cycle_finder_finds_a_cycle():
 def test_each_layer_imports_only_the_layers_above_it():
     bad = [f"{m} imports {n}" for m, deps in graph().items() for n in deps
            if LAYER[n.split(".")[0]] > LAYER[m.split(".")[0]]]
+    assert not bad, bad
+
+
+def test_nothing_below_sgr_imports_it():
+    """sgr (and sgr.evogym) is the top layer: tsim, tasks and evolve never import it."""
+    g = graph()
+    assert any(m.startswith("sgr.evogym") for m in g)  # the walk found the package
+    bad = [f"{m} imports {n}" for m, deps in g.items() for n in deps
+           if n.split(".")[0] == "sgr" and m.split(".")[0] != "sgr"]
     assert not bad, bad

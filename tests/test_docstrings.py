@@ -1,4 +1,4 @@
-"""Every public class, function and method of tsim, tasks and evolve has a docstring.
+"""Every public class, function and method of tsim, tasks, evolve and sgr has a docstring.
 
 Public: a name not starting with `_`; checked are module-level functions and classes (also those
 under a module-level `if`/`try`), and the methods (properties included) and nested classes of public
@@ -11,7 +11,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tsim", "tasks", "evolve")
+PACKAGES = ("tsim", "tasks", "evolve", "sgr")
 DEFS = (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)
 
 

@@ -221,6 +221,8 @@ class Renderer:
         self.width, self.height = int(width), int(height)
         self.scale = self.width / (view_voxels * C.CELL)  # pixels per world unit
         self.grid = grid
+        self.draw_voxels = True  # fill voxels (evogym's hide_voxels turns this off)
+        self.draw_edges = True  # outline surface edges (evogym's hide_edges turns this off)
         self.track_objects = track_objects
         self.camera = Camera(self.width, self.height, self.scale, follow)
         fixed = [(_Part(o.body), o.pos0) for o in self.world.fixed_objects]
@@ -312,13 +314,16 @@ class Renderer:
         quads_px = self._to_px(np.concatenate(quads), x0, y1)
         palette = np.concatenate(colors)
 
-        owner = np.full((self.height, self.width), -1, dtype=np.int64)
-        tris = np.concatenate([quads_px[:, [0, 1, 2]], quads_px[:, [0, 2, 3]]])
-        ids = np.tile(np.arange(len(quads_px)), 2)
-        _fill_triangles(owner, tris, ids)
         img = self._background(x0, y1)
-        hit = owner >= 0
-        img[hit] = palette[owner[hit]]
+        if self.draw_voxels:
+            owner = np.full((self.height, self.width), -1, dtype=np.int64)
+            tris = np.concatenate([quads_px[:, [0, 1, 2]], quads_px[:, [0, 2, 3]]])
+            ids = np.tile(np.arange(len(quads_px)), 2)
+            _fill_triangles(owner, tris, ids)
+            hit = owner >= 0
+            img[hit] = palette[owner[hit]]
+        if not self.draw_edges:
+            return img
 
         seg = np.concatenate(segs)  # (E, 2, 4): endpoint xy and its voxel centre xy
         ends = self._to_px(seg[..., :2], x0, y1)

@@ -58,7 +58,9 @@ class BatchSim:
         self.n_robot_points = np.array([b.n_points for b in bodies])
         self.n_actuators = np.array([b.n_actuators for b in bodies])
         P, E, V = int(n_pts.max()), int(n_edges.max()), int(n_vox.max())
-        A = max(1, int(self.n_actuators.max()))
+        # actuated objects (sgr.evogym's further robots) read the action columns after the robot's
+        n_obj_act = sum(o.body.n_actuators for o in objs if o.actuated)
+        A = max(1, int(self.n_actuators.max()) + n_obj_act)
         self.max_actuators = int(self.n_actuators.max())
         self.max_robot_points = int(self.n_robot_points.max())
 
@@ -73,6 +75,7 @@ class BatchSim:
         counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
         for w, ps in enumerate(parts):
             p_off = e_off = v_off = 0
+            a_off = bodies[w].n_actuators
             surf, surf_robot, rigid, fix = [], 0, [], []
             for obj_id, part in enumerate(ps):
                 place = (self.origin if obj_id == 0 else objs[obj_id - 1].cell)
@@ -81,7 +84,14 @@ class BatchSim:
                 sl = slice(e_off, e_off + part.n_edges)
                 edge_i[w, sl, 0] = part.edge_a + p_off
                 edge_i[w, sl, 1] = part.edge_b + p_off
-                edge_i[w, sl, 2:4] = part.edge_drivers if obj_id == 0 else -1
+                if obj_id == 0:
+                    edge_i[w, sl, 2:4] = part.edge_drivers
+                elif objs[obj_id - 1].actuated:
+                    d = part.edge_drivers
+                    edge_i[w, sl, 2:4] = np.where(d >= 0, d + a_off, -1)
+                    a_off += part.n_actuators
+                else:
+                    edge_i[w, sl, 2:4] = -1
                 edge_f[w, sl, K.E_REST] = part.edge_rest
                 edge_f[w, sl, K.E_K] = part.edge_k
                 edge_f[w, sl, K.E_GOAL] = part.edge_rest

@@ -38,6 +38,9 @@ class WorldObject:
     cell: tuple[int, int]  # grid cell of the bottom-left of the object's bounding box
     pos0: np.ndarray  # (2, n) exact initial positions
     per_world: bool = False  # placed per world and episode (BatchSim.place_object): never terrain
+    # driven like the robot (evogym lets any object with actuators be a robot): its actuators
+    # read BatchSim.actions after the robot's and earlier actuated objects' (sgr.evogym's worlds)
+    actuated: bool = False
 
     @property
     def is_fixed(self) -> bool:
@@ -168,6 +171,15 @@ def load_world(path: str | Path) -> World:
     path = Path(path)
     grid_w, grid_h, items = _read(path)
     return _world(path.stem, grid_w, grid_h, items, f"file {path}")
+
+
+def make_world(name: str, grid_w: int, grid_h: int, objects: tuple[WorldObject, ...]) -> World:
+    """A world built in code rather than read from a file (evogym's `EvoWorld`, for sgr.evogym):
+    the objects in the load order given (evogym's: robots, then the others, each sorted by name)
+    and the static terrain of the fixed ones."""
+    objects = tuple(objects)
+    return World(name=name, grid_w=grid_w, grid_h=grid_h, objects=objects,
+                 terrain=_build_terrain(objects, grid_w, grid_h))
 
 
 def load_object(path: str | Path) -> WorldObject:

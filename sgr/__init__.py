@@ -1,0 +1,43 @@
+"""sgr: the face users import. Re-exports the public API of the three layers below it (what the
+`__all__` of `tsim`, `tasks` and `evolve` hold), so `import sgr` is enough for a notebook:
+
+    import sgr
+    env = sgr.BatchEnv("Walker-v0", [body])
+    exp = sgr.Experiment.from_config({"method": "sgr", "task": "Walker-v0"}, out="runs/nb")
+
+`sgr.evogym` is evogym 2.0's own API (EvoWorld, EvoSim, EvoViewer, EvoGymBase, utils, the bare gym
+ids) on our simulator, so evogym code ports by changing `evogym` to `sgr.evogym` in its imports.
+Nothing in tsim, tasks or evolve imports this package.
+
+The names are resolved on first use (PEP 562), so `import sgr.evogym` does not pay for importing
+`evolve` (NEAT and the run machinery) it does not use. tests/sgr/test_sgr_package.py checks that
+the lists below are exactly the three packages' `__all__`.
+"""
+
+from __future__ import annotations
+
+import importlib
+
+_FROM = {
+    "tsim": ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",
+             "is_connected", "load_world", "sample_robot", "write_gif"],
+    "tasks": ["TASKS", "BatchEnv", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "task_spec",
+              "task_world"],
+    "evolve": ["METHODS", "Experiment", "Problem", "RunDir", "config_from_dict", "load_config"],
+}
+_WHERE = {name: pkg for pkg, names in _FROM.items() for name in names}
+
+__all__ = sorted(_WHERE)
+
+
+def __getattr__(name: str):
+    """The re-exported name, imported from its package on first use."""
+    if name in _WHERE:
+        value = getattr(importlib.import_module(_WHERE[name]), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'sgr' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))
