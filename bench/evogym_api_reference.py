@@ -163,7 +163,7 @@ def second_robot_world(EvoWorld, worlds: Path):
     (evogym flags it unstable at step 37) as a second robot: a one-voxel robot 'aaa' sorts
     first and leads."""
     world = EvoWorld.from_json(str(worlds / "Lifter-v0.json"))
-    d = np.load(OUT.parent / "evogym32" / "returns_Lifter-v0.npz", allow_pickle=True)
+    d = np.load(OUT.parent / "evogym32" / "returns_Lifter-v0.npz", allow_pickle=False)
     world.add_from_array("robot", d["body"][4], 2, 3)
     world.add_from_array("aaa", np.array([[3]]), 0, 8)
     return world, d["actions"][4, :, :d["n_act"][4]]

@@ -13,7 +13,7 @@
 # 4. `sgr bench` on Walker-v0 at B = 1024, 8192 and 65536 (robot-steps/s).
 # Everything goes to $OUT (default gpu-check/) as JSON and text, with a summary at the end; exit 1
 # on a failed check. Rehearsal on a CPU (what bench/gpu_rehearsal.sh does):
-#   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 PY=/path/to/python3.12 bash bench/gpu_check.sh
+#   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 DATA=tests/data/returns PY=python3.12 bash bench/gpu_check.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PY:-python3}
@@ -40,7 +40,7 @@ SGR_ARCH=$GPU "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${ST
 "$PY" bench/arch_returns.py --compare "$OUT/arch_cpu.json" "$OUT/arch_gpu.json" | tee "$OUT/arch_compare.txt" || fail=1
 
 # 3. recorded evogym data that travelled
-for d in tests/data/returns tests/data/traces tests/data/evogym32; do
+for d in ${DATA:-tests/data/returns tests/data/traces tests/data/evogym32}; do
   [ -d "$d" ] || continue
   name=$(basename "$d")
   SGR_ARCH=cpu "$PY" -m evolve.cli validate --json "$d" > "$OUT/validate_${name}_cpu.json"

@@ -19,4 +19,4 @@ fi
 [ -d device-wheels ] || PY="$ENV/bin/python" bash bench/device_wheels.sh
 if "$ENV/bin/python" -c "import taichi" 2>/dev/null; then echo "gpu_rehearsal: $ENV has taichi: not the device image"; exit 1; fi
 OUT=${OUT:-gpu-rehearsal} PY="$ENV/bin/python" PIP_NO_INDEX=1 SGR_ARCH_GPU=cpu SIZES=${SIZES:-64} \
-  ROBOTS=${ROBOTS:-2} STEPS=${STEPS:-20} bash bench/gpu_check.sh
+  ROBOTS=${ROBOTS:-2} STEPS=${STEPS:-20} DATA=${DATA:-tests/data/returns} bash bench/gpu_check.sh

@@ -20,10 +20,12 @@ import importlib
 
 _FROM = {
     "tsim": ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",
-             "is_connected", "load_world", "sample_robot", "write_gif"],
-    "tasks": ["TASKS", "BatchEnv", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "task_spec",
-              "task_world"],
-    "evolve": ["METHODS", "Experiment", "Problem", "RunDir", "config_from_dict", "load_config"],
+             "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix",
+             "write_gif"],
+    "tasks": ["TASKS", "BatchEnv", "Measure", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "register",
+              "task_spec", "task_world"],
+    "evolve": ["METHODS", "Champion", "Experiment", "Problem", "RunDir", "config_from_dict", "load_champion",
+               "load_config"],
 }
 _WHERE = {name: pkg for pkg, names in _FROM.items() for name in names}
 

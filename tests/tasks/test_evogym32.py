@@ -98,7 +98,7 @@ def test_every_robot_return_and_com_within_evogyms_own_spread(folder, returns, t
     deviation. Achieved: return differences <= 2e-3 of the bound, COM <= 1.1e-6 (Carrier-v0 17,
     spread 6.2e-4), else <= 1.4e-11 (Climber-v2)."""
     r = returns(task)
-    z = np.load(folder / f"returns_{task}.npz")
+    z = np.load(folder / f"returns_{task}.npz", allow_pickle=False)
     bound = np.maximum(1e-10, evogym_spread(z, "returns", "returns"))
     assert np.all(r["abs_diff"] <= bound), np.nonzero(r["abs_diff"] > bound)[0]
     assert r["max_abs_diff"] <= bound.max()

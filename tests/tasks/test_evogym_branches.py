@@ -33,7 +33,7 @@ def _episodes(source: str) -> list[dict]:
     """Recorded episodes: "returns:<task>" (its 24 robots) or the name of a state case. Each has the
     states after every step (row t = after step t): robot `com`, `ort`, tracked object `other`."""
     if source.startswith("returns:"):
-        z = np.load(DATA / f"returns_{source[8:]}.npz")
+        z = np.load(DATA / f"returns_{source[8:]}.npz", allow_pickle=False)
         out = []
         for i in range(len(z["seed"])):
             n = int(z["steps_run"][i]) + 1
@@ -43,7 +43,7 @@ def _episodes(source: str) -> list[dict]:
                 ep["other"] = z["other_com"][i, 1:n]
             out.append(ep)
         return out
-    z = np.load(DATA / "state_cases.npz")
+    z = np.load(DATA / "state_cases.npz", allow_pickle=False)
     (case,) = [c for c in json.loads(str(z["cases"])) if c["name"] == source]
     pre = source + "/"
     ep = {"com": z[pre + "com"][1:], "ort": z[pre + "ort"][1:], "unstable": case["unstable_step"]}
@@ -207,10 +207,10 @@ def test_bidirectional_goal_reached_within_and_beyond_0_2():
     step (the next goal is then scored in the same step). Replaying evogym's recorded COMs and
     goals (the random robots and the state cases put 0.195 and 0.205 right of the first goal),
     some steps finish a goal just inside 0.2 and some leave it just outside."""
-    z = np.load(DATA / "returns_BidirectionalWalker-v0.npz")
+    z = np.load(DATA / "returns_BidirectionalWalker-v0.npz", allow_pickle=False)
     runs = [(z["goals_x_voxels"][i], z["com"][i, 1:int(z["steps_run"][i]) + 1, 0])
             for i in range(len(z["seed"]))]
-    s = np.load(DATA / "state_cases.npz")
+    s = np.load(DATA / "state_cases.npz", allow_pickle=False)
     runs += [(s[f"{n}/goals_x_voxels"], s[f"{n}/com"][1:, 0])
              for n in ("bidirectional_goal_within", "bidirectional_goal_beyond")]
     inside = outside = math.inf

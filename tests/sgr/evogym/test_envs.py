@@ -35,7 +35,7 @@ def test_evogyms_env_classes_are_importable_by_name_and_bound_to_their_task():
 
 @pytest.mark.parametrize("task", ["Walker-v0", "Pusher-v0", "Thrower-v0", "Climber-v1", "Traverser-v0"])
 def test_gym_make_of_a_bare_id_earns_evogyms_rewards(task):
-    d = np.load(DATA / "evogym32" / f"returns_{task}.npz", allow_pickle=True)
+    d = np.load(DATA / "evogym32" / f"returns_{task}.npz", allow_pickle=False)
     for case in range(2):
         env = gym.make(task, body=d["body"][case])
         obs, _ = env.reset()

@@ -30,7 +30,7 @@ def _ref():
 
 @pytest.fixture(scope="module")
 def run():
-    ref, d = _ref(), np.load(DATA / "multi_world.npz")
+    ref, d = _ref(), np.load(DATA / "multi_world.npz", allow_pickle=False)
     sim = EvoSim(ref.multi_world_layout(EvoWorld))
     names = [str(n) for n in d["names"]]
     got = {"pos": [], "vel": [], "ort": [], "unstable": [], "time": []}
@@ -85,7 +85,7 @@ def test_past_steps_and_actuators_read_back_as_evogyms(run):
 
 
 def test_reset_starts_again_at_time_0_and_revert_goes_back(run):
-    ref, d = _ref(), np.load(DATA / "multi_world.npz")
+    ref, d = _ref(), np.load(DATA / "multi_world.npz", allow_pickle=False)
     sim = EvoSim(ref.multi_world_layout(EvoWorld))
     for t in range(20):
         ref.drive(sim, t)
@@ -155,7 +155,7 @@ def test_a_second_robot_goes_unstable_at_evogyms_step():
     comes at the same step, time stops at 37 as evogym's, and the state is evogym's last
     snapshot; later steps stay flagged (with a warning: evogym would go on from its unstable
     state)."""
-    ref, d = _ref(), np.load(DATA / "second_robot.npz")
+    ref, d = _ref(), np.load(DATA / "second_robot.npz", allow_pickle=False)
     world, acts = ref.second_robot_world(EvoWorld, ROOT / "tasks" / "worlds")
     sim = EvoSim(world)
     flags, times = [], []

@@ -48,7 +48,7 @@ def _actions():
 
 def test_tutorial_env_gives_evogyms_observations_and_rewards_for_a_whole_episode(tutorial_dir):
     from envs.simple_env import SimpleWalkerEnvClass
-    d, actions = np.load(DATA / "simple_env.npz"), _actions()
+    d, actions = np.load(DATA / "simple_env.npz", allow_pickle=False), _actions()
     env = SimpleWalkerEnvClass(d["body"], d["connections"])
     obs0, _ = env.reset()
     assert np.abs(obs0 - d["obs0"]).max() < 1e-9
@@ -67,7 +67,7 @@ def test_tutorial_env_gives_evogyms_observations_and_rewards_for_a_whole_episode
 
 def test_tutorial_env_registers_and_makes_through_gym(tutorial_dir):
     import envs  # noqa: F401  (registers SimpleWalkingEnv-v0, as the tutorial does)
-    d = np.load(DATA / "simple_env.npz")
+    d = np.load(DATA / "simple_env.npz", allow_pickle=False)
     env = gym.make("SimpleWalkingEnv-v0", body=d["body"], render_mode="rgb_array")
     obs, _ = env.reset()
     assert np.abs(obs - d["obs0"]).max() < 1e-9

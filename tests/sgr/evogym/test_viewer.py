@@ -116,7 +116,7 @@ def test_camera_follows_as_evogyms():
     spec = importlib.util.spec_from_file_location("ref", root / "bench" / "evogym_api_reference.py")
     ref = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(ref)
-    d = np.load(DATA / "camera.npz")
+    d = np.load(DATA / "camera.npz", allow_pickle=False)
     w = EvoWorld.from_json(str(DATA / "simple_environment.json"))
     w.add_from_array("robot", d["body"], 3, 1, connections=d["connections"])
     sim = EvoSim(w)
