@@ -53,8 +53,8 @@ def gallery_entries(rows: Sequence[dict], runs: Sequence[Path]) -> list[dict]:
     return [{"row": best[k], "run": by_name[best[k]["run"]]} for k in sorted(best)]
 
 
-def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 320, height: int = 160,
-                  every: int = 4, fps: float = 15.0) -> list[dict]:
+def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, height: int = 120,
+                  every: int = 10, fps: float = 8.0) -> list[dict]:
     """Write <run>.gif (every `every`-th step of the champion's episode) and <run>-body.png into
     `folder` for each entry; returns the entries with `gif` and `body` paths added."""
     import imageio.v3 as iio

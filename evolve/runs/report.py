@@ -237,7 +237,7 @@ def report_markdown(rows: list[dict]) -> str:
             for e in levels:
                 ratio = r.get(noise_column(e, "ratio"), math.nan)
                 cells += [f"{r[noise_column(e, 'mean')]:.3f} / {r[noise_column(e, 'min')]:.3f}",
-                          f"{100 * ratio:.0f} %" if math.isfinite(ratio) else "-"]
+                          f"{int(round(100 * ratio))} %" if math.isfinite(ratio) else "-"]
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     return out.getvalue()
