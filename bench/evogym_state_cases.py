@@ -7,8 +7,9 @@ and (issue 28) every other reward and termination branch of every task on both s
 the goals of 8 more tasks, falls through a height line (Lifter-v0's robot below 0.3, GapJumper-v0
 and PlatformJumper-v0 below 0.4, Carrier-v1's package below 0.4), x lines (Flipper-v0 0.1,
 Thrower-v0 0, the beams' 0.2, Carrier-v1's package at 2.0), both orientation limits of the five
-tasks that end when the robot falls over, BidirectionalWalker-v0's 0.2 to a goal, and Pusher's
-package put into the ground plane (which throws it above y = 0 within one step).
+tasks that end when the robot falls over, BidirectionalWalker-v0's 0.2 to a goal and its "all goals
+done" (the robot moved to each goal in turn, before every step), and Pusher's package put into the
+ground plane (which throws it above y = 0 within one step).
 
 Run under the evogym venv (sgr never imports evogym):
 
@@ -17,8 +18,14 @@ Run under the evogym venv (sgr never imports evogym):
 Each case: the body, seed and actions of trace case 1 of the task (tests/data/evogym32), or another
 body (BODIES) with the program of that seed, a fresh env, `reset` as in `evogym_reference.py`, then
 evogym's own `Sim.translate_object(dx, dy, name)` (the C++ simulator adds (dx, dy) to every point
-of the object and re-saves the time-0 snapshot) for each listed move, then `env.step(actions[t])`
-until termination or the case's step count.
+of the object and re-saves the snapshot of the current time, here time 0) for each listed move,
+then `env.step(actions[t])` until termination or the case's step count. A case in REPEATED makes
+its moves again before every later step t, from the positions at that time (evogym then re-saves
+the snapshot of time t, not that of time 0), and follows every move, the first included, with
+evogym's `Sim.revert(now)` (reloads that snapshot and sets every point's last position to its
+position and its "true" velocity to its velocity): translate_object alone leaves the last
+positions behind, so the first substep's true velocity is the jump over dt (~1e4 for a jump of 1),
+which kicks a robot standing on the ground through the contact damping and friction.
 Writes tests/data/evogym32/state_cases.npz (deterministic bytes; README there has the keys).
 """
 
@@ -40,7 +47,8 @@ DATA = Path(__file__).resolve().parent.parent / "tests" / "data" / "evogym32"
 # name, task, steps, moves: (object, rule) where a rule places the object from its reset points
 # p (2, n): ("com_x", x, bottom_y) puts its COM x at x and its lowest point at bottom_y;
 # ("com_y", y) puts its COM y at y; ("beside_robot", gap, bottom_y) puts its left edge gap right
-# of the robot's right edge and its lowest point at bottom_y.
+# of the robot's right edge and its lowest point at bottom_y; ("goal_x", d, d_last) moves it in x
+# only, its COM x d right of BidirectionalWalker-v0's current goal (d_last for the last goal).
 # The climbers' cases but "climber_squeezed" use NARROW_BODY: 3 voxels wide in the 5-wide pipe, it
 # touches no wall and falls freely (slowly at first), so a COM put 0.005 above the top stays above
 # it for step 0; the trace body fills the pipe's width and is thrown down by the soft wall patches.
@@ -103,6 +111,13 @@ CASES: list[tuple[str, str, int, list[tuple[str, tuple]]]] = [
      [("robot", ("near_goal", 0.195, 0.02))]),
     ("bidirectional_goal_beyond", "BidirectionalWalker-v0", 20,
      [("robot", ("near_goal", 0.205, 0.02))]),
+    # BidirectionalWalker-v0's "all goals done" (+1, end): the robot moved in x before every step
+    # (REPEATED) to 0.195 right of the current goal, which that step finishes, and so on to the
+    # last goal, which it finishes too (all done) or leaves 0.205 away (never done)
+    ("bidirectional_all_goals_done", "BidirectionalWalker-v0", 14,
+     [("robot", ("goal_x", 0.195, 0.195))]),
+    ("bidirectional_last_goal_beyond", "BidirectionalWalker-v0", 14,
+     [("robot", ("goal_x", 0.195, 0.205))]),
     ("hurdler_tips_right", "Hurdler-v0", 100, [("robot", ("on_top", 1.4, 0.01))]),
     ("upstepper_tips_left", "UpStepper-v0", 60, [("robot", ("on_top", 1.95, 0.01))]),
     ("obstacle_v0_tips_left", "ObstacleTraverser-v0", 60, [("robot", ("on_top", 4.11, 0.01))]),
@@ -118,6 +133,7 @@ BODIES = {"hurdler_tips_right": "COL_R", "upstepper_tips_left": "COL_L",
           "downstepper_tips_right": "COL_R", "platform_jumper_tips_left": "COL_L",
           "upstepper_tips_right": "COL_R", "obstacle_v0_tips_right": "COL_R",
           "platform_jumper_tips_right": "COL_R"}
+REPEATED = {"bidirectional_all_goals_done", "bidirectional_last_goal_beyond"}
 BODIES.update({c: "FLAT_BODY" for c in ("lifter_robot_falls_low", "gap_jumper_falls_off",
                                         "platform_jumper_falls_off")})
 
@@ -152,8 +168,8 @@ def trace_case(task: str, name: str, steps: int) -> dict:
 
 
 def move_for(u, name: str, rule: tuple) -> tuple[float, float]:
-    """(dx, dy) that puts object `name` where `rule` says (see CASES)."""
-    p = np.asarray(u.object_pos_at_time(0, name))
+    """(dx, dy) that puts object `name` where `rule` says (see CASES), from its points now."""
+    p = np.asarray(u.object_pos_at_time(u.get_time(), name))
     c = p.mean(axis=1)
     if rule[0] == "com_x":
         return rule[1] - c[0], rule[2] - p[1].min()
@@ -164,6 +180,9 @@ def move_for(u, name: str, rule: tuple) -> tuple[float, float]:
         return r[0].max() + rule[1] - p[0].min(), rule[2] - p[1].min()
     if rule[0] == "com_xy":
         return rule[1] - c[0], rule[2] - c[1]
+    if rule[0] == "goal_x":  # BidirectionalWalker-v0
+        k = u.current_goal
+        return u.goals[k].x_goal * 0.1 + rule[2 if k == len(u.goals) - 1 else 1] - c[0], 0.0
     if rule[0] == "near_goal":  # BidirectionalWalker-v0: on_top at d right of the first goal
         rule = ("on_top", u.goals[0].x_goal * 0.1 + rule[1], rule[2])
     if rule[0] == "on_top":  # COM x at x, lowest point gap above the other objects' points below
@@ -172,7 +191,7 @@ def move_for(u, name: str, rule: tuple) -> tuple[float, float]:
         top = 0.0  # evogym's ground plane
         for other in u.world.objects:
             if other != name:
-                q = np.asarray(u.object_pos_at_time(0, other))
+                q = np.asarray(u.object_pos_at_time(u.get_time(), other))
                 under = (q[0] >= lo - 1e-9) & (q[0] <= hi + 1e-9)
                 if under.any():
                     top = max(top, float(q[1][under].max()))
@@ -180,9 +199,9 @@ def move_for(u, name: str, rule: tuple) -> tuple[float, float]:
     raise ValueError(rule)
 
 
-def run_case(name: str, task: str, steps: int, moves: list) -> dict:
+def run_case(case: str, task: str, steps: int, moves: list) -> dict:
     """One moved episode in a fresh env (run in a forked child, see R.isolated)."""
-    tc = trace_case(task, name, steps)
+    tc = trace_case(task, case, steps)
     env = R.make_env(task, tc["body"])
     u = env.unwrapped
     R.reset(env, task, tc["seed"])
@@ -191,6 +210,8 @@ def run_case(name: str, task: str, steps: int, moves: list) -> dict:
         dx, dy = (float(v) for v in move_for(u, name, rule))
         u.sim.translate_object(dx, dy, name)
         applied.append((name, dx, dy))
+    if case in REPEATED:
+        u.sim.revert(u.get_time())
     other = R.OTHER_OBJECT.get(task)
     coms, obs, rewards, other_coms = [R.com(u, 0, "robot")], [], [], []
     orts = [u.object_orientation_at_time(0, "robot")]
@@ -199,7 +220,15 @@ def run_case(name: str, task: str, steps: int, moves: list) -> dict:
     pos0 = {name: np.asarray(u.object_pos_at_time(0, name)) for name, _ in moves}
     drawn = R.drawn_randomness(task, u)
     term_step = unstable_step = -1
+    step_moves, moved_coms = [], []
     for t in range(steps):
+        if t > 0 and case in REPEATED:
+            for name, rule in moves:
+                dx, dy = (float(v) for v in move_for(u, name, rule))
+                u.sim.translate_object(dx, dy, name)
+                step_moves.append((t, name, dx, dy))
+            u.sim.revert(u.get_time())
+            moved_coms.append(R.com(u, u.get_time(), "robot"))
         before = u.get_time()
         with R.Quiet():
             o, r, term, _, _ = env.step(tc["actions"][t])
@@ -218,7 +247,8 @@ def run_case(name: str, task: str, steps: int, moves: list) -> dict:
     env.close()
     return {"tc": tc, "applied": applied, "rewards": np.array(rewards), "obs": np.array(obs),
             "com": np.array(coms), "ort": np.array(orts), "other_com": np.array(other_coms),
-            "pos0": pos0, "drawn": drawn,
+            "pos0": pos0, "drawn": drawn, "step_moves": step_moves,
+            "moved_com": np.array(moved_coms),
             "term_step": term_step, "unstable_step": unstable_step, "steps_run": len(rewards)}
 
 
@@ -236,6 +266,10 @@ def main() -> None:
                      "rules": [[n, list(r)] for n, r in moves],
                      "steps_run": res["steps_run"], "term_step": res["term_step"],
                      "unstable_step": res["unstable_step"]})
+        if name in REPEATED:
+            meta[-1]["revert_after_moves"] = True
+        if res["step_moves"]:
+            meta[-1]["step_moves"] = [list(m) for m in res["step_moves"]]
         pre = name + "/"
         arrays[pre + "body"] = tc["body"].astype(np.int64)
         arrays[pre + "actions"] = tc["actions"][:res["steps_run"]]
@@ -247,6 +281,8 @@ def main() -> None:
             arrays[pre + "goals_x_voxels"] = np.array(res["drawn"]["goals_x_voxels"])
         for obj, p in res["pos0"].items():
             arrays[pre + "pos0_" + obj] = p
+        if res["step_moves"]:
+            arrays[pre + "moved_com"] = res["moved_com"]
         if len(res["other_com"]):
             arrays[pre + "other_com"] = res["other_com"]
         print(f"{name:28s} {task:16s} steps_run {res['steps_run']:3d} term {res['term_step']:3d} "

@@ -8,8 +8,7 @@ factor or sign changed in any branch fails there. docs/VALIDATION.md lists the b
 
 Not reachable from evogym states (listed in docs/VALIDATION.md, checked below where data show it):
 Pusher-v0/-v1's "package COM below y = 0" (evogym's ground plane throws a package put 0.005 into it
-above y = 0.4 within one step) and BidirectionalWalker-v0's "all goals done" (+1, the end: its goals
-lie >= 10 world units of walking apart).
+above y = 0.4 within one step).
 """
 
 from __future__ import annotations
@@ -226,6 +225,54 @@ def test_bidirectional_goal_reached_within_and_beyond_0_2():
                 else:
                     outside = min(outside, d - 0.2)
                     break
+    assert inside <= EPS and outside <= EPS, (inside, outside)
+
+
+def _goal_loop(goals_vox: np.ndarray, xs: np.ndarray) -> list[tuple[int, float]]:
+    """evogym's goal loop over the COM x after every step: per step, the index of the last goal
+    it evaluated and that goal's distance from the COM (a goal within 0.2 is done and the next
+    one evaluated with the same COM)."""
+    goals = [g * 0.1 for g in goals_vox if g >= 0]
+    k, out = 0, []
+    for x in xs:
+        while True:
+            d = abs(goals[k] - x)
+            if d < 0.2 and k + 1 < len(goals):
+                k += 1
+                continue
+            out.append((k, d))
+            if d < 0.2:
+                k += 1
+            break
+        if k == len(goals):
+            break
+    return out
+
+
+def test_bidirectional_all_goals_done_reached_and_not():
+    """BidirectionalWalker-v0's "all goals done" (+1, the end): in evogym's recorded episodes where
+    the robot was moved before every step to each goal in turn (`bidirectional_all_goals_done`,
+    `bidirectional_last_goal_beyond`), the last goal is evaluated with the COM just inside 0.2
+    (done: evogym ended the episode there, with the +1 in that step's reward) and just outside
+    (not done: evogym went on), within EPS of the line on both sides."""
+    z = np.load(DATA / "state_cases.npz", allow_pickle=False)
+    cases = {c["name"]: c for c in json.loads(str(z["cases"]))}
+    inside = outside = math.inf
+    for name in ("bidirectional_all_goals_done", "bidirectional_last_goal_beyond"):
+        goals = z[f"{name}/goals_x_voxels"]
+        last = int((goals >= 0).sum()) - 1
+        loop = _goal_loop(goals, z[f"{name}/com"][1:, 0])
+        rewards = z[f"{name}/rewards"]
+        for t, (k, d) in enumerate(loop):
+            if k != last:
+                continue
+            if d < 0.2:
+                inside = min(inside, 0.2 - d)
+                assert cases[name]["term_step"] == t and rewards[t] > 0.9  # progress + 1
+            else:
+                outside = min(outside, d - 0.2)
+        if cases[name]["term_step"] < 0:
+            assert len(loop) == cases[name]["steps_run"] and loop[-1][0] == last
     assert inside <= EPS and outside <= EPS, (inside, outside)
 
 

@@ -6,7 +6,10 @@ test_evogym_branches.py and docs/VALIDATION.md), against evogym 2.0.0 episodes t
 moved state
 (`state_cases.npz`, recorded by bench/evogym_state_cases.py; README there): evogym's own
 `Sim.translate_object` moved the robot (or a package or beam) right after reset, and we move ours
-by the same (dx, dy) in `env.sim.state`, then replay the same actions.
+by the same (dx, dy) in `env.sim.state`, then replay the same actions. Two BidirectionalWalker-v0
+cases move the robot again before every step (to each goal in turn, evogym's `Sim.revert(now)`
+after each move, so its "all goals done" is reached and missed); ours makes the same moves and the
+same state edit before the same steps.
 
 Per case: the moved points equal evogym's, and every step's reward, observation (floor and ceiling
 sight included), robot COM (and the package's or beam's COM) and the termination step match
@@ -55,26 +58,42 @@ def orientation_columns(task: str) -> list[int]:
 
 def translate(env: BatchEnv, name: str, dx: float, dy: float) -> None:
     """Move object `name` of world 0 by (dx, dy) as evogym's translate_object does: it adds (dx, dy)
-    to the current positions only (not to the last positions: ours stay where reset put them, as
-    evogym's do, which matters once a moved body touches something in the first substep) and
-    re-saves the time-0 snapshot, the reference of the orientation (our `_pos0`s)."""
+    to the current positions only (not to the last positions: ours stay where reset or the last
+    substep put them, as evogym's do, which matters once a moved body touches something in the
+    first substep) and re-saves the snapshot of the current time; at time 0 (before the first
+    step) that is the reference of the orientation and of a reset (our `_pos0`s)."""
     d = np.array([dx, dy])
     if name == "robot":
         pts = np.arange(env.n_points[0])
-        env._pos0[0, pts] += d
+        if env.t == 0:
+            env._pos0[0, pts] += d
     else:
         pts = env._obj_index[name][1][0]
     env.sim.state[0, pts, 0:2] += d
-    env.sim._pos0[0, pts] += d
+    if env.t == 0:
+        env.sim._pos0[0, pts] += d
+
+
+def revert_now(env: BatchEnv) -> None:
+    """evogym's `Sim.revert(now)` right after a move: the snapshot just saved is reloaded, with
+    every point's last position set to its position and its true velocity to its velocity
+    (our state columns pos 0:2, vel 2:4, pos_last 4:6, vel_true 6:8, tsim/kernels.py)."""
+    s = env.sim.state[0]
+    s[:, 4:6] = s[:, 0:2]
+    s[:, 6:8] = s[:, 2:4]
 
 
 def replay(z, case: dict) -> dict:
-    """Our episode of one recorded case: the env, then the moves, then the recorded actions."""
+    """Our episode of one recorded case: the env, then the moves, then the recorded actions, with
+    the moves recorded before later steps (`step_moves`) made before those steps."""
     pre = case["name"] + "/"
     env = BatchEnv(case["task"], [z[pre + "body"]], episode_steps=case["steps"],
                    seeds=[case["seed"]])
+    revert = case.get("revert_after_moves", False)
     for name, dx, dy in case["moves"]:
         translate(env, name, dx, dy)
+    if revert:
+        revert_now(env)
     env.observe()
     moved = {name: (env.sim.robot_pos(0) if name == "robot" else env.sim.object_pos(0, name))
              for name, _, _ in case["moves"]}
@@ -82,7 +101,17 @@ def replay(z, case: dict) -> dict:
     rewards, obs, coms = [], [], [env.sim.robot_com()[0]]
     other = [env.sim.object_pos(0, tracked).mean(axis=1)] if tracked else []
     term_step = -1
+    later = {}
+    for t, name, dx, dy in case.get("step_moves", []):
+        later.setdefault(t, []).append((name, dx, dy))
+    moved_coms = []
     for t, a in enumerate(z[pre + "actions"]):
+        if t in later:
+            for name, dx, dy in later[t]:
+                translate(env, name, dx, dy)
+            if revert:
+                revert_now(env)
+            moved_coms.append(env.sim.robot_com()[0])
         o, r, term, _, _ = env.step([a])
         rewards.append(r[0])
         obs.append(o[0, :env.obs_dims[0]])
@@ -93,7 +122,8 @@ def replay(z, case: dict) -> dict:
             term_step = t
             break
     return {"moved": moved, "rewards": np.array(rewards), "obs": np.array(obs),
-            "com": np.array(coms), "other_com": np.array(other), "term_step": term_step}
+            "com": np.array(coms), "other_com": np.array(other), "term_step": term_step,
+            "moved_com": np.array(moved_coms)}
 
 
 @pytest.mark.parametrize("name", CASE_NAMES)
@@ -107,6 +137,8 @@ def test_moved_state_matches_evogym(data, data_dir, name):
     assert len(ours["rewards"]) == case["steps_run"]
     assert np.abs(ours["rewards"] - data[pre + "rewards"]).max() <= 1e-12
     assert np.abs(ours["com"] - data[pre + "com"]).max() <= 1e-12
+    if pre + "moved_com" in data:  # the robot's COM right after each move between steps
+        assert np.abs(ours["moved_com"] - data[pre + "moved_com"]).max() <= 1e-12
     if pre + "other_com" in data:
         assert np.abs(ours["other_com"] - data[pre + "other_com"]).max() <= 1e-12
     ref = data[pre + "obs"]
