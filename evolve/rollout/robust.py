@@ -108,12 +108,15 @@ class EpisodeNoise:
 @dataclass(frozen=True)
 class Robust:
     """The `robust` config key: each genome's fitness is `statistic` over `episodes` perturbed
-    episodes (`Perturbation`), all simulated in the generation's batch."""
+    episodes (`Perturbation`), all simulated in the generation's batch. `reevaluate`: elites are
+    simulated again every generation, with that generation's noise, instead of keeping the score
+    of their first episodes (a lucky score then does not last)."""
     episodes: int = 4
     action_noise: str = "uniform"
     action_scale: float = 1e-3
     offset: float = 0.0
     statistic: str = "mean"
+    reevaluate: bool = False
 
     @property
     def perturbation(self) -> Perturbation:
@@ -145,7 +148,7 @@ class Robust:
         name = f"{source}: key 'robust"
         if not isinstance(raw, dict):
             raise ValueError(f"{name}' must be a mapping (episodes, action_noise, action_scale, "
-                             f"offset, statistic) or null, got {raw!r}")
+                             f"offset, statistic, reevaluate) or null, got {raw!r}")
         known = set(cls.__dataclass_fields__)
         for key in raw:
             if key not in known:
@@ -165,4 +168,6 @@ class Robust:
             and 0 <= int(s[1:]) <= 100
         if s not in STATISTICS[:3] and not quantile:
             raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, got {s!r}")
-        return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s)
+        if not isinstance(r.reevaluate, bool):
+            raise ValueError(f"{name}.reevaluate' must be true or false, got {r.reevaluate!r}")
+        return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s, r.reevaluate)

@@ -65,7 +65,8 @@ class Experiment:
             self.problem.restore(state.get("problem", {}))
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
-                                 state=state, reevaluate=method.reevaluate_elites)
+                                 state=state, reevaluate=method.reevaluate_elites
+                                 or bool((cfg.get("robust") or {}).get("reevaluate")))
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,

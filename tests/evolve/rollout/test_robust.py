@@ -71,7 +71,7 @@ def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescor
     assert rows(one) == rows(two)
     champ = one.champion()
     assert champ == two.champion()
-    assert champ["evaluation"]["robust"] == {**ROBUST}
+    assert champ["evaluation"]["robust"] == {**ROBUST, "reevaluate": False}
     assert rescore_champion(one.path) == champ["fitness"]  # the K episodes again, from the JSON alone
     nominal = replay_champion(one.path)[0]
     assert nominal != champ["fitness"]  # scored under noise, not by the exact episode
@@ -102,6 +102,20 @@ def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_s
     full = run(tmp_path, "full", cfg)
     assert len(crashed.rows()) == 8 and rows(crashed) == rows(full)
     assert crashed.champion() == full.champion()
+
+
+def test_with_reevaluate_elites_are_simulated_again_with_fresh_noise_and_the_run_stays_exact(tmp_path):
+    cfg = config("sgr", robust={**ROBUST, "reevaluate": True}, generations=4)
+    once = run(tmp_path, "a", cfg)
+    again = run(tmp_path, "b", {**cfg, "workers": 2})
+    assert rows(once) == rows(again)
+    keep = run(tmp_path, "keep", config("sgr", robust=ROBUST, generations=4))
+    k = ROBUST["episodes"]
+    for r, rk in zip(once.rows(), keep.rows(), strict=True):  # every valid genome, every generation
+        assert int(r["episodes"]) == k * int(r["n_valid"])
+        if int(r["generation"]) > 1:  # without: elites keep their score, fewer episodes
+            assert int(rk["episodes"]) < k * int(rk["n_valid"])
+    assert rescore_champion(once.path) == once.champion()["fitness"]
 
 
 def test_episode_noise_follows_the_episode_not_its_slot_in_the_batch_or_the_worker():
@@ -175,6 +189,7 @@ def test_a_robot_shift_moves_the_robot_alone():
     ({"action_scale": -1}, "key 'robust.action_scale' must be a number >= 0"),
     ({"statistic": "q250"}, "key 'robust.statistic' must be one of mean, min, median, qNN"),
     ({"episode": 4}, "key 'robust': unknown key 'episode'"),
+    ({"reevaluate": "yes"}, "key 'robust.reevaluate' must be true or false"),
     ([4], "key 'robust' must be dict or null"),
 ])
 def test_a_bad_robust_key_is_one_error_line_naming_it(tmp_path, capsys, robust, message):
