@@ -16,7 +16,7 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 
 from evolve.rollout.pool import PolicyFactory, RolloutPool
-from evolve.rollout.robust import EpisodeNoise, Robust, episode_keys
+from evolve.rollout.robust import Robust
 
 # config key -> (type or tuple of types, default)
 Schema = dict[str, tuple[Any, Any]]
@@ -71,7 +71,7 @@ class Problem:
         """Fitness of each robot (`RolloutPool.run`'s bodies, items and factory) and the episodes
         simulated: its episode return, or with the config's `robust` key the statistic over K
         perturbed episodes, the K episodes of every robot in one batch; episode k of the robot
-        tagged t is perturbed by `episode_keys(seed, [t], k)` alone."""
+        tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`)."""
         cfg = self.cfg
         robust = Robust.from_config(cfg.get("robust"))
         if robust is None:
@@ -80,10 +80,8 @@ class Problem:
         if n == 0:
             return np.zeros(0), 0
         tags = [str(i) for i in range(n)] if tags is None else list(tags)
-        keys = np.concatenate([episode_keys(cfg["seed"], tags, e) for e in range(k)])
-        noise = EpisodeNoise(robust.perturbation, keys, np.ones(n * k, dtype=bool))
         returns = self.pool.run(cfg["task"], list(bodies) * k, list(items) * k, factory,
-                                cfg["episode_steps"], noise)
+                                cfg["episode_steps"], robust.noise(cfg["seed"], tags))
         return robust.score(returns.reshape(k, n)), n * k
 
     def champion(self, phenotype: Phenotype) -> dict:

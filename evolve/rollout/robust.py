@@ -123,6 +123,12 @@ class Robust:
         """The perturbation of every episode."""
         return Perturbation(self.action_noise, self.action_scale, self.offset)
 
+    def noise(self, seed: int, tags: Sequence[str]) -> EpisodeNoise:
+        """The perturbations of the K episodes of each tagged genome of a run seeded `seed`, episode
+        major: world e * len(tags) + i is episode e of genome i (what `score` reshapes)."""
+        keys = np.concatenate([episode_keys(seed, tags, e) for e in range(self.episodes)])
+        return EpisodeNoise(self.perturbation, keys, np.ones(len(keys), dtype=bool))
+
     def score(self, returns: np.ndarray) -> np.ndarray:
         """(K, N) returns -> (N,) fitness; a non-finite return makes the genome's fitness -inf
         only through the statistic itself (min and quantiles see it, mean gives nan)."""

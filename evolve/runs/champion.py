@@ -128,9 +128,7 @@ def rescore_champion(run_dir: str | Path) -> float:
     if robust is None:
         return float(_replay(champ, body, ctrl, EpisodeNoise(Perturbation(), np.zeros(1, np.uint64),
                                                              np.zeros(1, bool)))[0])
-    keys = np.concatenate([episode_keys(evaluation["seed"], [evaluation["tag"]], e)
-                           for e in range(robust.episodes)])
-    returns = _replay(champ, body, ctrl, EpisodeNoise(robust.perturbation, keys, np.ones(len(keys), bool)))
+    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
     return float(robust.score(returns[:, None])[0])
 
 
