@@ -65,6 +65,10 @@ class BatchEnv:
         self._head = self.spec.head_width()
         self._rel_cols = self._relative_columns()
         self._obj_index = {o.name: self._object_index(k) for k, o in enumerate(self.sim.free_objects)}
+        # free objects' points of the state now, by name: read once per state within `step` (the
+        # reward's measure and several observation blocks ask for them); emptied whenever the
+        # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
+        self._points_now: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.task_state: dict[str, np.ndarray] = {}
         self._rngs: list[random.Random] = []
         self.seed(seeds)
@@ -93,6 +97,9 @@ class BatchEnv:
 
     def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(B, n, 2) positions and velocities of free object `name` in every world."""
+        hit = self._points_now.get(name)
+        if hit is not None:
+            return hit
         try:
             rows, pts = self._obj_index[name]
         except KeyError:
@@ -100,8 +107,10 @@ class BatchEnv:
         s = self.sim.state[rows, pts].transpose(0, 2, 1)
         # (B, 2, n) contiguous, seen as (B, n, 2): numpy's sums over the points depend on the
         # layout, and this one gives the COMs evogym's rewards were validated with, bit for bit
-        return (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
-                np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
+        out = (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
+               np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
+        self._points_now[name] = out
+        return out
 
     def _object_now(self, name: str) -> np.ndarray:
         """(B, 2, n) current points of world object `name`: a simulated one's state, a static
@@ -168,6 +177,7 @@ class BatchEnv:
         self._init_state(mask)
         self._place_objects(mask)
         self.sim.reset(mask)
+        self._points_now.clear()
         if mask is None:
             self.elapsed = np.zeros(self.n_worlds, dtype=np.int64)
             self.terminated = np.zeros(self.n_worlds, dtype=bool)
@@ -186,12 +196,14 @@ class BatchEnv:
         """One env step of every world: (obs (B, max_obs_dim), reward, terminated, truncated (B,),
         info with `unstable` and `t`). An unstable world gets -3 and terminates; a terminated one
         earns 0 from then on. RuntimeError once any world reached `episode_steps`, until `reset`."""
-        if np.any(self.elapsed >= self.episode_steps):
+        if (self.elapsed >= self.episode_steps).any():
             raise RuntimeError("episode is over (truncated); call reset()")
         self.sim.set_actions(actions)
+        self._points_now.clear()  # the caller may have written the state since the last step
         before = self._measure(self._robot_coms()[0])
         active = ~self.terminated
         self.sim.step()
+        self._points_now.clear()
         self.elapsed += 1
         unstable = self.sim.unstable & active
         com_after, vcom_after = self._robot_coms()
@@ -261,6 +273,7 @@ class BatchEnv:
 
     def observe(self) -> np.ndarray:
         """Observations of the current state, recomputed (e.g. after editing `sim.state`)."""
+        self._points_now.clear()
         self._obs = self._observe()
         return self._obs.copy()
 

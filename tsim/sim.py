@@ -141,6 +141,7 @@ class BatchSim:
             ter_i[:] = t.open
         self._pos0 = pos0
         self._counts0 = counts
+        self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
         self.edge_i = edge_i
         self.vox_i = vox_i
@@ -150,6 +151,8 @@ class BatchSim:
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
         self.state = np.zeros((B, P, K.NS))
         self.actions = np.ones((B, A))
+        # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
+        self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]
         # the smallest local-array capacity tier that holds every world (a compiled kernel each)
         n_surf = int(counts[:, K.N_SURF].max())
         self.capacity_tier = 0
@@ -166,14 +169,17 @@ class BatchSim:
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         self._launch: CachedLaunch | None = None  # see `step`
-        # the arrays no step changes, copied once into Taichi's own ndarrays: on a GPU they stay
-        # on the device instead of crossing the bus at every launch; on the CPU a call through
-        # Taichi takes them for ~6.5 us each against ~11 us for a numpy array's
-        # (bench/launch_args_bench.py; a cached launch re-sets them for ~1 us each). So the numpy
-        # edge_i, edge_f, vox_i, lists and ter_* are read-only after construction
-        self._static = tuple(_taichi_array(a) for a in (
-            self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists, self.ter_f,
-            self.ter_i, self.ter_grid))
+        # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
+        # that they stay on the device instead of crossing the bus at every launch. On the CPU the
+        # numpy arrays themselves are passed (flattened once, so every step passes the same
+        # objects): a cached launch (tsim/launch.py) sets a numpy array's address once, where a
+        # Taichi ndarray must be set again at every launch (~1 us each). So the numpy edge_i,
+        # edge_f, vox_i, lists and ter_* are read-only after construction
+        static = (self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists,
+                  self.ter_f, self.ter_i, self.ter_grid)
+        self._static = (tuple(np.ascontiguousarray(a) for a in static) if self._arch == "cpu"
+                        else tuple(_taichi_array(a) for a in static))
+        self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
 
     # ------------------------------------------------------------------ control
     @property
@@ -188,7 +194,7 @@ class BatchSim:
         if sel.shape != (self.n_worlds,):
             raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         if mask is None:
-            self.counts = self._counts0.copy()
+            self.counts[:] = self._counts0  # in place: a cached launch holds its address
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
         self.state[sel] = 0.0
         self.state[sel, :, 0:2] = self._pos0[sel]
@@ -229,14 +235,17 @@ class BatchSim:
                                  f"got {a.shape}")
             # vectorised: one finiteness test and one clip for the whole batch
             M = self.max_actuators
-            mask = np.arange(M)[None, :] < self.n_actuators[:, None]
-            ok = np.isfinite(a) | ~mask
-            if not ok.all():
-                w = int(np.nonzero(~ok.all(axis=1))[0][0])
-                r = a[w, :self.n_actuators[w]]
-                raise ValueError(f"non-finite actions for robot {w}: {r[~np.isfinite(r)][:3]}")
-            self.actions[:, :M] = np.where(mask, np.clip(a, C.ACTION_MIN, C.ACTION_MAX),
-                                           self.actions[:, :M])
+            mask = self._actuator_mask
+            if not np.isfinite(a).all():  # padding past a robot's actuators may hold anything
+                ok = np.isfinite(a) | ~mask
+                if not ok.all():
+                    w = int(np.nonzero(~ok.all(axis=1))[0][0])
+                    r = a[w, :self.n_actuators[w]]
+                    raise ValueError(f"non-finite actions for robot {w}: {r[~np.isfinite(r)][:3]}")
+            # max then min is np.clip's value for finite actions, without np.clip's ~5 us of
+            # Python-level dispatch per call
+            clipped = np.minimum(np.maximum(a, C.ACTION_MIN), C.ACTION_MAX)
+            np.copyto(self.actions[:, :M], clipped, where=mask)
             return
         else:
             if len(actions) != B:
@@ -258,7 +267,7 @@ class BatchSim:
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             edge_i, edge_f, vox_i, lists, ter_f, ter_i, ter_grid = self._static
-            args = (self.counts, self.state.reshape(-1), edge_i, edge_f, vox_i, lists,
+            args = (self.counts, self._state_flat, edge_i, edge_f, vox_i, lists,
                     self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self.state.shape[1],
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)

@@ -125,6 +125,9 @@ class EvoSim:
         for n in names:
             self._slices[n] = np.arange(offsets[n], offsets[n] + parts[n].body.n_points)
         self._all = np.concatenate([self._slices[n] for n in names])
+        # the simulated objects' rows in a snapshot, as slices (reading them copies nothing)
+        self._sim_rows = {n: slice(offsets[n], offsets[n] + parts[n].body.n_points) for n in names
+                          if offsets[n] + parts[n].body.n_points <= self._n_sim}
         self._unstable_warned = False
         self.reset()
 
@@ -160,7 +163,7 @@ class EvoSim:
         if a.shape != (body.n_actuators,):
             raise ValueError(f"expected action with {body.n_actuators} values but got action with "
                              f"{a.size} values for {robot_name}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             raise ValueError(f"non-finite action for {robot_name}: {a[~np.isfinite(a)][:3]}")
         col = self._act_cols[robot_name]
         self._bs.actions[0, col:col + body.n_actuators] = a
@@ -259,12 +262,18 @@ class EvoSim:
         """(2, n) positions of object `object_name`'s points at step `time`, in voxels."""
         self._check_time(time)
         self._check_object(object_name)
+        rows = self._sim_rows.get(object_name)
+        if rows is not None:  # a simulated object: its rows of the snapshot, no terrain appended
+            return self._history[time][rows, 0:2].T / self.VOXEL_SIZE
         return self._points(time, 0)[self._slices[object_name]].T / self.VOXEL_SIZE
 
     def object_vel_at_time(self, time: int, object_name: str) -> np.ndarray:
         """(2, n) velocities of object `object_name`'s points at step `time`, voxels per unit time."""
         self._check_time(time)
         self._check_object(object_name)
+        rows = self._sim_rows.get(object_name)
+        if rows is not None:
+            return self._history[time][rows, 2:4].T / self.VOXEL_SIZE
         return self._points(time, 2)[self._slices[object_name]].T / self.VOXEL_SIZE
 
     def object_orientation_at_time(self, time: int, object_name: str) -> float:

@@ -63,7 +63,7 @@ class EvoGymBase(gym.Env):
             raise TypeError(f"EvoGymBase.step takes a dict of actions by robot name, got "
                             f"{type(action).__name__}")
         for name, a in action.items():
-            a = np.clip(np.asarray(a, dtype=np.float64), 0.6, 1.6)
+            a = np.minimum(np.maximum(np.asarray(a, dtype=np.float64), 0.6), 1.6)  # np.clip's values
             self._sim.set_action(name, a)
         done = self._sim.step()
         if self._render_mode in ("human", "screen"):
