@@ -171,7 +171,7 @@ class EvoSim:
     def step(self) -> bool:
         """One step (30 substeps of dt = 1e-4). True when evogym's instability rule fired: then
         time does not advance and the last snapshot stays the current state."""
-        if self._bs.unstable[0]:
+        if self._stopped():
             if not self._unstable_warned:
                 warnings.warn("EvoSim.step after an unstable step: sgr keeps the last stable state "
                               "(evogym goes on from the unstable one); reset() or revert() to go on",
@@ -179,7 +179,7 @@ class EvoSim:
                 self._unstable_warned = True
             return True
         self._bs.step()
-        if self._bs.unstable[0]:
+        if self._stopped():
             return True
         if self._extra_unstable():
             self.revert(self._time)  # evogym keeps the last snapshot
@@ -188,6 +188,11 @@ class EvoSim:
         self._time += 1
         self._history.append(self._snapshot())
         return False
+
+    def _stopped(self) -> bool:
+        """The world is frozen by the instability rule or a non-finite state (`BatchSim.unstable`
+        for the one world, read as a scalar: this runs twice per step)."""
+        return int(self._bs.counts[0, K.STATUS]) in (K.UNSTABLE, K.NONFINITE)
 
     def _extra_unstable(self) -> bool:
         """evogym's rule for the robots after the first, at the end of the step: more ordered
