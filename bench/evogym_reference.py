@@ -12,9 +12,9 @@ Per task it writes:
                        programs, 100 steps: per-step rewards, termination step, return, reset
                        observation, robot COM every step, and evogym's own reruns under +-1e-9 and
                        +-1e-6 action perturbations (the chaos floor).
-  trace_<task>_<k>_<name>.npz   3 cases, 50 steps: robot COM, orientation and rewards every step;
-                       every point of every object, point velocities and observations at
-                       steps 0..5, 10, 20, 30, 40 and 50 (`state_steps`).
+  trace_<task>_<k>_<name>.npz   3 cases, 50 steps: robot COM, orientation, observation and rewards
+                       every step; every point of every object and the robot's point velocities
+                       at steps 0..5, 10, 20, 30, 40 and 50 (`state_steps`).
 and index.json (task facts + per-task summaries + sha256 of every file) and timing.json (the only
 non-deterministic output). Every .npz is byte-reproducible: fixed zip timestamps, fixed key order.
 
@@ -80,8 +80,8 @@ PERTURBATIONS = {"p9": 1e-9, "m9": -1e-9, "p6": 1e-6, "m6": -1e-6}
 MAX_ACT = 25
 WALKER_BODY = np.array([[3, 3, 3, 3, 3], [3, 3, 3, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3],
                         [3, 3, 0, 3, 3]])
-FORMAT_VERSION = 2  # 2: trace states at state_steps only, no per-step rewards of the reruns (size)
-TRACE_STRIDE = 10  # trace files keep pos, robot_vel and obs at steps 0..5, every 10th and the last
+FORMAT_VERSION = 2  # 2: trace points at state_steps only, no per-step rewards of the reruns (size)
+TRACE_STRIDE = 10  # trace files keep pos and robot_vel at steps 0..5, every 10th and the last
 
 
 # ---------------------------------------------------------------------------------------------- io
@@ -414,7 +414,7 @@ def record_traces(task: str, outdir: str, cases: list, returns_arrays: dict) -> 
             "robot_vel": r["vel"][keep],
             "com": r["com"],
             "ort": r["ort"],
-            "obs": r["obs"][keep],
+            "obs": r["obs"],
             "reward": r["rewards"][:S1 - 1],
             "term_step": np.int64(r["term_step"]),
             "unstable_step": np.int64(r["unstable_step"]),

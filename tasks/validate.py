@@ -252,8 +252,8 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
 
 
 def state_steps(z) -> np.ndarray:
-    """The steps whose states (every point, observation) a trace file keeps: its `state_steps`
-    (format 2: 0..5, every 10th and the last), else every step (format 1)."""
+    """The steps whose points (`pos`, `robot_vel`) a trace file keeps: its `state_steps` (format 2:
+    0..5, every 10th and the last), else every step (format 1)."""
     if "state_steps" in z.files:
         return z["state_steps"]
     return np.arange(int(z["steps_run"]) + 1)
@@ -261,8 +261,7 @@ def state_steps(z) -> np.ndarray:
 
 def evogym32_traces(folder: str | Path, task: str) -> dict:
     """Replay the 3 `trace_<task>_*.npz` cases of tests/data/evogym32 (50 steps, one batch): robot
-    COM and reward errors at every step, observation errors at the steps the file keeps
-    (`state_steps`)."""
+    COM, reward and observation errors at every step."""
     files = sorted(Path(folder).glob(f"trace_{task}_*.npz"))
     data = [_npz(f) for f in files]
     steps = int(data[0]["steps"])
@@ -285,9 +284,7 @@ def evogym32_traces(folder: str | Path, task: str) -> dict:
     for w, (f, z) in enumerate(zip(files, data, strict=True)):
         n = int(z["steps_run"]) + 1
         c = np.array(com[w][:n])
-        at = state_steps(z)
-        o = np.array([obs[w][t] for t in at if t < len(obs[w])])
-        ro = z["obs"][:len(at)]
+        o, ro = np.array(obs[w][:n]), z["obs"][:n]
         oc = _orientation_columns(env, w)
         keep = np.ones(ro.shape[1], bool)
         keep[oc] = False
