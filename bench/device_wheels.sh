@@ -2,6 +2,9 @@
 # Downloads, here, the wheels the GPU machine lacks (bench/device-requirements.txt: pinned, no
 # dependencies resolved there) for CPython 3.12 on x86-64 Linux into device-wheels/ (git-ignored),
 # so that they travel with the working tree:  bash bench/device_wheels.sh [DIR]
+# taichi's C API (taichi/_lib/c_api/, 20 MB packed, never loaded by `import taichi`) is dropped from
+# its wheel (bench/strip_wheel.py), and every file is checked against bench/device-wheels.json, the
+# sizes tests/test_tree_size.py counts against the 60 MiB budget.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DIR=${1:-device-wheels}
@@ -14,4 +17,15 @@ grep -v '^#' bench/device-requirements.txt | grep . > "$DIR/requirements.txt"
 n=$(ls "$DIR"/*.whl | wc -l)
 want=$(wc -l < "$DIR/requirements.txt")
 [ "$n" -eq "$want" ] || { echo "device_wheels: $n wheels in $DIR for $want pins (an old version left there?)" >&2; exit 1; }
-du -sh "$DIR"
+"$PY" bench/strip_wheel.py "$DIR"/taichi-*.whl taichi/_lib/c_api/
+"$PY" - "$DIR" <<'PY'
+import json, os, sys
+d = sys.argv[1]
+want = json.load(open("bench/device-wheels.json"))["files"]
+have = {f: os.path.getsize(os.path.join(d, f)) for f in sorted(os.listdir(d))}
+if have != want:
+    diff = sorted(f"{f}: {have.get(f)} bytes, bench/device-wheels.json says {want.get(f)}"
+                  for f in set(have) | set(want) if have.get(f) != want.get(f))
+    sys.exit("device_wheels: " + "; ".join(diff))
+print(f"device_wheels: {len(have)} files, {sum(have.values())} bytes ({sum(have.values()) / 2**20:.1f} MiB), as bench/device-wheels.json says")
+PY

@@ -12,7 +12,9 @@ Per task it writes:
                        programs, 100 steps: per-step rewards, termination step, return, reset
                        observation, robot COM every step, and evogym's own reruns under +-1e-9 and
                        +-1e-6 action perturbations (the chaos floor).
-  trace_<task>_<k>_<name>.npz   3 cases, 50 steps: every point of every object, every step.
+  trace_<task>_<k>_<name>.npz   3 cases, 50 steps: robot COM, orientation, observation and rewards
+                       every step; every point of every object and the robot's point velocities
+                       at steps 0..5, 10, 20, 30, 40 and 50 (`state_steps`).
 and index.json (task facts + per-task summaries + sha256 of every file) and timing.json (the only
 non-deterministic output). Every .npz is byte-reproducible: fixed zip timestamps, fixed key order.
 
@@ -29,8 +31,6 @@ global `random`, which random.seed(s) fixes right before the reset.
 from __future__ import annotations
 
 import argparse
-import hashlib
-import io
 import json
 import os
 import pickle
@@ -38,12 +38,12 @@ import random
 import sys
 import time
 import warnings
-import zipfile
 
 import evogym.envs  # noqa: F401  (registers the 32 tasks)
 import gymnasium as gym
 import numpy as np
 from evogym import sample_robot
+from npz_io import save_npz, state_steps  # bench/ (this script's folder) is on sys.path
 
 ALL_TASKS = (
     "Walker-v0", "BridgeWalker-v0", "CaveCrawler-v0", "Jumper-v0", "Flipper-v0", "Balancer-v0",
@@ -80,28 +80,11 @@ PERTURBATIONS = {"p9": 1e-9, "m9": -1e-9, "p6": 1e-6, "m6": -1e-6}
 MAX_ACT = 25
 WALKER_BODY = np.array([[3, 3, 3, 3, 3], [3, 3, 3, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3],
                         [3, 3, 0, 3, 3]])
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2  # 2: trace points at state_steps only, no per-step rewards of the reruns (size)
+TRACE_STRIDE = 10  # trace files keep pos and robot_vel at steps 0..5, every 10th and the last
 
 
 # ---------------------------------------------------------------------------------------------- io
-def save_npz(path: str, arrays: dict) -> str:
-    """np.savez_compressed, but byte-reproducible (fixed timestamps); returns the sha256."""
-    buf = io.BytesIO()
-    with zipfile.ZipFile(buf, "w", compression=zipfile.ZIP_DEFLATED, compresslevel=9) as zf:
-        for key, value in arrays.items():
-            arr = np.asanyarray(value)
-            if arr.dtype == object:
-                raise TypeError(f"{key}: object arrays are not allowed")
-            data = io.BytesIO()
-            np.lib.format.write_array(data, arr, allow_pickle=False)
-            info = zipfile.ZipInfo(key + ".npy", date_time=(1980, 1, 1, 0, 0, 0))
-            info.compress_type = zipfile.ZIP_DEFLATED
-            info.external_attr = 0o644 << 16
-            zf.writestr(info, data.getvalue(), compresslevel=9)
-    raw = buf.getvalue()
-    with open(path, "wb") as f:
-        f.write(raw)
-    return hashlib.sha256(raw).hexdigest()
 
 
 class Quiet:
@@ -384,8 +367,6 @@ def record_returns(task: str, outdir: str, n_cases: int) -> tuple[dict, list]:
         for r, ref in zip(runs, refs, strict=True):
             assert r["drawn"] == ref["drawn"], f"{task}: task randomness differs between reruns"
         arrays[f"returns_{k}"] = np.array([np.nansum(r["rewards"]) for r in runs])
-        if abs(PERTURBATIONS[k]) < 1e-8:  # per-step rewards only for the +-1e-9 reruns (size)
-            arrays[f"rewards_{k}"] = np.array([r["rewards"] for r in runs])
         arrays[f"term_step_{k}"] = np.array([r["term_step"] for r in runs], dtype=np.int64)
         arrays[f"unstable_step_{k}"] = np.array([r["unstable_step"] for r in runs], dtype=np.int64)
         dev = []
@@ -414,6 +395,7 @@ def record_traces(task: str, outdir: str, cases: list, returns_arrays: dict) -> 
             assert np.array_equal(r["rewards"][:r["steps_run"]],
                                   returns_arrays["rewards"][i, :r["steps_run"]]), f"{task}: rewards"
         S1 = len(r["pos"])
+        keep = state_steps(S1 - 1, TRACE_STRIDE)
         arrays = {
             "format_version": np.int64(FORMAT_VERSION),
             "task": np.str_(task),
@@ -427,8 +409,9 @@ def record_traces(task: str, outdir: str, cases: list, returns_arrays: dict) -> 
             "T": np.int64(T), "A": np.float64(A), "phases": phi,
             "actions": actions,
             "world_objects": np.str_(json.dumps(r["layout"])),
-            "pos": r["pos"],
-            "robot_vel": r["vel"],
+            "state_steps": keep,
+            "pos": r["pos"][keep],
+            "robot_vel": r["vel"][keep],
             "com": r["com"],
             "ort": r["ort"],
             "obs": r["obs"],

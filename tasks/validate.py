@@ -251,9 +251,17 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
             "com_err_median": float(np.median(com_err))}
 
 
+def state_steps(z) -> np.ndarray:
+    """The steps whose points (`pos`, `robot_vel`) a trace file keeps: its `state_steps` (format 2:
+    0..5, every 10th and the last), else every step (format 1)."""
+    if "state_steps" in z.files:
+        return z["state_steps"]
+    return np.arange(int(z["steps_run"]) + 1)
+
+
 def evogym32_traces(folder: str | Path, task: str) -> dict:
-    """Replay the 3 `trace_<task>_*.npz` cases of tests/data/evogym32 (50 steps, one batch):
-    robot COM error and every point's error per step, observation errors at every step."""
+    """Replay the 3 `trace_<task>_*.npz` cases of tests/data/evogym32 (50 steps, one batch): robot
+    COM, reward and observation errors at every step."""
     files = sorted(Path(folder).glob(f"trace_{task}_*.npz"))
     data = [_npz(f) for f in files]
     steps = int(data[0]["steps"])
