@@ -194,12 +194,11 @@ class BatchSim:
         if sel.shape != (self.n_worlds,):
             raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         if mask is None:
-            self.counts[:] = self._counts0  # in place: a cached launch holds its address
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
         self.state[sel] = 0.0
         self.state[sel, :, 0:2] = self._pos0[sel]
         self.state[sel, :, 4:6] = self._pos0[sel]
-        self.counts[sel] = self._counts0[sel]
+        self.counts[sel] = self._counts0[sel]  # in place: a cached launch holds its address
         self.actions[sel] = 1.0
         self.time[sel] = 0
 

@@ -263,23 +263,26 @@ class EvoSim:
         self._check_time(time)
         return self._points(time, 2)[self._all].T / self.VOXEL_SIZE
 
+    def _object_points(self, time: int, object_name: str, col: int) -> np.ndarray:
+        """(n, 2) positions (col 0) or velocities (col 2) of one object at `time`, world units: a
+        simulated object's rows of the snapshot (no terrain appended), a fixed one's from
+        `_points`."""
+        rows = self._sim_rows.get(object_name)
+        if rows is not None:
+            return self._history[time][rows, col:col + 2]
+        return self._points(time, col)[self._slices[object_name]]
+
     def object_pos_at_time(self, time: int, object_name: str) -> np.ndarray:
         """(2, n) positions of object `object_name`'s points at step `time`, in voxels."""
         self._check_time(time)
         self._check_object(object_name)
-        rows = self._sim_rows.get(object_name)
-        if rows is not None:  # a simulated object: its rows of the snapshot, no terrain appended
-            return self._history[time][rows, 0:2].T / self.VOXEL_SIZE
-        return self._points(time, 0)[self._slices[object_name]].T / self.VOXEL_SIZE
+        return self._object_points(time, object_name, 0).T / self.VOXEL_SIZE
 
     def object_vel_at_time(self, time: int, object_name: str) -> np.ndarray:
         """(2, n) velocities of object `object_name`'s points at step `time`, voxels per unit time."""
         self._check_time(time)
         self._check_object(object_name)
-        rows = self._sim_rows.get(object_name)
-        if rows is not None:
-            return self._history[time][rows, 2:4].T / self.VOXEL_SIZE
-        return self._points(time, 2)[self._slices[object_name]].T / self.VOXEL_SIZE
+        return self._object_points(time, object_name, 2).T / self.VOXEL_SIZE
 
     def object_orientation_at_time(self, time: int, object_name: str) -> float:
         """evogym's orientation estimate of the object at step `time` against step 0, radians in
