@@ -1,5 +1,5 @@
 """`sgr` command line. The dispatcher lives here (evolve is the only layer that may import all
-three); evolve's own commands are evolve, sweep, report, render and plot, and the task and
+three); evolve's own commands are evolve, sweep, report, select-champion, render and plot, and the task and
 simulator commands (demo, validate, bench) come from tasks/cli.py."""
 
 from __future__ import annotations
@@ -217,6 +217,20 @@ def _report(args: argparse.Namespace) -> int:
     return 0
 
 
+def _select_champion(args: argparse.Namespace) -> int:
+    from evolve.runs.experiment import select_finished_run
+    from evolve.runs.final_selection import FinalSelection, describe
+    from evolve.runs.rundir import RunDir
+
+    given = {k: v for k, v in (("candidates", args.candidates), ("episodes", args.episodes),
+                               ("statistic", args.statistic), ("tolerance", args.tolerance)) if v is not None}
+    own = RunDir(_resume_dir(args.run_dir)).config().get("final_selection") or {}
+    settings = FinalSelection.from_config({**own, **given}, "sgr select-champion")
+    champ = select_finished_run(args.run_dir, settings, args.workers)
+    print(f"{args.run_dir}: {describe(champ)}")
+    return 0
+
+
 def _render(args: argparse.Namespace) -> int:
     from evolve.runs.champion import champion_gif
     from tasks.bench import sinusoid
@@ -325,6 +339,18 @@ def main(argv: list[str] | None = None) -> int:
     rp.add_argument("--no-gallery", action="store_true",
                     help="no champion GIFs (gallery/) in report.html")
     rp.set_defaults(fn=_report)
+    sc = sub.add_parser("select-champion",
+                        help="choose a finished run's champion afresh among its final elites by many "
+                             "perturbed episodes (the final_selection config key, after the fact)")
+    sc.add_argument("run_dir", metavar="RUN_DIR")
+    sc.add_argument("--candidates", type=positive(int), help="top final elites scored, besides the "
+                                                                "best-ever genome (default 16)")
+    sc.add_argument("--episodes", type=positive(int), help="perturbed episodes per candidate (default 32)")
+    sc.add_argument("--statistic", help="mean, min, median or qNN (default mean)")
+    sc.add_argument("--tolerance", type=float, help="a candidate's score and nominal return may differ "
+                                                    "by TOLERANCE x the larger (default 0.05)")
+    sc.add_argument("--workers", type=workers_arg, default=1, help="rollout processes (default 1)")
+    sc.set_defaults(fn=_select_champion)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
     r.add_argument("--task")
@@ -360,7 +386,7 @@ def main(argv: list[str] | None = None) -> int:
     cc.set_defaults(fn=_convert_checkpoints)
     trust_help = ("import the code (imports:) that a run or sweep folder names even where someone else "
                   "could have written it; say you trust the folder")
-    for parser in (e, sw, rp, r):
+    for parser in (e, sw, rp, r, sc):
         parser.add_argument("--trust-imports", action="store_true", help=trust_help)
     register_task_commands(sub)
     args = p.parse_args(argv)

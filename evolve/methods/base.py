@@ -10,7 +10,8 @@ evolve/methods/__init__.py's registry.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any, ClassVar, Protocol
 
 import numpy as np
@@ -83,6 +84,17 @@ class Problem:
         returns = self.pool.run(cfg["task"], list(bodies) * k, list(items) * k, factory,
                                 cfg["episode_steps"], robust.noise(cfg["seed"], tags))
         return robust.score(returns.reshape(k, n)), n * k
+
+    @contextmanager
+    def scored_with(self, robust: dict | None) -> Iterator[None]:
+        """Inside, `evaluate` scores as the `robust` mapping says (None: one exact episode) instead
+        of as the run's config does (a run's final selection scores its candidates this way)."""
+        cfg = self.cfg
+        self.cfg = {**cfg, "robust": robust}
+        try:
+            yield
+        finally:
+            self.cfg = cfg
 
     def champion(self, phenotype: Phenotype) -> dict:
         """The champion file's method-specific keys: at least `body` and `controller` (JSON)."""

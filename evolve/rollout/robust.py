@@ -133,8 +133,11 @@ class Robust:
         """(K, N) returns -> (N,) fitness; a non-finite return makes the genome's fitness -inf
         only through the statistic itself (min and quantiles see it, mean gives nan)."""
         s = self.statistic
-        if s == "mean":
-            return returns.mean(axis=0)
+        if s == "mean":  # summed episode by episode: numpy's mean sums pairwise or not depending on
+            total = returns[0].astype(float)  # the array's shape, so one genome scored alone (K, 1)
+            for r in returns[1:]:  # would differ in the last bit from its column of a (K, N) batch
+                total = total + r
+            return total / len(returns)
         if s == "min":
             return returns.min(axis=0)
         if s == "median":

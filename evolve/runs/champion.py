@@ -31,6 +31,30 @@ from tsim.body import build_body, check_robot
 KEYS = ("task", "episode_steps", "body", "controller")
 
 
+def genome_json(genome) -> dict:
+    """The champion's genome as plain JSON (every node and connection, disabled ones included): a
+    record for reading; resuming uses the checkpoints, not this."""
+    return {"key": genome.key,
+            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
+                       "aggregation": n.aggregation} for n in genome.nodes.values()],
+            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
+                            for c in genome.connections.values()]}
+
+
+def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, generation: int,
+                    evaluation: dict) -> dict:
+    """champion.json's record of `genome` (decoded to `phenotype`) scored `fitness` as `evaluation`
+    says (robust settings, seed, tag), found in `generation` (counted from 1); `problem` is the run's
+    method (`Problem.champion` gives the body and controller)."""
+    champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
+             "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
+             "genome": genome_json(genome)}
+    method_keys = problem.champion(phenotype)
+    evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
+    champ.update(method_keys, evaluation=evaluation)
+    return champ
+
+
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
     """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
     ValueError naming the file and the key when it is not a champion that runs (checked with one

@@ -18,6 +18,7 @@ from typing import Any
 from evolve.methods import METHODS
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
+from evolve.runs.final_selection import FinalSelection
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 
@@ -47,6 +48,8 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "workers": ((int, str), "auto"),
     "imports": (list, []),
     "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
+    # evolve/runs/final_selection.py; null: the champion is the best-ever genome
+    "final_selection": ((dict, type(None)), None),
 }
 
 
@@ -113,6 +116,12 @@ def check_config(raw: dict, source: str = "config") -> dict:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
     robust = Robust.from_config(cfg["robust"], source)
     cfg["robust"] = None if robust is None else robust.to_json()
+    selection = FinalSelection.from_config(cfg["final_selection"], source)
+    if selection is not None and problem.reevaluate_elites:
+        raise ValueError(f"{source}: key 'final_selection' does not apply to method {method!r}: its "
+                         "evaluation evolves each body's controllers again, so a candidate has no "
+                         "fixed robot to score")
+    cfg["final_selection"] = None if selection is None else selection.to_json()
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)

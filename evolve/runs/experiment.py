@@ -20,22 +20,14 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.runs.champion import champion_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.final_selection import FinalSelection, describe, select_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.registry import import_tasks
-
-
-def genome_json(genome) -> dict:
-    """The champion's genome as plain JSON (every node and connection, disabled ones included): a
-    record for reading; resuming uses the checkpoints, not this."""
-    return {"key": genome.key,
-            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
-                       "aggregation": n.aggregation} for n in genome.nodes.values()],
-            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
-                            for c in genome.connections.values()]}
 
 
 def rollout_pool(workers: int | str) -> RolloutPool:
@@ -63,6 +55,7 @@ class Experiment:
         self.problem = method(cfg, self.neat_config, self.pool)
         if state is not None:
             self.problem.restore(state.get("problem", {}))
+        self.selection = FinalSelection.from_config(cfg.get("final_selection"))
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
                                  state=state, reevaluate=method.reevaluate_elites
@@ -144,8 +137,12 @@ class Experiment:
         with _interrupt_after_generation() as stop:
             while search.generation < cfg["generations"]:
                 row = search.step()
+                final = self.selection is not None and search.generation == cfg["generations"]
+                if final:  # before the row: a run killed while choosing runs its last generation again
+                    self._select_champion()
                 self.run.append_row({**row, "generation": row["generation"] + 1})  # counted from 1
-                self._write_champion()
+                if not final:
+                    self._write_champion()
                 g = search.generation
                 if g % cfg["checkpoint_every"] == 0 or g == cfg["generations"] or stop.is_set():
                     self.run.save_checkpoint(search.generation, self.state())
@@ -159,18 +156,21 @@ class Experiment:
         best = self.search.best
         if best is None:
             return
-        champ = {"format": "sgr-champion-1", "method": self.cfg["method"], "task": self.cfg["task"],
-                 "episode_steps": self.cfg["episode_steps"], "fitness": best["fitness"],
-                 "generation": best["generation"] + 1, "genome": genome_json(best["genome"])}
-        method_keys = self.problem.champion(best["phenotype"])
         # how the fitness was scored: enough to score the champion again exactly (robust: the
         # run's seed and the evaluation's tag give every episode's noise; the tag holds the
         # search's own generation number, counted from 0)
         evaluation = {"robust": self.cfg.get("robust"), "seed": self.cfg["seed"],
                       "tag": f"{best['generation']}/{best['key']}"}
-        evaluation.update(method_keys.pop("evaluation", {}))
-        champ.update(method_keys, evaluation=evaluation)
-        self.run.write_champion(champ)
+        self.run.write_champion(champion_record(self.cfg, self.problem, best["genome"], best["phenotype"],
+                                                best["fitness"], best["generation"] + 1, evaluation))
+
+    def _select_champion(self) -> None:
+        """The run's end with `final_selection`: the champion chosen afresh among the final elites
+        (evolve/runs/final_selection.py)."""
+        t0 = time.perf_counter()
+        champ = select_champion(self, self.selection)
+        if not self.quiet:
+            print(f"final selection: {describe(champ)} ({time.perf_counter() - t0:.0f} s)", flush=True)
 
     def _progress(self, row: dict, elapsed: float) -> None:
         if self.quiet:
@@ -194,13 +194,13 @@ class Experiment:
 
         self.close()
         plot_run(self.run.path, self.run.path / "fitness.png")
-        best = self.search.best
-        if best is None:
+        if self.search.best is None:
             return
         if self.cfg.get("render_champion", True):
             champion_gif(self.run.path)
         if not self.quiet:
-            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation'] + 1}) -> "
+            best = self.run.champion()
+            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
 
 
@@ -225,3 +225,32 @@ def _interrupt_after_generation() -> Iterator[threading.Event]:
         yield stop
     finally:
         signal.signal(signal.SIGINT, old)
+
+
+def select_finished_run(run_dir: str | Path, settings: FinalSelection | None = None,
+                        workers: int | str = 1) -> dict:
+    """`select_champion` (evolve/runs/final_selection.py) on a finished run's last checkpoint (`sgr
+    select-champion`): with `settings`, else the run's own `final_selection`, else the defaults."""
+    run = RunDir(run_dir)
+    cfg = run.config()
+    for ref in cfg.get("imports") or ():  # the modules that register the run's own task
+        import_tasks(ref, named_in=run.path / "config.yaml")
+    state = load_checkpoint(run, cfg)
+    if state is None:
+        raise ValueError(f"{run_dir} has no checkpoint")
+    if state["generation"] < cfg["generations"]:
+        raise ValueError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
+                         "generations): resume it first")
+    if settings is None:
+        settings = FinalSelection.from_config(cfg.get("final_selection"), str(run.path / "config.yaml")) \
+            or FinalSelection()
+    run.lock()
+    try:
+        exp = Experiment(run, cfg, state=state, quiet=True, workers=workers)
+    except BaseException:
+        run.unlock()
+        raise
+    try:
+        return select_champion(exp, settings)
+    finally:
+        exp.close()

@@ -228,16 +228,22 @@ def report_markdown(rows: list[dict]) -> str:
     rob = [r for r in rows if "nominal" in r]
     if rob and levels:
         out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
-                  "the mean as a share of the nominal return (- where that is not positive).\n\n")
-        out.write("| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share |"
-                                                          for e in levels) + "\n")
+                  "the mean as a share of the nominal return and of the champion's recorded fitness "
+                  "(- where that is not positive).\n\n")
+        out.write("| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of nominal "
+                                                          f"/ of champion |" for e in levels) + "\n")
         out.write("|---" * (3 + 2 * len(levels)) + "|\n")
+
+        def pct(x: float) -> str:
+            return f"{int(round(100 * x))} %" if math.isfinite(x) else "-"
+
         for r in sorted(rob, key=lambda r: r["run"]):
             cells = []
             for e in levels:
                 ratio = r.get(noise_column(e, "ratio"), math.nan)
-                cells += [f"{r[noise_column(e, 'mean')]:.3f} / {r[noise_column(e, 'min')]:.3f}",
-                          f"{int(round(100 * ratio))} %" if math.isfinite(ratio) else "-"]
+                mean, champ = r[noise_column(e, "mean")], r["champion_fitness"]
+                cells += [f"{mean:.3f} / {r[noise_column(e, 'min')]:.3f}",
+                          f"{pct(ratio)} / {pct(mean / champ if champ > 0 else math.nan)}"]
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     return out.getvalue()

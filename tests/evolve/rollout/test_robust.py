@@ -172,6 +172,17 @@ def test_scores_are_the_statistic_over_the_episodes(statistic, expected):
     assert r.score(returns).tolist() == expected
 
 
+@pytest.mark.parametrize("statistic", ["mean", "min", "median", "q25"])
+def test_a_genome_scored_alone_gets_the_bits_of_its_column_in_a_batch(statistic):
+    """A champion is scored again alone (`rescore_champion`); evolution scored it in a batch."""
+    rng = np.random.default_rng(3)
+    r = Robust.from_config({"episodes": 32, "statistic": statistic})
+    for k in (4, 12, 32, 100):
+        returns = rng.normal(5.0, 3.0, size=(k, 16))
+        batch = r.score(returns)
+        assert [r.score(returns[:, [i]])[0] for i in range(16)] == batch.tolist()
+
+
 def test_a_robot_shift_moves_the_robot_alone():
     body = np.array([[3, 3, 3], [3, 0, 3], [3, 0, 3]])
     plain = BatchEnv("Carrier-v0", [body, body])

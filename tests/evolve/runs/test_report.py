@@ -103,5 +103,8 @@ def test_report_md_cells_are_means_and_sample_sds_over_seeds(report):
 
 def test_report_md_lists_each_champion_under_noise(report):
     text, _ = report
-    assert "| sgr-Walker-v0-s0 | 5.000 | 2.000 | 2.000 / 1.000 | 100 % | 1.000 / 0.500 | 50 % |" in text
-    assert "| sgr-Walker-v0-s1 | 3.000 | 4.000 | 4.000 / 4.000 | 100 % | 4.000 / 2.000 | 100 % |" in text
+    # share of the nominal return / of the recorded fitness: s0 2/2, 2/5, 1/2, 1/5; s1 4/4, 4/3, 4/4, 4/3
+    assert ("| sgr-Walker-v0-s0 | 5.000 | 2.000 | 2.000 / 1.000 | 100 % / 40 % | 1.000 / 0.500 "
+            "| 50 % / 20 % |") in text
+    assert ("| sgr-Walker-v0-s1 | 3.000 | 4.000 | 4.000 / 4.000 | 100 % / 133 % | 4.000 / 2.000 "
+            "| 100 % / 133 % |") in text

@@ -1,0 +1,157 @@
+"""Choosing a run's champion afresh at its end: among the final elites and the best-ever genome, by
+many new perturbed episodes, keeping only genomes whose exact episode is typical of their perturbed
+ones.
+
+Why: a run's best-ever record is the maximum of thousands of noisy scores, so under robust
+evaluation it keeps a lucky one (docs/RESULTS.md, "Champions that hold": Walker-v0 champions kept
+72-94 % of their recorded fitness). Scoring a few candidates once more by K fresh episodes gives a
+fitness their replays keep, and a genome whose exact (noise-free) episode is far better than its
+perturbed ones is a knife-edge trajectory, not a gait (and one whose exact episode is far worse is
+chaotic: its nominal fitness means nothing either): `tolerance` drops both.
+
+The rule (`choose`): every candidate gets a score (the `statistic` of K episodes perturbed as the
+run's `robust` key says, uniform(+-1e-3) on a nominal run; episode k of genome g is drawn from the
+tag "final/<g>") and its nominal return; a candidate agrees when the two differ by at most
+`tolerance` x the larger of their magnitudes. The champion is the best-scoring candidate that
+agrees, or the best-scoring one when none does (champion.json says so).
+
+The candidates are read from the state after the last generation, which is the last checkpoint, so
+the choice made at a run's end and `sgr select-champion` on the finished run
+(`evolve.runs.experiment.select_finished_run`) are the same, and making it again changes nothing.
+champion.json then records the chosen genome, its score as `fitness` and an `evaluation` that
+`rescore_champion` reproduces exactly, plus a `selection` block (every candidate's score and
+nominal return); the best-ever record is kept as champion-best-ever.json.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from evolve.rollout.robust import STATISTICS, Robust
+from evolve.runs.champion import champion_record
+from evolve.runs.files import atomic_write
+
+BEST_EVER_FILE = "champion-best-ever.json"
+TAG = "final"
+
+
+@dataclass(frozen=True)
+class FinalSelection:
+    """The `final_selection` config key (null: the champion is the best-ever genome)."""
+    candidates: int = 16  # the top final elites by recorded fitness, plus the best-ever genome
+    episodes: int = 32
+    statistic: str = "mean"
+    tolerance: float = 0.05  # |score - nominal return| <= tolerance x max(|score|, |nominal return|)
+
+    def to_json(self) -> dict:
+        """The config mapping (every key)."""
+        return asdict(self)
+
+    def robust(self, run_robust: dict | None) -> Robust:
+        """How candidates are scored: the run's perturbation (uniform(+-1e-3) on a nominal run),
+        this selection's episodes and statistic, no re-evaluation."""
+        base = Robust.from_config(run_robust) or Robust()
+        return Robust(self.episodes, base.action_noise, base.action_scale, base.offset, self.statistic)
+
+    @classmethod
+    def from_config(cls, raw: object, source: str = "config") -> FinalSelection | None:
+        """The checked mapping; None stays None. ValueError naming `source` and the key."""
+        if raw is None:
+            return None
+        name = f"{source}: key 'final_selection"
+        if not isinstance(raw, dict):
+            raise ValueError(f"{name}' must be a mapping (candidates, episodes, statistic, tolerance) or "
+                             f"null, got {raw!r}")
+        known = set(cls.__dataclass_fields__)
+        for key in raw:
+            if key not in known:
+                raise ValueError(f"{name}': unknown key {key!r}; known keys: {', '.join(sorted(known))}")
+        sel = cls(**raw)
+        for key in ("candidates", "episodes"):
+            v = getattr(sel, key)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+                raise ValueError(f"{name}.{key}' must be an int >= 1, got {v!r}")
+        try:
+            Robust.from_config({"statistic": sel.statistic}, source)
+        except ValueError:
+            raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, "
+                             f"got {sel.statistic!r}") from None
+        h = sel.tolerance
+        if isinstance(h, bool) or not isinstance(h, int | float) or not (0 <= h <= 1):
+            raise ValueError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
+        return cls(sel.candidates, sel.episodes, sel.statistic, float(h))
+
+
+def candidates(search, n: int) -> list[tuple[int, object]]:
+    """(key, genome) of the `n` best elites of the search's current population (genomes carrying a
+    fitness: the elites kept from the last generation; ties by key) and of the best-ever genome
+    when it is not among them, in that order."""
+    elites = sorted(((k, g) for k, g in search.population.items()
+                     if g.fitness is not None and math.isfinite(g.fitness)),
+                    key=lambda kv: (-kv[1].fitness, kv[0]))[:n]
+    best = search.best
+    if best is not None and all(k != best["key"] for k, _ in elites):
+        elites.append((best["key"], best["genome"]))
+    return elites
+
+
+def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
+    """The chosen candidate's index and which candidates agree (module docstring)."""
+    with np.errstate(invalid="ignore"):
+        agrees = np.abs(scores - nominal) <= tolerance * np.maximum(np.abs(scores), np.abs(nominal))
+    agrees &= np.isfinite(scores) & np.isfinite(nominal)
+    pool = np.flatnonzero(agrees) if agrees.any() else np.flatnonzero(np.isfinite(scores))
+    if len(pool) == 0:
+        raise ValueError("no candidate has a finite score")
+    return int(pool[np.argmax(scores[pool])]), agrees
+
+
+def select_champion(exp, settings: FinalSelection) -> dict:
+    """Score the candidates of `exp` (an `Experiment` at its run's end), write champion.json and
+    champion-best-ever.json, and return the new champion record."""
+    cfg, search, problem = exp.cfg, exp.search, exp.problem
+    if type(problem).reevaluate_elites:
+        raise ValueError(f"final_selection does not apply to method {cfg['method']!r}: its evaluation "
+                         "evolves each body's controllers again, so a candidate has no fixed robot to "
+                         "score")
+    if search.best is None:
+        raise ValueError(f"{exp.run.path} has no champion to choose from yet")
+    cands = candidates(search, settings.candidates)
+    phenotypes = [search.decode(g) for _, g in cands]
+    robust = settings.robust(cfg.get("robust"))
+    tags = [f"{TAG}/{k}" for k, _ in cands]
+    with problem.scored_with(robust.to_json()):
+        scores = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
+    with problem.scored_with(None):
+        nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
+    i, agrees = choose(scores, nominal, settings.tolerance)
+    best = search.best
+    best_ever = champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
+                                best["generation"] + 1, {"robust": cfg.get("robust"), "seed": cfg["seed"],
+                                                         "tag": f"{best['generation']}/{best['key']}"})
+    genome = cands[i][1]
+    champ = champion_record(cfg, problem, genome, phenotypes[i], float(scores[i]), search.generation,
+                            {"robust": robust.to_json(), "seed": cfg["seed"], "tag": tags[i]})
+    champ["selection"] = {
+        **settings.to_json(), "agrees": bool(agrees[i]), "nominal": float(nominal[i]),
+        "best_ever": {"key": best["key"], "fitness": best["fitness"], "file": BEST_EVER_FILE},
+        "candidates": [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
+                        "score": float(s), "nominal": float(n), "agrees": bool(a)}
+                       for (k, g), s, n, a in zip(cands, scores, nominal, agrees, strict=True)]}
+    atomic_write(exp.run.path / BEST_EVER_FILE, json.dumps(best_ever, indent=1).encode())
+    exp.run.write_champion(champ)
+    return champ
+
+
+def describe(champ: dict) -> str:
+    """One line on a chosen champion (the console's and `sgr select-champion`'s)."""
+    sel = champ["selection"]
+    return (f"champion genome {champ['genome']['key']} of {len(sel['candidates'])} candidates, score "
+            f"{champ['fitness']:.4f} ({sel['statistic']} of {sel['episodes']} perturbed episodes), "
+            f"nominal {sel['nominal']:.4f}"
+            f"{'' if sel['agrees'] else ' (no candidate agreed with its nominal return)'}; best-ever "
+            f"{sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")

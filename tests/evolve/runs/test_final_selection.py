@@ -1,0 +1,158 @@
+"""A run's final selection (evolve/runs/final_selection.py): the champion chosen afresh at the end
+among the final elites, by many new perturbed episodes, keeping genomes whose exact episode is
+typical of their perturbed ones.
+
+What must hold: evolution itself is unchanged (same rows, and the best-ever record kept beside);
+champion.json alone scores the chosen genome again to the bit; the choice follows its rule from the
+recorded scores; choosing again, on one or two workers, or after a kill while choosing, gives the
+same file; nested runs are refused with one line.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+
+from evolve.cli import main
+from evolve.runs.champion import replay_champion, rescore_champion
+from evolve.runs.experiment import Experiment
+from evolve.runs.final_selection import BEST_EVER_FILE, FinalSelection, choose
+from evolve.runs.rundir import RunDir
+
+ROBUST = {"episodes": 2, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0,
+          "statistic": "mean"}
+# 12 episodes: numpy's pairwise sum would score one genome alone differently from its column of a batch
+SELECT = {"candidates": 4, "episodes": 12, "statistic": "mean", "tolerance": 0.1}
+COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
+
+
+def config(**changes) -> dict:
+    return {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 12, "seed": 5,
+            "episode_steps": 40, "render_champion": False, "workers": 1, "checkpoint_every": 1,
+            "robust": ROBUST, **changes}
+
+
+def run(tmp: Path, name: str, cfg: dict) -> RunDir:
+    exp = Experiment.from_config(cfg, tmp / name, quiet=True)
+    exp.run_all()
+    exp.close()
+    return exp.run
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory) -> tuple[RunDir, RunDir]:
+    tmp = tmp_path_factory.mktemp("final")
+    return run(tmp, "plain", config()), run(tmp, "selected", config(final_selection=SELECT))
+
+
+def test_evolution_is_unchanged_and_the_best_ever_record_is_kept(runs):
+    plain, selected = runs
+    table = [[[r[c] for c in COLUMNS] for r in run.rows()] for run in runs]
+    assert table[1] == table[0]
+    assert json.loads((selected.path / BEST_EVER_FILE).read_text()) == plain.champion()
+    assert "selection" not in plain.champion()
+
+
+def test_the_chosen_champion_rescores_to_the_bit_from_its_json(runs):
+    champ = runs[1].champion()
+    ev = champ["evaluation"]
+    assert ev["robust"] == {**ROBUST, "episodes": 12, "reevaluate": False}
+    assert ev["tag"] == f"final/{champ['genome']['key']}" and ev["seed"] == 5
+    assert rescore_champion(runs[1].path) == champ["fitness"]
+    assert replay_champion(runs[1].path)[0] == champ["selection"]["nominal"]  # its exact episode
+
+
+def test_the_choice_follows_the_rule_from_the_recorded_scores(runs):
+    champ = runs[1].champion()
+    sel = champ["selection"]
+    cands = sel["candidates"]
+    assert 4 <= len(cands) <= 5 and sel["best_ever"]["key"] in [c["key"] for c in cands]
+    for c in cands:
+        score, nominal = c["score"], c["nominal"]
+        assert c["agrees"] == (abs(score - nominal) <= 0.1 * max(abs(score), abs(nominal)))
+    pool = [c for c in cands if c["agrees"]] or cands
+    best = max(pool, key=lambda c: c["score"])
+    assert champ["genome"]["key"] == best["key"] and champ["fitness"] == best["score"]
+    assert sel["agrees"] == best["agrees"]
+
+
+def test_choose_prefers_a_candidate_whose_exact_episode_is_typical_and_else_the_best_score():
+    # 8 vs 5: knife-edge; 4.1 vs 4: typical; -1 vs 3: chaotic; -2 vs -1.95: typical, but worse
+    scores, nominal = np.array([5.0, 4.0, 3.0, -1.95]), np.array([8.0, 4.1, -1.0, -2.0])
+    i, agrees = choose(scores, nominal, 0.05)
+    assert i == 1 and agrees.tolist() == [False, True, False, True]
+    i, agrees = choose(np.array([5.0, 4.0]), np.array([8.0, 7.0]), 0.05)
+    assert i == 0 and not agrees.any()
+    assert choose(np.array([np.nan, 1.0]), np.array([0.5, 2.0]), 0.0)[0] == 1
+
+
+def test_choosing_again_on_one_or_two_workers_changes_nothing(runs, tmp_path, capsys):
+    import shutil
+
+    before = (runs[1].path / "champion.json").read_bytes()
+    best_ever = (runs[1].path / BEST_EVER_FILE).read_bytes()
+    for workers in ("1", "2"):
+        copy = tmp_path / f"w{workers}"
+        shutil.copytree(runs[1].path, copy)
+        assert main(["select-champion", str(copy), "--workers", workers]) == 0
+        assert (copy / "champion.json").read_bytes() == before
+        assert (copy / BEST_EVER_FILE).read_bytes() == best_ever
+    assert "score" in capsys.readouterr().out
+
+
+def test_selecting_after_the_fact_matches_selecting_at_the_end(runs, tmp_path):
+    import shutil
+
+    copy = tmp_path / "after"
+    shutil.copytree(runs[0].path, copy)
+    assert main(["select-champion", str(copy), "--candidates", "4", "--episodes", "12",
+                 "--tolerance", "0.1"]) == 0
+    assert json.loads((copy / "champion.json").read_text()) == runs[1].champion()
+    assert json.loads((copy / BEST_EVER_FILE).read_text()) == runs[0].champion()
+
+
+def test_a_run_killed_while_choosing_resumes_to_the_same_champion(runs, tmp_path):
+    import shutil
+
+    copy = tmp_path / "killed"
+    shutil.copytree(runs[1].path, copy)
+    # the state of a kill during the choice: the last generation's row and checkpoint not written
+    (copy / "checkpoints" / "gen-00003.json.gz").unlink()
+    (copy / BEST_EVER_FILE).unlink()
+    exp = Experiment.resume(copy, quiet=True)
+    exp.run_all()
+    exp.close()
+    assert (copy / "champion.json").read_bytes() == (runs[1].path / "champion.json").read_bytes()
+    assert (copy / BEST_EVER_FILE).read_bytes() == (runs[1].path / BEST_EVER_FILE).read_bytes()
+
+
+def test_an_unfinished_run_or_a_nested_run_is_one_error_line(runs, tmp_path, capsys):
+    cfg = {**config(method="nested", pop_size=6, inner_pop_size=6, inner_generations=1),
+           "final_selection": SELECT}
+    (tmp_path / "n.yaml").write_text(yaml.safe_dump(cfg))
+    assert main(["evolve", "--config", str(tmp_path / "n.yaml"), "--out", str(tmp_path / "n")]) == 2
+    err = capsys.readouterr().err
+    assert "key 'final_selection' does not apply to method 'nested'" in err and err.count("\n") == 1
+    exp = Experiment.from_config(config(generations=5), tmp_path / "short", quiet=True)
+    exp.search.step()
+    exp.run.save_checkpoint(1, exp.state())
+    exp.close()
+    assert main(["select-champion", str(tmp_path / "short")]) == 2
+    err = capsys.readouterr().err
+    assert "is not finished (1 of 5 generations)" in err and err.count("\n") == 1
+
+
+@pytest.mark.parametrize("raw, message", [
+    ({"candidates": 0}, "key 'final_selection.candidates' must be an int >= 1"),
+    ({"tolerance": 1.5}, "key 'final_selection.tolerance' must be a number in [0, 1]"),
+    ({"statistic": "best"}, "key 'final_selection.statistic' must be one of mean"),
+    ({"episode": 3}, "key 'final_selection': unknown key 'episode'"),
+])
+def test_a_bad_final_selection_key_names_it(raw, message):
+    with pytest.raises(ValueError, match=None) as exc:
+        FinalSelection.from_config(raw, "c.yaml")
+    assert message in str(exc.value)
