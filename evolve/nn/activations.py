@@ -22,7 +22,9 @@ NEAT_ACTIVATIONS: dict[str, Fn] = {
     "sigmoid": _neat_sigmoid,
     "tanh": lambda z: np.tanh(np.clip(2.5 * z, -60.0, 60.0)),
     "sin": lambda z: np.sin(np.clip(5.0 * z, -60.0, 60.0)),
-    "gauss": lambda z: np.exp(-5.0 * np.clip(z, -3.4, 3.4) ** 2),
+    # np.square, not ** 2: a numpy scalar's ** is C pow(), at times one ulp off z * z, so the JSON
+    # controller's scalars and the batch's arrays (** 2 is square there) disagreed in last bits
+    "gauss": lambda z: np.exp(-5.0 * np.square(np.clip(z, -3.4, 3.4))),
     "relu": lambda z: np.maximum(z, 0.0),
     "identity": lambda z: z,
     "clamped": lambda z: np.clip(z, -1.0, 1.0),
