@@ -139,7 +139,7 @@ class Experiment:
                 row = search.step()
                 final = self.selection is not None and search.generation == cfg["generations"]
                 if final:  # before the row: a run killed while choosing runs its last generation again
-                    self._select_champion()
+                    chosen = self._select_champion()
                 self.run.append_row({**row, "generation": row["generation"] + 1})  # counted from 1
                 if not final:
                     self._write_champion()
@@ -147,6 +147,8 @@ class Experiment:
                 if g % cfg["checkpoint_every"] == 0 or g == cfg["generations"] or stop.is_set():
                     self.run.save_checkpoint(search.generation, self.state())
                 self._progress(row, time.perf_counter() - t_start)
+                if final and not self.quiet:
+                    print(chosen, flush=True)
                 if after_generation is not None:
                     after_generation(self)
                 if stop.is_set() and search.generation < cfg["generations"]:
@@ -164,13 +166,12 @@ class Experiment:
         self.run.write_champion(champion_record(self.cfg, self.problem, best["genome"], best["phenotype"],
                                                 best["fitness"], best["generation"] + 1, evaluation))
 
-    def _select_champion(self) -> None:
+    def _select_champion(self) -> str:
         """The run's end with `final_selection`: the champion chosen afresh among the final elites
-        (evolve/runs/final_selection.py)."""
+        (evolve/runs/final_selection.py); returns the console's line on it."""
         t0 = time.perf_counter()
         champ = select_champion(self, self.selection)
-        if not self.quiet:
-            print(f"final selection: {describe(champ)} ({time.perf_counter() - t0:.0f} s)", flush=True)
+        return f"final selection: {describe(champ)} ({time.perf_counter() - t0:.0f} s)"
 
     def _progress(self, row: dict, elapsed: float) -> None:
         if self.quiet:
