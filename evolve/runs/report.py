@@ -193,7 +193,13 @@ def report_markdown(rows: list[dict]) -> str:
               "*nominal*: its return replayed without noise (the same, unless the run was scored "
               "by robust evaluation); *±eps*: the champion replayed with uniform(±eps) added to "
               "every action (mean over replays, then mean ± sd over seeds; *worst*: the worst "
-              "replay of any seed).\n\n")
+              "replay of any seed).")
+    if any(method.endswith("robust") for method, _ in groups):
+        out.write(" For runs scored by robust evaluation (*... robust*) the generation columns are "
+                  "the best of noisy scores, which selection biases upward; their *champion* is the "
+                  "recorded fitness of the champion file, scored afresh where the run chose it by "
+                  "final selection (docs/EVOLVE.md).")
+    out.write("\n\n")
     noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels)
     out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
               f"100 / end) | champion | nominal |{noise_head}\n")

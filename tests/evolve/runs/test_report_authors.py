@@ -50,3 +50,14 @@ def test_the_paper_episode_length_shows_the_authors_figures_the_runs_reached(tmp
     ax = saved[-1].axes[0]
     marks = [line for line in ax.get_lines() if "authors" in line.get_label()]
     assert len(marks) == 1 and list(marks[0].get_xdata()) == [1] and ax.get_xlim()[1] <= 3.5
+
+
+def test_robust_runs_are_labelled_and_their_noisy_best_columns_explained(tmp_path):
+    nominal = _run(tmp_path / "a", [1.0, 2.0], 500)
+    text = report_markdown(summarize([nominal], robustness=False))
+    assert "sgr robust" not in text and "best of noisy scores" not in text
+    robust = _run(tmp_path / "b", [1.5, 2.5], 500)
+    cfg = yaml.safe_load((robust / "config.yaml").read_text())
+    (robust / "config.yaml").write_text(yaml.safe_dump({**cfg, "robust": {"episodes": 4}}))
+    text = report_markdown(summarize([nominal, robust], robustness=False))
+    assert "| sgr robust | Walker-v0 |" in text and "best of noisy scores" in text
