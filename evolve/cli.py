@@ -347,8 +347,8 @@ def main(argv: list[str] | None = None) -> int:
                                                                 "best-ever genome (default 16)")
     sc.add_argument("--episodes", type=positive(int), help="perturbed episodes per candidate (default 32)")
     sc.add_argument("--statistic", help="mean, min, median or qNN (default mean)")
-    sc.add_argument("--tolerance", type=float, help="a candidate's score and nominal return may differ "
-                                                    "by TOLERANCE x the larger (default 0.05)")
+    sc.add_argument("--tolerance", type=float, help="a candidate holds if its score is at least its "
+                                                    "nominal return less TOLERANCE x it (default 0.05)")
     sc.add_argument("--workers", type=workers_arg, default=1, help="rollout processes (default 1)")
     sc.set_defaults(fn=_select_champion)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
