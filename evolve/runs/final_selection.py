@@ -6,15 +6,16 @@ Why: a run's best-ever record is the maximum of thousands of noisy scores, so un
 evaluation it keeps a lucky one (docs/RESULTS.md, "Champions that hold": Walker-v0 champions kept
 72-94 % of their recorded fitness). Scoring a few candidates once more by K fresh episodes gives a
 fitness their replays keep, and a genome whose exact (noise-free) episode is far better than its
-perturbed ones is a knife-edge trajectory, not a gait: `tolerance` drops it. (One whose exact
-episode is worse than its perturbed ones was unlucky in that one draw; it stays: what the robust
-run optimizes is the return under noise.)
+perturbed ones is a knife-edge trajectory, not a gait: `tolerance` drops it. Among the rest the
+champion must do well both ways, as its recorded fitness says (under noise) and as a user first
+sees it (its exact episode, e.g. in gymnasium): the best worse-of-the-two wins.
 
 The rule (`choose`): every candidate gets a score (the `statistic` of K episodes perturbed as the
 run's `robust` key says, uniform(+-1e-3) on a nominal run; episode k of genome g is drawn from the
 tag "final/<g>") and its nominal return; a candidate holds when its score is at least its nominal
-return minus `tolerance` x |nominal return|. The champion is the best-scoring candidate that holds,
-or the best-scoring one when none does (champion.json says so).
+return minus `tolerance` x |nominal return|. The champion is the candidate that holds with the
+highest min(score, nominal return), or the highest of all when none holds (champion.json says
+so). Its `fitness` is its score.
 
 The candidates are read from the state after the last generation, which is the last checkpoint, so
 the choice made at a run's end and `sgr select-champion` on the finished run
@@ -108,7 +109,8 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float) -> tuple[i
     pool = np.flatnonzero(holds) if holds.any() else np.flatnonzero(np.isfinite(scores))
     if len(pool) == 0:
         raise ValueError("no candidate has a finite score")
-    return int(pool[np.argmax(scores[pool])]), holds
+    worse = np.fmin(scores, nominal)  # a nan nominal return leaves the score
+    return int(pool[np.argmax(worse[pool])]), holds
 
 
 def select_champion(exp, settings: FinalSelection) -> dict:

@@ -75,19 +75,21 @@ def test_the_choice_follows_the_rule_from_the_recorded_scores(runs):
         score, nominal = c["score"], c["nominal"]
         assert c["holds"] == (score >= nominal - 0.1 * abs(nominal))
     pool = [c for c in cands if c["holds"]] or cands
-    best = max(pool, key=lambda c: c["score"])
+    best = max(pool, key=lambda c: min(c["score"], c["nominal"]))
     assert champ["genome"]["key"] == best["key"] and champ["fitness"] == best["score"]
     assert sel["holds"] == best["holds"]
 
 
-def test_choose_takes_the_best_candidate_that_holds_and_else_the_best_score():
-    # score vs nominal: 5 vs 8 knife-edge; 4 vs 4.1 holds; 3 vs 1 holds (an unlucky exact
-    # episode); -1.95 vs -2 holds; -2.2 vs -2 does not (5 % of |-2| is 0.1)
-    scores, nominal = np.array([5.0, 4.0, 3.0, -1.95, -2.2]), np.array([8.0, 4.1, 1.0, -2.0, -2.0])
+def test_choose_takes_the_candidate_that_holds_with_the_best_worse_of_score_and_nominal_return():
+    # score vs nominal: 5 vs 8 knife-edge; 4 vs 4.1 holds (worse 4); 4.5 vs 1 holds, unlucky exact
+    # episode (worse 1); -1.95 vs -2 holds; -2.2 vs -2 does not (5 % of |-2| is 0.1)
+    scores = np.array([5.0, 4.0, 4.5, -1.95, -2.2])
+    nominal = np.array([8.0, 4.1, 1.0, -2.0, -2.0])
     i, holds = choose(scores, nominal, 0.05)
     assert i == 1 and holds.tolist() == [False, True, True, True, False]
-    i, holds = choose(np.array([5.0, 4.0]), np.array([8.0, 7.0]), 0.05)
+    i, holds = choose(np.array([5.0, 4.0]), np.array([8.0, 7.0]), 0.05)  # none holds: best worse-of
     assert i == 0 and not holds.any()
+    assert choose(np.array([4.5, 4.0]), np.array([4.2, 4.1]), 0.05)[0] == 0
     assert choose(np.array([np.nan, 1.0]), np.array([0.5, 2.0]), 0.0)[0] == 1
 
 
