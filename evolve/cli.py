@@ -223,7 +223,8 @@ def _select_champion(args: argparse.Namespace) -> int:
     from evolve.runs.rundir import RunDir
 
     given = {k: v for k, v in (("candidates", args.candidates), ("episodes", args.episodes),
-                               ("statistic", args.statistic), ("tolerance", args.tolerance)) if v is not None}
+                               ("statistic", args.statistic), ("tolerance", args.tolerance),
+                               ("rank", args.rank)) if v is not None}
     own = RunDir(_resume_dir(args.run_dir)).config().get("final_selection") or {}
     settings = FinalSelection.from_config({**own, **given}, "sgr select-champion")
     champ = select_finished_run(args.run_dir, settings, args.workers)
@@ -349,6 +350,9 @@ def main(argv: list[str] | None = None) -> int:
     sc.add_argument("--statistic", help="mean, min, median or qNN (default mean)")
     sc.add_argument("--tolerance", type=float, help="a candidate holds if its score is at least its "
                                                     "nominal return less TOLERANCE x it (default 0.05)")
+    sc.add_argument("--rank", choices=("min", "score"),
+                    help="among candidates that hold: the best min(score, nominal return), or the best "
+                         "score (default min)")
     sc.add_argument("--workers", type=workers_arg, default=1, help="rollout processes (default 1)")
     sc.set_defaults(fn=_select_champion)
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")

@@ -14,8 +14,8 @@ The rule (`choose`): every candidate gets a score (the `statistic` of K episodes
 run's `robust` key says, uniform(+-1e-3) on a nominal run; episode k of genome g is drawn from the
 tag "final/<g>") and its nominal return; a candidate holds when its score is at least its nominal
 return minus `tolerance` x |nominal return|. The champion is the candidate that holds with the
-highest min(score, nominal return), or the highest of all when none holds (champion.json says
-so). Its `fitness` is its score.
+highest min(score, nominal return) (`rank: min`; `rank: score`, the highest score), or the highest
+of all when none holds (champion.json says so). Its `fitness` is its score.
 
 The candidates are read from the state after the last generation, which is the last checkpoint, so
 the choice made at a run's end and `sgr select-champion` on the finished run
@@ -39,6 +39,7 @@ from evolve.runs.files import atomic_write
 
 BEST_EVER_FILE = "champion-best-ever.json"
 TAG = "final"
+RANKS = ("min", "score")
 
 
 @dataclass(frozen=True)
@@ -48,6 +49,7 @@ class FinalSelection:
     episodes: int = 32
     statistic: str = "mean"
     tolerance: float = 0.05  # holds: score >= nominal return - tolerance x |nominal return|
+    rank: str = "min"  # among those that hold: min(score, nominal return), or "score" alone
 
     def to_json(self) -> dict:
         """The config mapping (every key)."""
@@ -66,8 +68,8 @@ class FinalSelection:
             return None
         name = f"{source}: key 'final_selection"
         if not isinstance(raw, dict):
-            raise ValueError(f"{name}' must be a mapping (candidates, episodes, statistic, tolerance) or "
-                             f"null, got {raw!r}")
+            raise ValueError(f"{name}' must be a mapping (candidates, episodes, statistic, tolerance, "
+                             f"rank) or null, got {raw!r}")
         known = set(cls.__dataclass_fields__)
         for key in raw:
             if key not in known:
@@ -85,7 +87,9 @@ class FinalSelection:
         h = sel.tolerance
         if isinstance(h, bool) or not isinstance(h, int | float) or not (0 <= h <= 1):
             raise ValueError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
-        return cls(sel.candidates, sel.episodes, sel.statistic, float(h))
+        if sel.rank not in RANKS:
+            raise ValueError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
+        return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank)
 
 
 def candidates(search, n: int) -> list[tuple[int, object]]:
@@ -101,7 +105,8 @@ def candidates(search, n: int) -> list[tuple[int, object]]:
     return elites
 
 
-def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float) -> tuple[int, np.ndarray]:
+def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
+           rank: str = "min") -> tuple[int, np.ndarray]:
     """The chosen candidate's index and which candidates hold (module docstring)."""
     with np.errstate(invalid="ignore"):
         holds = scores >= nominal - tolerance * np.abs(nominal)
@@ -109,8 +114,8 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float) -> tuple[i
     pool = np.flatnonzero(holds) if holds.any() else np.flatnonzero(np.isfinite(scores))
     if len(pool) == 0:
         raise ValueError("no candidate has a finite score")
-    worse = np.fmin(scores, nominal)  # a nan nominal return leaves the score
-    return int(pool[np.argmax(worse[pool])]), holds
+    key = np.fmin(scores, nominal) if rank == "min" else scores  # fmin: a nan nominal leaves the score
+    return int(pool[np.argmax(key[pool])]), holds
 
 
 def select_champion(exp, settings: FinalSelection) -> dict:
@@ -131,7 +136,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
         scores = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
     with problem.scored_with(None):
         nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
-    i, holds = choose(scores, nominal, settings.tolerance)
+    i, holds = choose(scores, nominal, settings.tolerance, settings.rank)
     best = search.best
     best_ever = champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                                 best["generation"] + 1, {"robust": cfg.get("robust"), "seed": cfg["seed"],

@@ -90,6 +90,7 @@ def test_choose_takes_the_candidate_that_holds_with_the_best_worse_of_score_and_
     i, holds = choose(np.array([5.0, 4.0]), np.array([8.0, 7.0]), 0.05)  # none holds: best worse-of
     assert i == 0 and not holds.any()
     assert choose(np.array([4.5, 4.0]), np.array([4.2, 4.1]), 0.05)[0] == 0
+    assert choose(scores, nominal, 0.05, "score")[0] == 2  # the best score that holds
     assert choose(np.array([np.nan, 1.0]), np.array([0.5, 2.0]), 0.0)[0] == 1
 
 
@@ -154,6 +155,7 @@ def test_an_unfinished_run_or_a_nested_run_is_one_error_line(runs, tmp_path, cap
     ({"tolerance": 1.5}, "key 'final_selection.tolerance' must be a number in [0, 1]"),
     ({"statistic": "best"}, "key 'final_selection.statistic' must be one of mean"),
     ({"episode": 3}, "key 'final_selection': unknown key 'episode'"),
+    ({"rank": "max"}, "key 'final_selection.rank' must be one of min, score"),
 ])
 def test_a_bad_final_selection_key_names_it(raw, message):
     with pytest.raises(ValueError, match=None) as exc:
