@@ -105,6 +105,19 @@ class EpisodeNoise:
         return None if s is None else np.where(self.on, s, 0.0)
 
 
+def config_dataclass(cls, raw: object, name: str):
+    """`cls` (a dataclass) built from a config mapping whose keys are its fields; ValueError
+    naming `name` (the source and the key, without its closing quote) when `raw` is not a mapping
+    or holds an unknown key. Values are the caller's to check."""
+    fields = list(cls.__dataclass_fields__)
+    if not isinstance(raw, dict):
+        raise ValueError(f"{name}' must be a mapping ({', '.join(fields)}) or null, got {raw!r}")
+    for key in raw:
+        if key not in fields:
+            raise ValueError(f"{name}': unknown key {key!r}; known keys: {', '.join(sorted(fields))}")
+    return cls(**raw)
+
+
 @dataclass(frozen=True)
 class Robust:
     """The `robust` config key: each genome's fitness is `statistic` over `episodes` perturbed
@@ -155,14 +168,7 @@ class Robust:
         if raw is None:
             return None
         name = f"{source}: key 'robust"
-        if not isinstance(raw, dict):
-            raise ValueError(f"{name}' must be a mapping (episodes, action_noise, action_scale, "
-                             f"offset, statistic, reevaluate) or null, got {raw!r}")
-        known = set(cls.__dataclass_fields__)
-        for key in raw:
-            if key not in known:
-                raise ValueError(f"{name}': unknown key {key!r}; known keys: {', '.join(sorted(known))}")
-        r = cls(**raw)
+        r = config_dataclass(cls, raw, name)
         if not isinstance(r.episodes, int) or isinstance(r.episodes, bool) or r.episodes < 1:
             raise ValueError(f"{name}.episodes' must be an int >= 1, got {r.episodes!r}")
         if r.action_noise not in NOISE_KINDS:

@@ -33,7 +33,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from evolve.rollout.robust import STATISTICS, Robust
+from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
 from evolve.runs.champion import champion_record
 from evolve.runs.files import atomic_write
 
@@ -67,14 +67,7 @@ class FinalSelection:
         if raw is None:
             return None
         name = f"{source}: key 'final_selection"
-        if not isinstance(raw, dict):
-            raise ValueError(f"{name}' must be a mapping (candidates, episodes, statistic, tolerance, "
-                             f"rank) or null, got {raw!r}")
-        known = set(cls.__dataclass_fields__)
-        for key in raw:
-            if key not in known:
-                raise ValueError(f"{name}': unknown key {key!r}; known keys: {', '.join(sorted(known))}")
-        sel = cls(**raw)
+        sel = config_dataclass(cls, raw, name)
         for key in ("candidates", "episodes"):
             v = getattr(sel, key)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
