@@ -219,15 +219,12 @@ def _report(args: argparse.Namespace) -> int:
 
 def _select_champion(args: argparse.Namespace) -> int:
     from evolve.runs.experiment import select_finished_run
-    from evolve.runs.final_selection import FinalSelection, describe
-    from evolve.runs.rundir import RunDir
+    from evolve.runs.final_selection import describe
 
     given = {k: v for k, v in (("candidates", args.candidates), ("episodes", args.episodes),
                                ("statistic", args.statistic), ("tolerance", args.tolerance),
                                ("rank", args.rank)) if v is not None}
-    own = RunDir(_resume_dir(args.run_dir)).config().get("final_selection") or {}
-    settings = FinalSelection.from_config({**own, **given}, "sgr select-champion")
-    champ = select_finished_run(args.run_dir, settings, args.workers)
+    champ = select_finished_run(_resume_dir(args.run_dir), given, args.workers)
     print(f"{args.run_dir}: {describe(champ)}")
     return 0
 

@@ -55,6 +55,17 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     return champ
 
 
+def best_ever_record(cfg: dict, problem, best: dict) -> dict:
+    """champion.json's record of a search's best-ever genome (`NeatSearch.best`), with how its
+    fitness was scored: enough to score it again exactly (robust: the run's seed and the
+    evaluation's tag give every episode's noise; the tag holds the search's own generation
+    number, counted from 0)."""
+    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"],
+                  "tag": f"{best['generation']}/{best['key']}"}
+    return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
+                           best["generation"] + 1, evaluation)
+
+
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
     """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
     ValueError naming the file and the key when it is not a champion that runs (checked with one

@@ -18,7 +18,7 @@ from typing import Any
 from evolve.methods import METHODS
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
-from evolve.runs.final_selection import FinalSelection
+from evolve.runs.final_selection import FinalSelection, not_for
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 
@@ -118,9 +118,7 @@ def check_config(raw: dict, source: str = "config") -> dict:
     cfg["robust"] = None if robust is None else robust.to_json()
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
-        raise ValueError(f"{source}: key 'final_selection' does not apply to method {method!r}: its "
-                         "evaluation evolves each body's controllers again, so a candidate has no "
-                         "fixed robot to score")
+        raise ValueError(f"{source}: key 'final_selection' {not_for(method)}")
     cfg["final_selection"] = None if selection is None else selection.to_json()
     for key, name in problem.default_files.items():
         if cfg[key] is None:

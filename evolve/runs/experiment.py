@@ -20,7 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
-from evolve.runs.champion import champion_record
+from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
@@ -155,16 +155,8 @@ class Experiment:
                     raise KeyboardInterrupt
 
     def _write_champion(self) -> None:
-        best = self.search.best
-        if best is None:
-            return
-        # how the fitness was scored: enough to score the champion again exactly (robust: the
-        # run's seed and the evaluation's tag give every episode's noise; the tag holds the
-        # search's own generation number, counted from 0)
-        evaluation = {"robust": self.cfg.get("robust"), "seed": self.cfg["seed"],
-                      "tag": f"{best['generation']}/{best['key']}"}
-        self.run.write_champion(champion_record(self.cfg, self.problem, best["genome"], best["phenotype"],
-                                                best["fitness"], best["generation"] + 1, evaluation))
+        if self.search.best is not None:
+            self.run.write_champion(best_ever_record(self.cfg, self.problem, self.search.best))
 
     def _select_champion(self) -> str:
         """The run's end with `final_selection`: the champion chosen afresh among the final elites
@@ -228,10 +220,10 @@ def _interrupt_after_generation() -> Iterator[threading.Event]:
         signal.signal(signal.SIGINT, old)
 
 
-def select_finished_run(run_dir: str | Path, settings: FinalSelection | None = None,
+def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
                         workers: int | str = 1) -> dict:
     """`select_champion` (evolve/runs/final_selection.py) on a finished run's last checkpoint (`sgr
-    select-champion`): with `settings`, else the run's own `final_selection`, else the defaults."""
+    select-champion`): the run's own `final_selection` (else the defaults) with `overrides`."""
     run = RunDir(run_dir)
     cfg = run.config()
     for ref in cfg.get("imports") or ():  # the modules that register the run's own task
@@ -242,9 +234,8 @@ def select_finished_run(run_dir: str | Path, settings: FinalSelection | None = N
     if state["generation"] < cfg["generations"]:
         raise ValueError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
                          "generations): resume it first")
-    if settings is None:
-        settings = FinalSelection.from_config(cfg.get("final_selection"), str(run.path / "config.yaml")) \
-            or FinalSelection()
+    settings = FinalSelection.from_config({**(cfg.get("final_selection") or {}), **(overrides or {})},
+                                          "sgr select-champion")
     run.lock()
     try:
         exp = Experiment(run, cfg, state=state, quiet=True, workers=workers)

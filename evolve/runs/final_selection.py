@@ -34,7 +34,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
-from evolve.runs.champion import champion_record
+from evolve.runs.champion import best_ever_record, champion_record
 from evolve.runs.files import atomic_write
 
 BEST_EVER_FILE = "champion-best-ever.json"
@@ -85,6 +85,13 @@ class FinalSelection:
         return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank)
 
 
+def not_for(method: str) -> str:
+    """Why a method whose evaluation changes state (`Problem.reevaluate_elites`) has no final
+    selection."""
+    return (f"does not apply to method {method!r}: its evaluation evolves each body's controllers "
+            "again, so a candidate has no fixed robot to score")
+
+
 def candidates(search, n: int) -> list[tuple[int, object]]:
     """(key, genome) of the `n` best elites of the search's current population (genomes carrying a
     fitness: the elites kept from the last generation; ties by key) and of the best-ever genome
@@ -116,9 +123,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     champion-best-ever.json, and return the new champion record."""
     cfg, search, problem = exp.cfg, exp.search, exp.problem
     if type(problem).reevaluate_elites:
-        raise ValueError(f"final_selection does not apply to method {cfg['method']!r}: its evaluation "
-                         "evolves each body's controllers again, so a candidate has no fixed robot to "
-                         "score")
+        raise ValueError(f"final_selection {not_for(cfg['method'])}")
     if search.best is None:
         raise ValueError(f"{exp.run.path} has no champion to choose from yet")
     cands = candidates(search, settings.candidates)
@@ -131,9 +136,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
         nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
     i, holds = choose(scores, nominal, settings.tolerance, settings.rank)
     best = search.best
-    best_ever = champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
-                                best["generation"] + 1, {"robust": cfg.get("robust"), "seed": cfg["seed"],
-                                                         "tag": f"{best['generation']}/{best['key']}"})
+    best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]
     champ = champion_record(cfg, problem, genome, phenotypes[i], float(scores[i]), search.generation,
                             {"robust": robust.to_json(), "seed": cfg["seed"], "tag": tags[i]})
