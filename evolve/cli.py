@@ -323,9 +323,11 @@ def main(argv: list[str] | None = None) -> int:
                          "workers (default 1)")
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
-    rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")
+    rp = sub.add_parser("report", help="a run's or a sweep's table (with the authors' figures), summary CSV "
+                                       "and curves")
     rp.add_argument("dir", metavar="DIR", nargs="+",
-                    help="a sweep directory, or a folder of run directories (several: one report)")
+                    help="a run directory, a sweep directory or a folder of run directories (several: one "
+                         "report)")
     rp.add_argument("--out", help="report path (default DIR/report.md); summary.csv, curves.png beside it")
     rp.add_argument("--no-robustness", action="store_true",
                     help="skip replaying each champion under action noise")

@@ -71,11 +71,9 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     ValueError naming the file and the key when it is not a champion that runs (checked with one
     forward pass of the controller)."""
     f = Path(run_dir) / "champion.json"
-    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: the modules that register it
-        from tasks.registry import import_tasks
-
-        for ref in RunDir(run_dir).config().get("imports") or ():
-            import_tasks(ref, named_in=Path(run_dir) / "config.yaml")
+    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
+        run = RunDir(run_dir)
+        run.load_task(run.config())
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
@@ -27,7 +28,7 @@ from evolve.runs.final_selection import FinalSelection, describe, select_champio
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
-from tasks.registry import import_tasks
+from tasks.specs import BUILTIN
 
 
 def rollout_pool(workers: int | str) -> RolloutPool:
@@ -84,6 +85,8 @@ class Experiment:
         run.lock()
         try:
             run.create(cfg, ini)
+            if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
+                run.save_task(spec_blob(cfg["task"]))
             exp = cls(run, cfg, quiet=quiet)
             run.save_checkpoint(0, exp.state())
         except BaseException:
@@ -98,8 +101,7 @@ class Experiment:
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
         cfg = run.config()
-        for ref in cfg.get("imports") or ():  # the modules that register the run's own task
-            import_tasks(ref, named_in=run.path / "config.yaml")
+        run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
         run.lock()
         try:
             state = load_checkpoint(run, cfg)
@@ -226,8 +228,7 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
     select-champion`): the run's own `final_selection` (else the defaults) with `overrides`."""
     run = RunDir(run_dir)
     cfg = run.config()
-    for ref in cfg.get("imports") or ():  # the modules that register the run's own task
-        import_tasks(ref, named_in=run.path / "config.yaml")
+    run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
     state = load_checkpoint(run, cfg)
     if state is None:
         raise ValueError(f"{run_dir} has no checkpoint")

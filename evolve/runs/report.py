@@ -89,13 +89,16 @@ def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
 
 
 def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
-    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder; of
-    each folder when given several."""
+    """Run directories (with config.yaml and generations.csv): folder itself when it is one (as
+    `sgr render RUN` takes it), else those in folder/runs or in folder; of each folder when given
+    several."""
     if not isinstance(folder, str | Path):
         return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
+    if (folder / "config.yaml").is_file() and (folder / "generations.csv").is_file():
+        return [folder]
     base = folder / "runs" if (folder / "runs").is_dir() else folder
     runs = sorted(d for d in base.iterdir()
                   if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())

@@ -155,6 +155,33 @@ class RunDir:
             raise ValueError(f"{f}: not a run config (no 'method' key)")
         return cfg
 
+    def save_task(self, blob: bytes) -> None:
+        """Keep the pickled spec of a task registered in a script (no `imports:` names it), so that
+        the run renders, reports and resumes in another process (tasks/registry.py, TASK_FILE)."""
+        from tasks.registry import TASK_FILE
+
+        atomic_write(self.path / TASK_FILE, blob)
+
+    def load_task(self, cfg: dict) -> None:
+        """Register the run's own task in this process, if it is not sgr's: import the modules its
+        config names (`imports:`), else load the task the folder keeps (a script's); each only
+        where the files are yours alone or after --trust-imports. ValueError in one line when it
+        may not be loaded, or when the task is still unknown."""
+        from tasks.registry import TASK_FILE, import_tasks, load_task_file
+        from tasks.specs import TASKS, unknown_task
+
+        named_in = self.path / "config.yaml"
+        for ref in cfg.get("imports") or ():
+            import_tasks(ref, named_in=named_in)
+        task = cfg.get("task")
+        if not isinstance(task, str) or task in TASKS:
+            return
+        if (self.path / TASK_FILE).is_file():
+            load_task_file(self.path / TASK_FILE, named_in)
+        if task not in TASKS:
+            raise ValueError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
+                             f"file that registers it is imported: add imports: [that file] to {named_in}")
+
     def update_config(self, cfg: dict) -> None:
         """Replace config.yaml atomically (a resume that extends `generations` does)."""
         atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
