@@ -159,9 +159,7 @@ def _run(exp) -> int:
               f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
     except OSError as exc:  # e.g. a full disk: every file is still whole (a cut CSV row is dropped)
-        print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped during generation "
-              f"{exp.search.generation + 1} and keeps its last checkpoint: make room, then "
-              f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        print(f"sgr: error: {exp.write_failed(exc)}", file=sys.stderr)
         return 1
     finally:
         exp.close()

@@ -9,6 +9,7 @@ later (robot over objects over terrain, later voxels over earlier) wins.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from functools import cache
 from pathlib import Path
@@ -17,6 +18,7 @@ import numpy as np
 
 from tsim import constants as C
 from tsim.body import Body, build_body
+from tsim.files import atomic_write
 from tsim.world import World, resolve_world
 
 BACKGROUND = (244, 245, 247)
@@ -357,7 +359,8 @@ def _as_indexed(frame: np.ndarray) -> np.ndarray | None:
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
     """Write frames as a looping GIF; returns the path.
 
-    Frames are RGB (H, W, 3) uint8 or `PALETTE` index images (H, W). Frames whose colours all lie in
+    Written whole or not at all (tsim/files.py). Frames are RGB (H, W, 3) uint8 or `PALETTE` index
+    images (H, W). Frames whose colours all lie in
     `PALETTE` (every frame `Renderer` makes) are written losslessly with that palette through Pillow
     directly, which skips imageio's per-frame colour quantization (about 10x faster); other RGB frames
     go through imageio's GIF writer.
@@ -370,12 +373,14 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     path.parent.mkdir(parents=True, exist_ok=True)
     indexed = [f if f.ndim == 2 else _as_indexed(f) for f in (np.asarray(f) for f in frames)]
     duration = 1000.0 / fps
+    buf = io.BytesIO()  # made in memory, then written whole or not at all (a full disk cuts no GIF)
     if any(f is None for f in indexed):
         import imageio.v3 as iio
 
         rgb = [to_rgb(f) if f.ndim == 2 else f for f in (np.asarray(f) for f in frames)]
-        iio.imwrite(path, np.stack(rgb), extension=".gif",
+        iio.imwrite(buf, np.stack(rgb), extension=".gif",
                     duration=duration, loop=0)
+        atomic_write(path, buf.getvalue())
         return path
     from PIL import Image
 
@@ -387,6 +392,7 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
         im = Image.frombytes("P", (w, h), np.ascontiguousarray(f, dtype=np.uint8).tobytes())
         im.putpalette(palette.tobytes())
         images.append(im)
-    images[0].save(path, format="GIF", save_all=True, append_images=images[1:], duration=duration,
+    images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=duration,
                    loop=0, optimize=False)
+    atomic_write(path, buf.getvalue())
     return path

@@ -115,7 +115,7 @@ class Experiment:
                 if generations != cfg["generations"]:
                     cfg = {**cfg, "generations": generations}
                     run.update_config(cfg)
-            if done >= cfg["generations"]:
+            if done >= cfg["generations"] and not run.end_files_pending():
                 raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
                                  "add --generations N to extend it")
             run.truncate_rows(done)
@@ -177,23 +177,37 @@ class Experiment:
               f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
+    def write_failed(self, exc: OSError) -> str:
+        """One line for a write that failed (a full disk): the file, why, where the run stands and
+        the command that completes it. Every file is still whole (written whole or not at all)."""
+        what = f"cannot write {exc.filename or 'a file'}: {exc.strerror or exc}"
+        resume = f"sgr evolve --resume {self.run.path}"
+        if self.run.end_files_pending():
+            return (f"{what}; the run's {self.search.generation} generations are done and checkpointed, "
+                    f"its end files (fitness.png, champion.gif) are not: make room, then {resume} "
+                    "writes them")
+        return (f"{what}; the run stopped during generation {self.search.generation + 1} and keeps its "
+                f"last checkpoint: make room, then {resume}")
+
     def close(self) -> None:
         """Stop the rollout worker processes and let go of the run directory."""
         self.pool.close()
         self.run.unlock()
 
     def finish(self) -> None:
-        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
+        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
+        written whole or not at all, and a run stopped while writing them (a full disk) writes
+        them again on `resume`."""
         from evolve.runs.champion import champion_gif
         from evolve.runs.plots import plot_run
 
         self.close()
+        self.run.begin_end_files()  # a stop before the end of this: --resume writes them again
         plot_run(self.run.path, self.run.path / "fitness.png")
-        if self.search.best is None:
-            return
-        if self.cfg.get("render_champion", True):
+        if self.search.best is not None and self.cfg.get("render_champion", True):
             champion_gif(self.run.path)
-        if not self.quiet:
+        self.run.end_files_written()
+        if self.search.best is not None and not self.quiet:
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")

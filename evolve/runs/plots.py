@@ -24,6 +24,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
+from evolve.runs.files import atomic_write
+
 UNKNOWN = "unknown"
 _WRAPPED = re.compile(r"^\s*[A-Za-z_][\w.]*\((.*)\)\s*$")
 
@@ -132,11 +134,14 @@ def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve]) -> list[Line2D]:
     return lines
 
 
-def _save(fig: Figure, out: str | Path) -> Path:
+def save_png(fig: Figure, out: str | Path, dpi: int = 120) -> Path:
+    """Write the figure as a PNG, whole or not at all (made in memory, then `atomic_write`)."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
-    fig.savefig(out, format="png", dpi=120)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    atomic_write(out, buf.getvalue())
     return out
 
 
@@ -202,4 +207,4 @@ def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> 
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    return _save(fig, out)
+    return save_png(fig, out)

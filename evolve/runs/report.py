@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from evolve.runs.plots import read_generations, run_labels
+from evolve.runs.files import atomic_write
+from evolve.runs.plots import read_generations, run_labels, save_png
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -267,7 +268,7 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
     w.writeheader()
     for r in rows:
         w.writerow({k: r.get(k, "") for k in columns})
-    path.write_text(buf.getvalue())
+    atomic_write(path, buf.getvalue().encode())
 
 
 def plot_curves(runs: list[Path], path: Path) -> Path:
@@ -320,8 +321,7 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
         ax.grid(alpha=0.3)
         ax.legend(fontsize="small")
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=110)
-    return path
+    return save_png(fig, path, dpi=110)
 
 
 def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
@@ -340,9 +340,9 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = summarize(runs, robustness, levels, replays)
     text = report_markdown(rows)
-    out.write_text(text)
+    atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
     curves = plot_curves(runs, out.parent / "curves.png")
     shown = write_gallery(gallery_entries(rows, runs), out.parent / "gallery") if gallery else []
-    (out.parent / "report.html").write_text(report_html(text, curves, shown))
+    atomic_write(out.parent / "report.html", report_html(text, curves, shown).encode())
     return out

@@ -40,6 +40,7 @@ CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
 MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
+ENDING = ".writing-end-files"  # present while a run's end files are being written
 PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
 
 
@@ -231,6 +232,21 @@ class RunDir:
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
         self._write_rows([r for r in rows if int(r["generation"]) <= generation])
+
+    # ------------------------------------------------------------------ end files
+    def begin_end_files(self) -> None:
+        """Mark that the end files (fitness.png, champion.gif) are being written: until
+        `end_files_written`, a finished run is not done, and `sgr evolve --resume` writes them again
+        (a full disk or a kill while writing them)."""
+        atomic_write(self.path / ENDING, b"")
+
+    def end_files_written(self) -> None:
+        """The end files are all written whole."""
+        (self.path / ENDING).unlink(missing_ok=True)
+
+    def end_files_pending(self) -> bool:
+        """Whether writing the end files began and did not end."""
+        return (self.path / ENDING).exists()
 
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:
