@@ -228,7 +228,7 @@ def _select_champion(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from evolve.runs.champion import champion_gif
+    from evolve.runs.champion import champion_gif, replay_line
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot
@@ -241,6 +241,9 @@ def _render(args: argparse.Namespace) -> int:
             raise ValueError("give either RUN_DIR or --task with --body, not both")
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
+        line = replay_line(args.run_dir, args.replay, args.noise, args.noise_kind, args.offset)
+        print(f"wrote {out}: {line}")
+        return 0
     else:
         if not (args.task and args.body):
             raise ValueError("sgr render needs RUN_DIR, or --task and --body")
@@ -357,7 +360,8 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--task")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
     r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
-    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif or robot.gif)")
+    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif, with --replay I "
+                                 "RUN_DIR/champion-replayI.gif; with --body robot.gif)")
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)

@@ -198,19 +198,27 @@ class Experiment:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
         written whole or not at all, and a run stopped while writing them (a full disk) writes
         them again on `resume`."""
-        from evolve.runs.champion import champion_gif
-        from evolve.runs.plots import plot_run
-
         self.close()
-        self.run.begin_end_files()  # a stop before the end of this: --resume writes them again
-        plot_run(self.run.path, self.run.path / "fitness.png")
-        if self.search.best is not None and self.cfg.get("render_champion", True):
-            champion_gif(self.run.path)
-        self.run.end_files_written()
+        write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+
+
+def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:
+    """The files drawn from a run's results: fitness.png (with its champion) always, champion.gif
+    when `render_champion` is set (or the run has one: it must show the champion of
+    champion.json). Each is written whole or not at all, and while they are written the run is
+    marked so that `sgr evolve --resume` writes them again after a failure."""
+    from evolve.runs.champion import champion_gif
+    from evolve.runs.plots import plot_run
+
+    run.begin_end_files()
+    plot_run(run.path, run.path / "fitness.png")
+    if champion and (cfg.get("render_champion", True) or (run.path / "champion.gif").exists()):
+        champion_gif(run.path)
+    run.end_files_written()
 
 
 @contextmanager
@@ -239,7 +247,8 @@ def _interrupt_after_generation() -> Iterator[threading.Event]:
 def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
                         workers: int | str = 1) -> dict:
     """`select_champion` (evolve/runs/final_selection.py) on a finished run's last checkpoint (`sgr
-    select-champion`): the run's own `final_selection` (else the defaults) with `overrides`."""
+    select-champion`): the run's own `final_selection` (else the defaults) with `overrides`; then
+    the files drawn from the champion (champion.gif, fitness.png) are drawn again."""
     run = RunDir(run_dir)
     cfg = run.config()
     run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
@@ -258,6 +267,8 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
         run.unlock()
         raise
     try:
-        return select_champion(exp, settings)
+        champ = select_champion(exp, settings)
     finally:
         exp.close()
+    write_end_files(run, cfg)  # the new champion's GIF and plot: the run's files agree
+    return champ

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -186,7 +187,8 @@ def matplotlib_colors() -> list[str]:
 
 
 def plot_run(run_dir: str | Path, out: str | Path) -> Path:
-    """PNG of one run's best, mean and median fitness per generation; returns the PNG path."""
+    """PNG of one run's best, mean and median fitness per generation, and its champion (of
+    champion.json) as a star; returns the PNG path."""
     cols = read_generations(run_dir)
     if "generation" not in cols:
         raise ValueError(f"{run_dir}/generations.csv has no rows")
@@ -196,7 +198,20 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
     for name in ("best", "mean", "median"):
         if name in cols:
             ax.plot(cols["generation"], cols[name], label=name)
+    champ = _champion(run_dir)
+    if champ is not None:  # the champion of champion.json (re-chosen by select-champion: redrawn)
+        ax.plot([champ[0]], [champ[1]], "k*", markersize=11,
+                label=f"champion: {champ[1]:.3f} (generation {champ[0]})")
     return _finish(fig, ax, f"{method} / {task}: {Path(run_dir).name}", "fitness", out)
+
+
+def _champion(run_dir: str | Path) -> tuple[int, float] | None:
+    """(generation, fitness) of the run's champion.json, None without a readable one."""
+    try:
+        champ = json.loads((Path(run_dir) / "champion.json").read_text())
+        return int(champ["generation"]), float(champ["fitness"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
