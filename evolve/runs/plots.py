@@ -12,6 +12,7 @@ from __future__ import annotations
 import csv
 import io
 import json
+import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -184,6 +185,17 @@ def matplotlib_colors() -> list[str]:
     from matplotlib import rcParams
 
     return rcParams["axes.prop_cycle"].by_key()["color"] * 8
+
+
+def runs_plot_path(run_dirs: Sequence[str | Path]) -> Path:
+    """Where `sgr plot` puts a plot of several runs (or of one with --per-run or --compare) without
+    --out: fitness.png in the folder that holds them all (runs/fitness.png for runs/*), never in the
+    working folder; fitness-runs.png inside a run directory given alone (its fitness.png is the
+    run's own plot)."""
+    common = Path(os.path.commonpath([Path(d).resolve() for d in run_dirs]))
+    if len(run_dirs) == 1 or (common / "generations.csv").is_file():
+        return common / "fitness-runs.png"
+    return common / "fitness.png"
 
 
 def plot_run(run_dir: str | Path, out: str | Path) -> Path:
