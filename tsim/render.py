@@ -246,13 +246,30 @@ class Renderer:
         self.view = None
 
     def _fits(self, points: np.ndarray) -> bool:
-        """Whether points (2, K) fit in 90 % of the view: the camera follows the robot and the
+        """Whether points (2, K) fit in 96 % of the view: the camera follows the robot and the
         loose objects together only then, so the robot never leaves the picture."""
         pts = points[:, np.isfinite(points).all(axis=0)]
         if pts.shape[1] == 0:
             return True
         span = pts.max(axis=1) - pts.min(axis=1)
-        return bool(span[0] <= 0.9 * self.width / self.scale and span[1] <= 0.9 * self.height / self.scale)
+        return bool(span[0] <= 0.96 * self.width / self.scale and span[1] <= 0.96 * self.height / self.scale)
+
+    def _followed(self, robot: np.ndarray, loose: list[np.ndarray]) -> np.ndarray:
+        """The points the camera follows: the robot's, with the loose objects nearest to it (by the
+        distance between their centres) as long as all of them fit the view (`_fits`). So a task's
+        objects stay in the picture where they can (Traverser-v0's blocks ahead of the robot), and
+        the robot always does (Catcher-v0's package high above is left out until it comes near)."""
+        followed = robot
+        if not loose:
+            return followed
+        centre = np.nanmean(robot, axis=1) if np.isfinite(robot).any() else np.zeros(2)
+        with np.errstate(invalid="ignore"):
+            dist = [float(np.hypot(*(np.nanmean(p, axis=1) - centre))) for p in loose]
+        for i in np.argsort(np.nan_to_num(dist, nan=np.inf), kind="stable"):
+            both = np.concatenate([followed, loose[i]], axis=1)
+            if self._fits(both):
+                followed = both
+        return followed
 
     def to_pixels(self, xy: np.ndarray) -> np.ndarray:
         """Pixel (column, row) coordinates (..., 2) of world points (..., 2) in the last frame."""
@@ -291,12 +308,9 @@ class Renderer:
         robot_points = np.asarray(robot_points, dtype=np.float64)
         objs = [(part, np.asarray(object_points.get(name, pos0), dtype=np.float64))
                 for name, (part, pos0) in self._objects.items()]
-        tracked = [robot_points] + ([p for name, (_, p) in zip(self._objects, objs, strict=True)
-                                     if name in self._loose] if self.track_objects else [])
-        followed = np.concatenate(tracked, axis=1)
-        if not self._fits(followed):  # e.g. Catcher-v0's package high above, Traverser's blocks
-            followed = robot_points
-        x0, y1 = self.view = self.camera.update(followed)
+        loose = [p for name, (_, p) in zip(self._objects, objs, strict=True)
+                 if name in self._loose] if self.track_objects else []
+        x0, y1 = self.view = self.camera.update(self._followed(robot_points, loose))
         x_lo, x_hi = x0 - C.CELL, x0 + self.width / self.scale + C.CELL
         y_lo, y_hi = y1 - self.height / self.scale - C.CELL, y1 + C.CELL
 
