@@ -9,9 +9,13 @@
     champ = load_champion("runs/notebook")   # body, policy(obs) -> action, episode length, env()
 """
 
-from evolve.methods import METHODS, Problem
-from evolve.runs import Experiment, RunDir, config_from_dict, load_config
-from evolve.runs.champion import Champion, load_champion
+from evolve.own_modules import use_own_modules
+
+use_own_modules()  # tsim and tasks are sgr's, whatever else the path holds (evolve/own_modules.py)
+
+from evolve.methods import METHODS, Problem  # noqa: E402
+from evolve.runs import Experiment, RunDir, config_from_dict, load_config  # noqa: E402
+from evolve.runs.champion import Champion, load_champion  # noqa: E402
 
 __all__ = ["METHODS", "Champion", "Experiment", "Problem", "RunDir", "config_from_dict", "load_champion",
            "load_config"]

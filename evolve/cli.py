@@ -159,9 +159,7 @@ def _run(exp) -> int:
               f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
     except OSError as exc:  # e.g. a full disk: every file is still whole (a cut CSV row is dropped)
-        print(f"sgr: error: cannot write {exc.filename}: {exc.strerror}; the run stopped during generation "
-              f"{exp.search.generation + 1} and keeps its last checkpoint: make room, then "
-              f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        print(f"sgr: error: {exp.write_failed(exc)}", file=sys.stderr)
         return 1
     finally:
         exp.close()
@@ -230,7 +228,7 @@ def _select_champion(args: argparse.Namespace) -> int:
 
 
 def _render(args: argparse.Namespace) -> int:
-    from evolve.runs.champion import champion_gif
+    from evolve.runs.champion import champion_gif, replay_line
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot
@@ -243,6 +241,9 @@ def _render(args: argparse.Namespace) -> int:
             raise ValueError("give either RUN_DIR or --task with --body, not both")
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
+        line = replay_line(args.run_dir, args.replay, args.noise, args.noise_kind, args.offset)
+        print(f"wrote {out}: {line}")
+        return 0
     else:
         if not (args.task and args.body):
             raise ValueError("sgr render needs RUN_DIR, or --task and --body")
@@ -258,14 +259,14 @@ def _render(args: argparse.Namespace) -> int:
 
 
 def _plot(args: argparse.Namespace) -> int:
-    from evolve.runs.plots import plot_run, plot_runs
+    from evolve.runs.plots import plot_run, plot_runs, runs_plot_path
 
     if args.out:
         output_path(args.out)
     if len(args.run_dirs) == 1 and not (args.compare or args.per_run):
         out = plot_run(args.run_dirs[0], args.out or Path(args.run_dirs[0]) / "fitness.png")
     else:
-        out = plot_runs(args.run_dirs, args.out or "fitness.png", per_run=args.per_run)
+        out = plot_runs(args.run_dirs, args.out or runs_plot_path(args.run_dirs), per_run=args.per_run)
     print(f"wrote {out}")
     return 0
 
@@ -323,9 +324,11 @@ def main(argv: list[str] | None = None) -> int:
                          "workers (default 1)")
     sw.add_argument("--quiet", action="store_true", help="only run starts and ends, no progress lines")
     sw.set_defaults(fn=_sweep)
-    rp = sub.add_parser("report", help="a sweep's table (with the authors' figures), summary CSV and curves")
+    rp = sub.add_parser("report", help="a run's or a sweep's table (with the authors' figures), summary CSV "
+                                       "and curves")
     rp.add_argument("dir", metavar="DIR", nargs="+",
-                    help="a sweep directory, or a folder of run directories (several: one report)")
+                    help="a run directory, a sweep directory or a folder of run directories (several: one "
+                         "report)")
     rp.add_argument("--out", help="report path (default DIR/report.md); summary.csv, curves.png beside it")
     rp.add_argument("--no-robustness", action="store_true",
                     help="skip replaying each champion under action noise")
@@ -357,7 +360,8 @@ def main(argv: list[str] | None = None) -> int:
     r.add_argument("--task")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
     r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
-    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif or robot.gif)")
+    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif, with --replay I "
+                                 "RUN_DIR/champion-replayI.gif; with --body robot.gif)")
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
@@ -374,7 +378,8 @@ def main(argv: list[str] | None = None) -> int:
     pl = sub.add_parser("plot", help="best fitness per generation; runs of one method/task averaged, or "
                                      "one line per run with --per-run")
     pl.add_argument("run_dirs", nargs="+", metavar="RUN_DIR")
-    pl.add_argument("--out", help="PNG path (default RUN_DIR/fitness.png for one run, else fitness.png)")
+    pl.add_argument("--out", help="PNG path (default: RUN_DIR/fitness.png for one run, else fitness.png in "
+                                  "the folder that holds the runs, e.g. runs/fitness.png for runs/*)")
     pl.add_argument("--compare", action="store_true", help="group style even for a single run")
     pl.add_argument("--per-run", action="store_true",
                     help="one line per run (coloured by method and task) instead of a mean with a band")

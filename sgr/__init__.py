@@ -10,13 +10,16 @@ ids) on our simulator, so evogym code ports by changing `evogym` to `sgr.evogym`
 Nothing in tsim, tasks or evolve imports this package.
 
 The names are resolved on first use (PEP 562), so `import sgr.evogym` does not pay for importing
-`evolve` (NEAT and the run machinery) it does not use. tests/sgr/test_sgr_package.py checks that
-the lists below are exactly the three packages' `__all__`.
+`evolve` (NEAT and the run machinery) it does not use; `tasks` is imported at once, since importing
+it registers the gymnasium ids `sgr/<task>` (as evogym's import registers its ids).
+tests/sgr/test_sgr_package.py checks that the lists below are exactly the three packages' `__all__`.
 """
 
 from __future__ import annotations
 
 import importlib
+
+import tasks  # noqa: F401  (registers the gymnasium ids: gym.make("sgr/Walker-v0") after import sgr)
 
 _FROM = {
     "tsim": ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from tsim.files import atomic_write
+
 
 def positive(cast):
     """argparse type: a positive number of type `cast` (int or float)."""
@@ -107,7 +109,7 @@ def _demo(args: argparse.Namespace) -> int:
               "returns": total.tolist(), "best_return": float(total[best]),
               "best_body": bodies[best].tolist(), "unstable": int(env.sim.unstable.sum()),
               "wall_s": wall, "robot_steps_per_s": args.robots * args.steps / wall}
-    (out / "results.json").write_text(json.dumps(result, indent=1))
+    atomic_write(out / "results.json", json.dumps(result, indent=1).encode())
     print(f"{args.task}: {args.robots} robots x {args.steps} steps in {wall:.1f} s "
           f"({result['robot_steps_per_s']:.0f} robot-steps/s); best return "
           f"{result['best_return']:.3f}; wrote {out / 'results.json'}")

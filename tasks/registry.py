@@ -4,6 +4,11 @@
 Rollout workers are other processes (`python -m evolve.rollout`, or Ray actors) that know only
 sgr's tasks: a registered spec travels with each job through the pipe
 (evolve/rollout/worker.py, `spec_blob`).
+
+A run of a task registered in a script (no `imports:` to name it) keeps that spec in its folder,
+as the same pickle (`TASK_FILE`), so that `sgr render`, `sgr report`, `sgr evolve --resume` and
+`load_champion` work on it later, in another process. Loading it runs code, so it follows the rule
+of `imports:`: only where the files are yours alone, or after `trust_imports()` (--trust-imports).
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ import hashlib
 import importlib
 import importlib.util
 import os
+import pickle
 import sys
 from pathlib import Path
 
@@ -22,6 +28,8 @@ from tasks.specs import BUILTIN, TASKS, task_world
 
 _SGR = ("tasks", "tsim", "evolve")
 _TRUST_ALL = False  # --trust-imports: import code named in any file, whoever wrote it
+TASK_FILE = "task.pkl"  # in a run folder: the spec of a task registered in a script
+HOW_TO_TRUST = "if you trust it, add --trust-imports (in Python: tasks.registry.trust_imports())"
 
 
 def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
@@ -82,7 +90,7 @@ def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = 
         others = [p for p in (Path(named_in), path) if p is not None and not _yours(p)]
         if others:
             raise ValueError(f"{named_in} names code to import ({ref}) and {others[0]} could have been "
-                             "written by someone else: if you trust it, add --trust-imports")
+                             f"written by someone else: {HOW_TO_TRUST}")
     if path is not None:
         name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
         if name in sys.modules:
@@ -101,3 +109,25 @@ def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = 
     except ImportError as exc:
         raise ValueError(f"task module {ref!r} cannot be imported ({exc}); give a module on the path "
                          "or a .py file") from None
+
+
+def load_task_file(path: Path, named_in: Path) -> str:
+    """Register the task a run folder keeps in `path` (`TASK_FILE`, written where the run began),
+    unless a task of that name is registered already; returns its name. `named_in` is the run's
+    config.yaml. The pickle is code: loaded only when both files are yours alone (`_yours`) or
+    after `trust_imports()`; ValueError in one line, saying how to allow it, otherwise."""
+    path = Path(path)
+    if not _TRUST_ALL:
+        others = [p for p in (Path(named_in), path) if not _yours(p)]
+        if others:
+            raise ValueError(f"{path} holds the code of the run's own task, and {others[0]} could have "
+                             f"been written by someone else: {HOW_TO_TRUST}")
+    try:
+        spec = pickle.loads(path.read_bytes())
+    except Exception as exc:  # a damaged file, or code that no longer loads (a module gone)
+        raise ValueError(f"{path}: the run's task does not load ({type(exc).__name__}: {exc})") from None
+    if not isinstance(spec, TaskSpec):
+        raise ValueError(f"{path}: not a task (a pickled {type(spec).__name__})")
+    if spec.name not in TASKS:
+        register(spec)
+    return spec.name

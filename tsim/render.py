@@ -9,6 +9,7 @@ later (robot over objects over terrain, later voxels over earlier) wins.
 
 from __future__ import annotations
 
+import io
 from collections.abc import Sequence
 from functools import cache
 from pathlib import Path
@@ -17,6 +18,7 @@ import numpy as np
 
 from tsim import constants as C
 from tsim.body import Body, build_body
+from tsim.files import atomic_write
 from tsim.world import World, resolve_world
 
 BACKGROUND = (244, 245, 247)
@@ -244,13 +246,30 @@ class Renderer:
         self.view = None
 
     def _fits(self, points: np.ndarray) -> bool:
-        """Whether points (2, K) fit in 90 % of the view: the camera follows the robot and the
+        """Whether points (2, K) fit in 96 % of the view: the camera follows the robot and the
         loose objects together only then, so the robot never leaves the picture."""
         pts = points[:, np.isfinite(points).all(axis=0)]
         if pts.shape[1] == 0:
             return True
         span = pts.max(axis=1) - pts.min(axis=1)
-        return bool(span[0] <= 0.9 * self.width / self.scale and span[1] <= 0.9 * self.height / self.scale)
+        return bool(span[0] <= 0.96 * self.width / self.scale and span[1] <= 0.96 * self.height / self.scale)
+
+    def _followed(self, robot: np.ndarray, loose: list[np.ndarray]) -> np.ndarray:
+        """The points the camera follows: the robot's, with the loose objects nearest to it (by the
+        distance between their centres) as long as all of them fit the view (`_fits`). So a task's
+        objects stay in the picture where they can (Traverser-v0's blocks ahead of the robot), and
+        the robot always does (Catcher-v0's package high above is left out until it comes near)."""
+        followed = robot
+        if not loose:
+            return followed
+        centre = np.nanmean(robot, axis=1) if np.isfinite(robot).any() else np.zeros(2)
+        with np.errstate(invalid="ignore"):
+            dist = [float(np.hypot(*(np.nanmean(p, axis=1) - centre))) for p in loose]
+        for i in np.argsort(np.nan_to_num(dist, nan=np.inf), kind="stable"):
+            both = np.concatenate([followed, loose[i]], axis=1)
+            if self._fits(both):
+                followed = both
+        return followed
 
     def to_pixels(self, xy: np.ndarray) -> np.ndarray:
         """Pixel (column, row) coordinates (..., 2) of world points (..., 2) in the last frame."""
@@ -289,12 +308,9 @@ class Renderer:
         robot_points = np.asarray(robot_points, dtype=np.float64)
         objs = [(part, np.asarray(object_points.get(name, pos0), dtype=np.float64))
                 for name, (part, pos0) in self._objects.items()]
-        tracked = [robot_points] + ([p for name, (_, p) in zip(self._objects, objs, strict=True)
-                                     if name in self._loose] if self.track_objects else [])
-        followed = np.concatenate(tracked, axis=1)
-        if not self._fits(followed):  # e.g. Catcher-v0's package high above, Traverser's blocks
-            followed = robot_points
-        x0, y1 = self.view = self.camera.update(followed)
+        loose = [p for name, (_, p) in zip(self._objects, objs, strict=True)
+                 if name in self._loose] if self.track_objects else []
+        x0, y1 = self.view = self.camera.update(self._followed(robot_points, loose))
         x_lo, x_hi = x0 - C.CELL, x0 + self.width / self.scale + C.CELL
         y_lo, y_hi = y1 - self.height / self.scale - C.CELL, y1 + C.CELL
 
@@ -357,7 +373,8 @@ def _as_indexed(frame: np.ndarray) -> np.ndarray | None:
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
     """Write frames as a looping GIF; returns the path.
 
-    Frames are RGB (H, W, 3) uint8 or `PALETTE` index images (H, W). Frames whose colours all lie in
+    Written whole or not at all (tsim/files.py). Frames are RGB (H, W, 3) uint8 or `PALETTE` index
+    images (H, W). Frames whose colours all lie in
     `PALETTE` (every frame `Renderer` makes) are written losslessly with that palette through Pillow
     directly, which skips imageio's per-frame colour quantization (about 10x faster); other RGB frames
     go through imageio's GIF writer.
@@ -370,12 +387,14 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     path.parent.mkdir(parents=True, exist_ok=True)
     indexed = [f if f.ndim == 2 else _as_indexed(f) for f in (np.asarray(f) for f in frames)]
     duration = 1000.0 / fps
+    buf = io.BytesIO()  # made in memory, then written whole or not at all (a full disk cuts no GIF)
     if any(f is None for f in indexed):
         import imageio.v3 as iio
 
         rgb = [to_rgb(f) if f.ndim == 2 else f for f in (np.asarray(f) for f in frames)]
-        iio.imwrite(path, np.stack(rgb), extension=".gif",
+        iio.imwrite(buf, np.stack(rgb), extension=".gif",
                     duration=duration, loop=0)
+        atomic_write(path, buf.getvalue())
         return path
     from PIL import Image
 
@@ -387,6 +406,7 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
         im = Image.frombytes("P", (w, h), np.ascontiguousarray(f, dtype=np.uint8).tobytes())
         im.putpalette(palette.tobytes())
         images.append(im)
-    images[0].save(path, format="GIF", save_all=True, append_images=images[1:], duration=duration,
+    images[0].save(buf, format="GIF", save_all=True, append_images=images[1:], duration=duration,
                    loop=0, optimize=False)
+    atomic_write(path, buf.getvalue())
     return path

@@ -20,10 +20,10 @@ import pickle
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
-from pathlib import Path
 
 import numpy as np
 
+from evolve.own_modules import child_env, python_command
 from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
@@ -136,11 +136,10 @@ class RolloutPool:
         return self._procs[:n]
 
     def _spawn(self) -> subprocess.Popen:
-        root = str(Path(__file__).resolve().parents[2])
-        env = {**os.environ, "SGR_THREADS": "1",  # one Taichi thread per worker process
-               "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
-        return subprocess.Popen([sys.executable, "-m", "evolve.rollout"],
-                                stdin=subprocess.PIPE, stdout=subprocess.PIPE, env=env)
+        # -P and sgr's folder first: a tasks.py in the working folder is never imported there
+        env = child_env(SGR_THREADS="1")  # one Taichi thread per worker process
+        return subprocess.Popen(python_command("evolve.rollout"), stdin=subprocess.PIPE,
+                                stdout=subprocess.PIPE, env=env)
 
     def _send(self, proc: subprocess.Popen, job: tuple) -> None:
         try:

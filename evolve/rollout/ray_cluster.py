@@ -31,6 +31,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from evolve.own_modules import ROOT
 from evolve.rollout.pool import PolicyFactory, balanced_chunks, chunk_job
 from evolve.rollout.robust import EpisodeNoise
 
@@ -53,12 +54,18 @@ def connect(what: str, address: str | None = None, start: str | None = None):
     import ray
 
     if not ray.is_initialized():
+        # Ray puts the driver's working folder on its workers' path, before sgr: made from sgr's own
+        # folder, so that a tasks.py or evolve.py where the user works is not imported there
+        here = os.getcwd()
+        os.chdir(ROOT)
         try:
             ray.init(address=address or start, logging_level=logging.WARNING, log_to_driver=False)
         except ConnectionError as exc:  # e.g. no cluster at that address
             where = f"at {address}" if address else "here"
             raise ValueError(f"{what}: cannot join a Ray cluster {where}: "
                              f"{' '.join(str(exc).split())}") from None
+        finally:
+            os.chdir(here)
     return ray
 
 

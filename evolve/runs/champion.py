@@ -71,11 +71,9 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     ValueError naming the file and the key when it is not a champion that runs (checked with one
     forward pass of the controller)."""
     f = Path(run_dir) / "champion.json"
-    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: the modules that register it
-        from tasks.registry import import_tasks
-
-        for ref in RunDir(run_dir).config().get("imports") or ():
-            import_tasks(ref, named_in=Path(run_dir) / "config.yaml")
+    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
+        run = RunDir(run_dir)
+        run.load_task(run.config())
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
@@ -115,12 +113,14 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
                  kind: str = "uniform", offset: float = 0.0, seed: int = 0, every: int = 1) -> Path:
     """Render the champion's episode in its task (same episode length as its evaluation; a frame
     every `every` steps): the nominal episode, or with `replay` > 0 that perturbed replay of
-    `replay_champion` (same arguments, same episode)."""
+    `replay_champion` (same arguments, same episode). Default `out`: the run's champion.gif, or
+    for a replay its own file (`replay_gif_name`), so champion.gif always shows the champion."""
     from tasks.render_episode import render_episode
     from tsim.render import write_gif
 
     champ, body, ctrl = read_champion(run_dir)
     noise = _replay_noise(replay + 1, eps, kind, offset, seed).take([replay])
+    out = out or Path(run_dir) / replay_gif_name(replay)
     shift = noise.shifts()
 
     def policy(t: int, obs: np.ndarray) -> np.ndarray:
@@ -130,7 +130,24 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
 
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
                             every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
-    return write_gif(frames, out or Path(run_dir) / "champion.gif", fps=fps)
+    return write_gif(frames, out, fps=fps)
+
+
+def replay_gif_name(replay: int) -> str:
+    """The GIF of a run's champion (replay 0), or of its perturbed replay I: champion-replayI.gif."""
+    return "champion.gif" if replay == 0 else f"champion-replay{replay}.gif"
+
+
+def replay_line(run_dir: str | Path, replay: int = 0, eps: float = 0.0, kind: str = "uniform",
+                offset: float = 0.0, seed: int = 0) -> str:
+    """What `sgr render` prints beside the GIF: the champion's nominal return and, for a perturbed
+    replay, that replay's return (the episode the GIF shows), to answer "does it hold?"."""
+    returns = replay_champion(run_dir, replay, eps, seed, kind, offset)
+    nominal = f"nominal return {returns[0]:.4f}"
+    if replay == 0:
+        return nominal
+    noise = f"±{eps:g} {kind} action noise" + (f", start ±{offset:g}" if offset else "")
+    return f"replay {replay} ({noise}) return {returns[replay]:.4f}, {nominal}"
 
 
 class _SameController:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
@@ -27,7 +28,7 @@ from evolve.runs.final_selection import FinalSelection, describe, select_champio
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
-from tasks.registry import import_tasks
+from tasks.specs import BUILTIN
 
 
 def rollout_pool(workers: int | str) -> RolloutPool:
@@ -84,6 +85,8 @@ class Experiment:
         run.lock()
         try:
             run.create(cfg, ini)
+            if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
+                run.save_task(spec_blob(cfg["task"]))
             exp = cls(run, cfg, quiet=quiet)
             run.save_checkpoint(0, exp.state())
         except BaseException:
@@ -98,8 +101,7 @@ class Experiment:
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
         cfg = run.config()
-        for ref in cfg.get("imports") or ():  # the modules that register the run's own task
-            import_tasks(ref, named_in=run.path / "config.yaml")
+        run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
         run.lock()
         try:
             state = load_checkpoint(run, cfg)
@@ -113,7 +115,7 @@ class Experiment:
                 if generations != cfg["generations"]:
                     cfg = {**cfg, "generations": generations}
                     run.update_config(cfg)
-            if done >= cfg["generations"]:
+            if done >= cfg["generations"] and not run.end_files_pending():
                 raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
                                  "add --generations N to extend it")
             run.truncate_rows(done)
@@ -175,26 +177,48 @@ class Experiment:
               f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
+    def write_failed(self, exc: OSError) -> str:
+        """One line for a write that failed (a full disk): the file, why, where the run stands and
+        the command that completes it. Every file is still whole (written whole or not at all)."""
+        what = f"cannot write {exc.filename or 'a file'}: {exc.strerror or exc}"
+        resume = f"sgr evolve --resume {self.run.path}"
+        if self.run.end_files_pending():
+            return (f"{what}; the run's {self.search.generation} generations are done and checkpointed, "
+                    f"its end files (fitness.png, champion.gif) are not: make room, then {resume} "
+                    "writes them")
+        return (f"{what}; the run stopped during generation {self.search.generation + 1} and keeps its "
+                f"last checkpoint: make room, then {resume}")
+
     def close(self) -> None:
         """Stop the rollout worker processes and let go of the run directory."""
         self.pool.close()
         self.run.unlock()
 
     def finish(self) -> None:
-        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
-        from evolve.runs.champion import champion_gif
-        from evolve.runs.plots import plot_run
-
+        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
+        written whole or not at all, and a run stopped while writing them (a full disk) writes
+        them again on `resume`."""
         self.close()
-        plot_run(self.run.path, self.run.path / "fitness.png")
-        if self.search.best is None:
-            return
-        if self.cfg.get("render_champion", True):
-            champion_gif(self.run.path)
-        if not self.quiet:
+        write_end_files(self.run, self.cfg, champion=self.search.best is not None)
+        if self.search.best is not None and not self.quiet:
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+
+
+def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:
+    """The files drawn from a run's results: fitness.png (with its champion) always, champion.gif
+    when `render_champion` is set (or the run has one: it must show the champion of
+    champion.json). Each is written whole or not at all, and while they are written the run is
+    marked so that `sgr evolve --resume` writes them again after a failure."""
+    from evolve.runs.champion import champion_gif
+    from evolve.runs.plots import plot_run
+
+    run.begin_end_files()
+    plot_run(run.path, run.path / "fitness.png")
+    if champion and (cfg.get("render_champion", True) or (run.path / "champion.gif").exists()):
+        champion_gif(run.path)
+    run.end_files_written()
 
 
 @contextmanager
@@ -223,11 +247,11 @@ def _interrupt_after_generation() -> Iterator[threading.Event]:
 def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
                         workers: int | str = 1) -> dict:
     """`select_champion` (evolve/runs/final_selection.py) on a finished run's last checkpoint (`sgr
-    select-champion`): the run's own `final_selection` (else the defaults) with `overrides`."""
+    select-champion`): the run's own `final_selection` (else the defaults) with `overrides`; then
+    the files drawn from the champion (champion.gif, fitness.png) are drawn again."""
     run = RunDir(run_dir)
     cfg = run.config()
-    for ref in cfg.get("imports") or ():  # the modules that register the run's own task
-        import_tasks(ref, named_in=run.path / "config.yaml")
+    run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
     state = load_checkpoint(run, cfg)
     if state is None:
         raise ValueError(f"{run_dir} has no checkpoint")
@@ -243,6 +267,8 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
         run.unlock()
         raise
     try:
-        return select_champion(exp, settings)
+        champ = select_champion(exp, settings)
     finally:
         exp.close()
+    write_end_files(run, cfg)  # the new champion's GIF and plot: the run's files agree
+    return champ

@@ -60,6 +60,7 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
     import imageio.v3 as iio
 
     from evolve.runs.champion import champion_gif, read_champion
+    from evolve.runs.files import atomic_write
 
     folder.mkdir(parents=True, exist_ok=True)
     out = []
@@ -69,7 +70,7 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
                            every=every)
         _, body, _ = read_champion(e["run"])
         png = folder / f"{name}-body.png"
-        iio.imwrite(png, body_image(body))
+        atomic_write(png, iio.imwrite("<bytes>", body_image(body), extension=".png"))  # whole or not at all
         out.append({**e, "gif": gif, "body": png})
     return out
 

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import csv
 import io
+import json
+import os
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -23,6 +25,8 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
+
+from evolve.runs.files import atomic_write
 
 UNKNOWN = "unknown"
 _WRAPPED = re.compile(r"^\s*[A-Za-z_][\w.]*\((.*)\)\s*$")
@@ -132,11 +136,14 @@ def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve]) -> list[Line2D]:
     return lines
 
 
-def _save(fig: Figure, out: str | Path) -> Path:
+def save_png(fig: Figure, out: str | Path, dpi: int = 120) -> Path:
+    """Write the figure as a PNG, whole or not at all (made in memory, then `atomic_write`)."""
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
-    fig.savefig(out, format="png", dpi=120)
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=dpi)
+    atomic_write(out, buf.getvalue())
     return out
 
 
@@ -180,8 +187,20 @@ def matplotlib_colors() -> list[str]:
     return rcParams["axes.prop_cycle"].by_key()["color"] * 8
 
 
+def runs_plot_path(run_dirs: Sequence[str | Path]) -> Path:
+    """Where `sgr plot` puts a plot of several runs (or of one with --per-run or --compare) without
+    --out: fitness.png in the folder that holds them all (runs/fitness.png for runs/*), never in the
+    working folder; fitness-runs.png inside a run directory given alone (its fitness.png is the
+    run's own plot)."""
+    common = Path(os.path.commonpath([Path(d).resolve() for d in run_dirs]))
+    if len(run_dirs) == 1 or (common / "generations.csv").is_file():
+        return common / "fitness-runs.png"
+    return common / "fitness.png"
+
+
 def plot_run(run_dir: str | Path, out: str | Path) -> Path:
-    """PNG of one run's best, mean and median fitness per generation; returns the PNG path."""
+    """PNG of one run's best, mean and median fitness per generation, and its champion (of
+    champion.json) as a star; returns the PNG path."""
     cols = read_generations(run_dir)
     if "generation" not in cols:
         raise ValueError(f"{run_dir}/generations.csv has no rows")
@@ -191,7 +210,20 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
     for name in ("best", "mean", "median"):
         if name in cols:
             ax.plot(cols["generation"], cols[name], label=name)
+    champ = _champion(run_dir)
+    if champ is not None:  # the champion of champion.json (re-chosen by select-champion: redrawn)
+        ax.plot([champ[0]], [champ[1]], "k*", markersize=11,
+                label=f"champion: {champ[1]:.3f} (generation {champ[0]})")
     return _finish(fig, ax, f"{method} / {task}: {Path(run_dir).name}", "fitness", out)
+
+
+def _champion(run_dir: str | Path) -> tuple[int, float] | None:
+    """(generation, fitness) of the run's champion.json, None without a readable one."""
+    try:
+        champ = json.loads((Path(run_dir) / "champion.json").read_text())
+        return int(champ["generation"]), float(champ["fitness"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
@@ -202,4 +234,4 @@ def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> 
     ax.grid(alpha=0.3)
     ax.legend(fontsize="small")
     fig.tight_layout()
-    return _save(fig, out)
+    return save_png(fig, out)

@@ -9,13 +9,12 @@ names the resume command; every run keeps its last checkpoint.
 
 from __future__ import annotations
 
-import os
 import socket
 import subprocess
-import sys
 import time
 from pathlib import Path
 
+from evolve.own_modules import child_env, python_command
 from evolve.rollout.ray_cluster import connect
 from evolve.runs.sweep import BackendLost, die_with_parent, trust_flag
 
@@ -25,12 +24,11 @@ HEALTH_EVERY_S = 1.0
 
 def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> int:
     """A Ray task: advance one run to its end in a subprocess on this node; its exit code."""
-    root = str(Path(__file__).resolve().parents[2])
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (root, os.environ.get("PYTHONPATH")) if p)}
+    env = child_env()  # -P (python_command) and sgr's folder first: no file of the working folder is imported
     with open(Path(run_path) / "log.txt", "ab") as log:
         # the run dies with this worker (a cancelled task, a sweep that stopped): no run goes on alone
-        proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--resume", run_path,
-                                 "--workers", str(workers), "--quiet", *flags],
+        proc = subprocess.Popen(python_command("evolve.cli", "evolve", "--resume", run_path,
+                                               "--workers", str(workers), "--quiet", *flags),
                                 stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
     return proc.wait()
 

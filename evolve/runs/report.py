@@ -28,7 +28,8 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from evolve.runs.plots import read_generations, run_labels
+from evolve.runs.files import atomic_write
+from evolve.runs.plots import read_generations, run_labels, save_png
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -89,13 +90,16 @@ def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
 
 
 def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
-    """Run directories (with config.yaml and generations.csv) in folder/runs, else in folder; of
-    each folder when given several."""
+    """Run directories (with config.yaml and generations.csv): folder itself when it is one (as
+    `sgr render RUN` takes it), else those in folder/runs or in folder; of each folder when given
+    several."""
     if not isinstance(folder, str | Path):
         return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
         raise ValueError(f"not a folder: {folder}")
+    if (folder / "config.yaml").is_file() and (folder / "generations.csv").is_file():
+        return [folder]
     base = folder / "runs" if (folder / "runs").is_dir() else folder
     runs = sorted(d for d in base.iterdir()
                   if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())
@@ -264,7 +268,7 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
     w.writeheader()
     for r in rows:
         w.writerow({k: r.get(k, "") for k in columns})
-    path.write_text(buf.getvalue())
+    atomic_write(path, buf.getvalue().encode())
 
 
 def plot_curves(runs: list[Path], path: Path) -> Path:
@@ -317,8 +321,7 @@ def plot_curves(runs: list[Path], path: Path) -> Path:
         ax.grid(alpha=0.3)
         ax.legend(fontsize="small")
     fig.tight_layout()
-    fig.savefig(path, format="png", dpi=110)
-    return path
+    return save_png(fig, path, dpi=110)
 
 
 def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
@@ -337,9 +340,9 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
     out.parent.mkdir(parents=True, exist_ok=True)
     rows = summarize(runs, robustness, levels, replays)
     text = report_markdown(rows)
-    out.write_text(text)
+    atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
     curves = plot_curves(runs, out.parent / "curves.png")
     shown = write_gallery(gallery_entries(rows, runs), out.parent / "gallery") if gallery else []
-    (out.parent / "report.html").write_text(report_html(text, curves, shown))
+    atomic_write(out.parent / "report.html", report_html(text, curves, shown).encode())
     return out

@@ -40,6 +40,7 @@ CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
 MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
+ENDING = ".writing-end-files"  # present while a run's end files are being written
 PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
 
 
@@ -155,6 +156,33 @@ class RunDir:
             raise ValueError(f"{f}: not a run config (no 'method' key)")
         return cfg
 
+    def save_task(self, blob: bytes) -> None:
+        """Keep the pickled spec of a task registered in a script (no `imports:` names it), so that
+        the run renders, reports and resumes in another process (tasks/registry.py, TASK_FILE)."""
+        from tasks.registry import TASK_FILE
+
+        atomic_write(self.path / TASK_FILE, blob)
+
+    def load_task(self, cfg: dict) -> None:
+        """Register the run's own task in this process, if it is not sgr's: import the modules its
+        config names (`imports:`), else load the task the folder keeps (a script's); each only
+        where the files are yours alone or after --trust-imports. ValueError in one line when it
+        may not be loaded, or when the task is still unknown."""
+        from tasks.registry import TASK_FILE, import_tasks, load_task_file
+        from tasks.specs import TASKS, unknown_task
+
+        named_in = self.path / "config.yaml"
+        for ref in cfg.get("imports") or ():
+            import_tasks(ref, named_in=named_in)
+        task = cfg.get("task")
+        if not isinstance(task, str) or task in TASKS:
+            return
+        if (self.path / TASK_FILE).is_file():
+            load_task_file(self.path / TASK_FILE, named_in)
+        if task not in TASKS:
+            raise ValueError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
+                             f"file that registers it is imported: add imports: [that file] to {named_in}")
+
     def update_config(self, cfg: dict) -> None:
         """Replace config.yaml atomically (a resume that extends `generations` does)."""
         atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
@@ -204,6 +232,21 @@ class RunDir:
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
         self._write_rows([r for r in rows if int(r["generation"]) <= generation])
+
+    # ------------------------------------------------------------------ end files
+    def begin_end_files(self) -> None:
+        """Mark that the end files (fitness.png, champion.gif) are being written: until
+        `end_files_written`, a finished run is not done, and `sgr evolve --resume` writes them again
+        (a full disk or a kill while writing them)."""
+        atomic_write(self.path / ENDING, b"")
+
+    def end_files_written(self) -> None:
+        """The end files are all written whole."""
+        (self.path / ENDING).unlink(missing_ok=True)
+
+    def end_files_pending(self) -> bool:
+        """Whether writing the end files began and did not end."""
+        return (self.path / ENDING).exists()
 
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:

@@ -25,7 +25,6 @@ import math
 import shutil
 import signal
 import subprocess
-import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -33,6 +32,7 @@ from pathlib import Path
 import yaml
 
 from evolve.methods import METHODS
+from evolve.own_modules import child_env, python_command
 from evolve.runs.config import configs_dir
 from evolve.runs.files import atomic_write, read_yaml
 from evolve.runs.rundir import RunDir
@@ -263,9 +263,9 @@ class LocalBackend:
         workers = max(1, resolve_workers("auto") // self.parallel)
         log = open(sweep.run_dir(run).path / "log.txt", "ab")  # noqa: SIM115 (closed by the process)
         self.procs[run] = subprocess.Popen(
-            [sys.executable, "-m", "evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
-             "--workers", str(workers), "--quiet", *trust_flag()],
-            stdout=log, stderr=subprocess.STDOUT, preexec_fn=die_with_parent)
+            python_command("evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
+                           "--workers", str(workers), "--quiet", *trust_flag()),
+            stdout=log, stderr=subprocess.STDOUT, env=child_env(), preexec_fn=die_with_parent)
         log.close()
 
     def poll(self) -> dict[SweepRun, int]:

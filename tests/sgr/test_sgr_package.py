@@ -24,3 +24,19 @@ def test_importing_sgr_evogym_leaves_evolve_alone():
     code = "import sys, sgr.evogym.envs; print('evolve' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_import_sgr_registers_the_sgr_gymnasium_ids():
+    """After `import sgr` alone, gym.make("sgr/Walker-v0", ...) works (no NamespaceNotFound)."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    code = ("import gymnasium as gym, numpy as np, sgr\n"
+            "env = gym.make('sgr/Walker-v0', body=np.full((5, 5), 3))\n"
+            "print(env.spec.id, env.spec.max_episode_steps)")
+    root = Path(__file__).resolve().parents[2]
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120,
+                       env={**os.environ, "PYTHONPATH": str(root)})
+    assert r.returncode == 0 and r.stdout.split() == ["sgr/Walker-v0", "500"], r.stderr[-2000:]

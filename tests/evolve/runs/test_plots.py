@@ -121,3 +121,19 @@ def test_ticks_are_whole_generations_and_per_run_draws_one_line_per_run(tmp_path
         assert all(float(t).is_integer() for t in seen["ticks"])
     finally:
         P._finish = real_finish
+
+
+def test_sgr_plot_of_several_runs_writes_beside_them_and_says_where(tmp_path, monkeypatch, capsys):
+    """`sgr plot runs/* --per-run` from another folder: runs/fitness.png, named on stdout; nothing in
+    the working folder (its --help says so)."""
+    from evolve.cli import main
+
+    runs = [_run(tmp_path / "runs" / "a", [1.0, 2.0], "sgr"),
+            _run(tmp_path / "runs" / "b", [0.5, 1.0], "sgr")]
+    cwd = tmp_path / "elsewhere"
+    cwd.mkdir()
+    monkeypatch.chdir(cwd)
+    assert main(["plot", *map(str, runs), "--per-run"]) == 0
+    assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'runs' / 'fitness.png'}"
+    assert (tmp_path / "runs" / "fitness.png").read_bytes().startswith(PNG_MAGIC)
+    assert list(cwd.iterdir()) == []

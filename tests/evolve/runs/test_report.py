@@ -108,3 +108,12 @@ def test_report_md_lists_each_champion_under_noise(report):
             "| 50 % / 20 % |") in text
     assert ("| sgr-Walker-v0-s1 | 3.000 | 4.000 | 4.000 / 4.000 | 100 % / 133 % | 4.000 / 2.000 "
             "| 100 % / 133 % |") in text
+
+
+def test_report_takes_one_run_directory_as_sgr_render_does(tmp_path):
+    """`sgr report RUN`: the run itself, reported in RUN/report.md (no 'holds no run directories')."""
+    run = make_run(tmp_path, 0)
+    out = write_report(run, robustness=False, gallery=False)
+    assert out == run / "report.md"
+    rows = list(csv.DictReader((run / "summary.csv").open()))
+    assert [r["run"] for r in rows] == [run.name] and float(rows[0]["best_gen30"]) == 5.0
