@@ -60,8 +60,11 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
     fitness was scored: enough to score it again exactly (robust: the run's seed and the
     evaluation's tag give every episode's noise; the tag holds the search's own generation
     number, counted from 0)."""
-    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"],
-                  "tag": f"{best['generation']}/{best['key']}"}
+    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"]}
+    if "tags" in best:  # accumulated fitness: the mean of these evaluations' scores, in this order
+        evaluation["tags"] = list(best["tags"])
+    else:
+        evaluation["tag"] = f"{best['generation']}/{best['key']}"
     return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                            best["generation"] + 1, evaluation)
 
@@ -163,8 +166,16 @@ def rescore_champion(run_dir: str | Path) -> float:
     if robust is None:
         return float(_replay(champ, body, ctrl, EpisodeNoise(Perturbation(), np.zeros(1, np.uint64),
                                                              np.zeros(1, bool)))[0])
-    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
-    return float(robust.score(returns[:, None])[0])
+    if "tags" not in evaluation:
+        returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
+        return float(robust.score(returns[:, None])[0])
+    tags = evaluation["tags"]  # accumulated: each evaluation's score, summed in order, then the mean
+    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], tags))
+    scores = robust.score(returns.reshape(robust.episodes, len(tags)))
+    total = 0.0
+    for s in scores:
+        total += float(s)
+    return total / len(tags)
 
 
 def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0,

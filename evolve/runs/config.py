@@ -115,6 +115,9 @@ def check_config(raw: dict, source: str = "config") -> dict:
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
     robust = Robust.from_config(cfg["robust"], source)
+    if robust is not None and robust.accumulate and problem.reevaluate_elites:
+        raise ValueError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "
+                         "(the best of a search run for each body) is not a score to average")
     cfg["robust"] = None if robust is None else robust.to_json()
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:

@@ -20,6 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.rollout.robust import Robust
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
@@ -56,10 +57,11 @@ class Experiment:
         if state is not None:
             self.problem.restore(state.get("problem", {}))
         self.selection = FinalSelection.from_config(cfg.get("final_selection"))
+        robust = Robust.from_config(cfg.get("robust")) or Robust(reevaluate=False)
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
-                                 state=state, reevaluate=method.reevaluate_elites
-                                 or bool((cfg.get("robust") or {}).get("reevaluate")))
+                                 state=state, reevaluate=method.reevaluate_elites or robust.reevaluate,
+                                 accumulate=robust.accumulate, race=robust.race)
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
