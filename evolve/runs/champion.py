@@ -23,6 +23,7 @@ from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
+from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS
@@ -247,6 +248,15 @@ class Champion:
             total += reward
             done = terminated or truncated
         return total
+
+    def verdict(self, replays: int = verdict_rule.REPLAYS,
+                eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
+        """Whether it holds (evolve/runs/verdict.py): its episode replayed `replays` times with
+        uniform(+-eps) on every action, against its noise-free return. `verdict().line()` says it
+        in words; `verdict().holds` is the rule's answer."""
+        returns = _replay(self.record, self.body, self.controller,
+                          _replay_noise(replays + 1, eps, "uniform", 0.0, 0))
+        return verdict_rule.from_returns(returns, eps)
 
     def gif(self, out: str | Path, *, width: int = 640, height: int = 320, fps: float = 30.0) -> Path:
         """Render its episode to a GIF at `out`; returns the path."""

@@ -194,9 +194,12 @@ class Experiment:
         if self.cfg.get("render_champion", True):
             champion_gif(self.run.path)
         if not self.quiet:
+            from evolve.runs.verdict import judge
+
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+            print(f"champion {judge(self.run.path).line()}", flush=True)
 
 
 @contextmanager

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from evolve.runs import verdict as verdict_rule
 from evolve.runs.plots import read_generations, run_labels
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
@@ -122,7 +123,8 @@ def champion_robustness(run_dir: Path, replays: int = 10,
     from evolve.runs.rundir import RunDir
 
     champ = RunDir(run_dir).champion()
-    out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir)}
+    out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir),
+           "replays": replays}
     for eps in levels:
         total = replay_champion(run_dir, replays, eps)
         nominal, perturbed = float(total[0]), total[1:]
@@ -233,12 +235,17 @@ def report_markdown(rows: list[dict]) -> str:
                               for r in off) + ".\n")
     rob = [r for r in rows if "nominal" in r]
     if rob and levels:
+        judged = verdict_rule.EPS in levels
         out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
                   "the mean as a share of the nominal return and of the champion's recorded fitness "
-                  "(- where that is not positive).\n\n")
-        out.write("| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of nominal "
-                                                          f"/ of champion |" for e in levels) + "\n")
-        out.write("|---" * (3 + 2 * len(levels)) + "|\n")
+                  "(- where that is not positive).")
+        if judged:
+            held = sum(_verdict(r).holds for r in rob)
+            out.write(f" **{held} of {len(rob)} champions hold.** Verdict, {_rule(rob)}.")
+        out.write("\n\n| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of "
+                                                              f"nominal / of champion |" for e in levels)
+                  + (" verdict |" if judged else "") + "\n")
+        out.write("|---" * (3 + 2 * len(levels) + judged) + "|\n")
 
         def pct(x: float) -> str:
             return f"{int(round(100 * x))} %" if math.isfinite(x) else "-"
@@ -250,9 +257,24 @@ def report_markdown(rows: list[dict]) -> str:
                 mean, champ = r[noise_column(e, "mean")], r["champion_fitness"]
                 cells += [f"{mean:.3f} / {r[noise_column(e, 'min')]:.3f}",
                           f"{pct(ratio)} / {pct(mean / champ if champ > 0 else math.nan)}"]
+            if judged:
+                cells.append(f"**{_verdict(r).label}**")
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     return out.getvalue()
+
+
+def _verdict(row: dict) -> verdict_rule.Verdict:
+    """A summary row's verdict (evolve/runs/verdict.py) from its replays at the rule's noise level."""
+    return verdict_rule.Verdict(row["nominal"], row[noise_column(verdict_rule.EPS, "mean")],
+                                row.get("replays", 0), verdict_rule.EPS)
+
+
+def _rule(rows: list[dict]) -> str:
+    """The verdict's rule as the report applies it (with its own replay count)."""
+    counts = sorted({r.get("replays", 0) for r in rows})
+    n = "/".join(str(c) for c in counts)
+    return verdict_rule.RULE.replace(f"{verdict_rule.REPLAYS} replays", f"{n} replays")
 
 
 def write_summary_csv(rows: list[dict], path: Path) -> None:
