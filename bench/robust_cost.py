@@ -29,6 +29,8 @@ DESIGNS = {
     "acc1": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True},
     "race16": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True, "race": 16},
     "race8x2": {"episodes": 2, **NOISE, "reevaluate": True, "accumulate": True, "race": 8},
+    "settle8": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True, "settle": 8},
+    "race8settle8": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True, "race": 8, "settle": 8},
 }
 
 

@@ -127,7 +127,9 @@ class Robust:
     a genome's fitness is the mean of its scores over every generation it has been evaluated in,
     so one fresh episode a generation adds up to many for the genomes that survive, at the cost of
     a nominal run. `race` (with `accumulate`): the `race` genomes ranked highest after a
-    generation's episodes get `episodes` more that generation (NeatSearch)."""
+    generation's episodes get `episodes` more that generation (NeatSearch). `settle` (with
+    `accumulate`; 0: never): a genome scored `settle` times keeps that mean and is not simulated
+    again."""
     episodes: int = 4
     action_noise: str = "uniform"
     action_scale: float = 1e-3
@@ -136,6 +138,7 @@ class Robust:
     reevaluate: bool = False
     accumulate: bool = False
     race: int = 0
+    settle: int = 0
 
     @property
     def perturbation(self) -> Perturbation:
@@ -164,10 +167,10 @@ class Robust:
         return np.quantile(returns, int(s[1:]) / 100.0, axis=0)
 
     def to_json(self) -> dict:
-        """The config mapping: every key, but `accumulate` and `race` only when set (the records
+        """The config mapping: every key, but `accumulate`, `race` and `settle` only when set (the records
         of runs made before they existed stay as they were)."""
         out = asdict(self)
-        for key in ("accumulate", "race"):
+        for key in ("accumulate", "race", "settle"):
             if not out[key]:
                 del out[key]
         return out
@@ -200,9 +203,11 @@ class Robust:
         if r.accumulate and not r.reevaluate:
             raise ValueError(f"{name}.accumulate' needs reevaluate: true (a survivor's scores are "
                              "averaged over the generations it is simulated in)")
-        if not isinstance(r.race, int) or isinstance(r.race, bool) or r.race < 0:
-            raise ValueError(f"{name}.race' must be an int >= 0, got {r.race!r}")
-        if r.race and not r.accumulate:
-            raise ValueError(f"{name}.race' needs accumulate: true (the extra episodes are averaged in)")
+        for key in ("race", "settle"):
+            v = getattr(r, key)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 0:
+                raise ValueError(f"{name}.{key}' must be an int >= 0, got {v!r}")
+            if v and not r.accumulate:
+                raise ValueError(f"{name}.{key}' needs accumulate: true (a genome's scores are averaged)")
         return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s, r.reevaluate,
-                   r.accumulate, r.race)
+                   r.accumulate, r.race, r.settle)

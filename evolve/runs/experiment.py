@@ -61,7 +61,8 @@ class Experiment:
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
                                  state=state, reevaluate=method.reevaluate_elites or robust.reevaluate,
-                                 accumulate=robust.accumulate, race=robust.race)
+                                 accumulate=robust.accumulate, race=robust.race,
+                                 settle=robust.settle)
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,

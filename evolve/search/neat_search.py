@@ -34,7 +34,7 @@ class NeatSearch:
     `state` checkpoints it exactly."""
     def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
                  body_distance_weight: float = 0.0, state: dict | None = None,
-                 reevaluate: bool = False, accumulate: bool = False, race: int = 0):
+                 reevaluate: bool = False, accumulate: bool = False, race: int = 0, settle: int = 0):
         """`seed` None leaves Python's `random` as it is (populations nested in another search);
         `reevaluate` simulates elites again instead of reusing their fitness (when evaluation has
         side effects, e.g. the nested baseline evolves a body's controllers, or is noisy).
@@ -42,16 +42,18 @@ class NeatSearch:
         so a survivor's fitness averages over the generations it survives, and a lucky score is
         diluted instead of kept. `race` (with `accumulate`, in `step`): the `race` genomes with the
         highest fitness after a generation's evaluation are evaluated once more (their tags get
-        "/race"), so those that could become elites or the champion get more episodes."""
+        "/race"), so those that could become elites or the champion get more episodes. `settle` (with
+        `accumulate`, 0: never): a genome with `settle` scores keeps their mean and is not simulated
+        again, so long-lived elites stop costing episodes."""
         if accumulate and not reevaluate:
             raise ValueError("accumulate needs reevaluate: elites must be simulated again")
-        if race and not accumulate:
-            raise ValueError("race needs accumulate: a genome's extra scores are averaged in")
+        if (race or settle) and not accumulate:
+            raise ValueError("race and settle need accumulate: a genome's scores are averaged")
         self.config = neat_config
         self.decode = decode
         self.evaluate = evaluate
         self.reevaluate = reevaluate
-        self.race = race
+        self.race, self.settle = race, settle
         # genome key -> (sum of its scores so far, the tags of those evaluations in the order they
         # were added); None: fitness is the latest score
         self.scores: dict[int, tuple[float, list[str]]] | None = {} if accumulate else None
@@ -113,6 +115,10 @@ class NeatSearch:
             self._add_score(k, float(f), f"{self.generation}/{k}/race")
         return episodes
 
+    def _settled(self, key: int) -> bool:
+        """Whether `key` has the `settle` scores after which its mean stands."""
+        return bool(self.settle) and len(self.scores.get(key, (0.0, []))[1]) >= self.settle
+
     def _mean(self, key: int, score: float) -> float:
         """The fitness `key` would have with one more score."""
         total, tags = self.scores.get(key, (0.0, []))
@@ -129,7 +135,7 @@ class NeatSearch:
         """(key, phenotype) of the genomes of this generation that need a fitness."""
         self._build_s = self.pending_build_s + self._decode_all()
         self._todo = [k for k, g in self.population.items() if self.phenotypes[k].valid
-                      and (g.fitness is None or self.reevaluate)]
+                      and (g.fitness is None or self.reevaluate and not self._settled(k))]
         return [(k, self.phenotypes[k]) for k in self._todo]
 
     def tell(self, fitness: Sequence[float], episodes: int | None = None) -> dict:

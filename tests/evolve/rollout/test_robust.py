@@ -235,6 +235,7 @@ def test_a_robot_shift_moves_the_robot_alone():
     ({"reevaluate": "yes"}, "key 'robust.reevaluate' must be true or false"),
     ({"accumulate": True}, "key 'robust.accumulate' needs reevaluate: true"),
     ({"reevaluate": True, "race": 3}, "key 'robust.race' needs accumulate: true"),
+    ({"reevaluate": True, "settle": 3}, "key 'robust.settle' needs accumulate: true"),
     ({"reevaluate": True, "accumulate": True, "race": -1}, "key 'robust.race' must be an int >= 0"),
     ([4], "key 'robust' must be dict or null"),
 ])

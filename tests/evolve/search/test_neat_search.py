@@ -142,5 +142,31 @@ def test_accumulate_without_reevaluate_or_race_without_accumulate_is_refused(nea
     import pytest
     with pytest.raises(ValueError, match="accumulate needs reevaluate"):
         NeatSearch(neat_config(pop=10), lambda g: g, None, seed=0, accumulate=True)
-    with pytest.raises(ValueError, match="race needs accumulate"):
+    with pytest.raises(ValueError, match="race and settle need accumulate"):
         NeatSearch(neat_config(pop=10), lambda g: g, None, seed=0, reevaluate=True, race=3)
+
+
+def test_a_settled_genome_keeps_its_mean_and_is_not_simulated_again(neat_config):
+    """`settle`: once a genome has that many scores its mean stands, and it costs no more episodes."""
+    from types import SimpleNamespace
+
+    seen: list[str] = []
+
+    def evaluate(phenotypes, tags):
+        seen.extend(tags)
+        return np.array([_tag_score(t) for t in tags]), len(tags)
+
+    search = NeatSearch(neat_config(pop=30), lambda g: SimpleNamespace(valid=True, body=np.ones((5, 5))),
+                        evaluate, seed=2, reevaluate=True, accumulate=True, settle=2)
+    for _ in range(6):
+        search.step()
+    per_key: dict[str, int] = {}
+    for t in seen:
+        per_key[t.split("/")[1]] = per_key.get(t.split("/")[1], 0) + 1
+    assert max(per_key.values()) == 2  # nobody scored a third time
+    long_lived = [k for k, (_, tags) in search.scores.items() if len(tags) == 2
+                  and int(tags[-1].split("/")[0]) < search.generation - 1]
+    assert long_lived  # an elite that lived on after it settled, unsimulated
+    for k in long_lived:
+        total, tags = search.scores[k]
+        assert search.population[k].fitness == (_tag_score(tags[0]) + _tag_score(tags[1])) / 2
