@@ -221,6 +221,17 @@ class Champion:
     fitness: float
     record: dict = field(repr=False)  # champion.json as read
 
+    @property
+    def nominal(self) -> float | None:
+        """The return of its exact, noise-free episode as evolution computed it (what `rollout()`
+        gives again): its fitness for a run scored by that episode, the recorded nominal return
+        for a champion chosen by final selection (whose fitness is its score under noise); None
+        for a champion scored under noise alone (`verdict()` replays it)."""
+        if (self.record.get("evaluation") or {}).get("robust") is None:
+            return self.fitness
+        selection = self.record.get("selection")
+        return None if selection is None else float(selection["nominal"])
+
     def policy(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
         return self.controller.act(obs)
@@ -237,9 +248,9 @@ class Champion:
 
     def rollout(self, env=None) -> float:
         """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
-        as evolution's episode was, so for a run scored by one exact episode it equals `fitness`
-        exactly. (A run with robust evaluation scored a statistic over perturbed episodes:
-        `rescore_champion(run_dir)` reproduces that.)"""
+        as evolution's episode was, so it equals `nominal` exactly (and `fitness`, for a run scored
+        by one exact episode). (A run with robust evaluation scored a statistic over perturbed
+        episodes: `rescore_champion(run_dir)` reproduces that.)"""
         env = self.env() if env is None else env
         obs, _ = env.reset(seed=0)
         total, done = 0.0, False

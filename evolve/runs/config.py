@@ -133,13 +133,13 @@ def check_config(raw: dict, source: str = "config") -> dict:
 
 
 def load_config(path: str | Path, overrides: dict | None = None) -> dict:
-    """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
+    """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
+    resolve relative paths and validate a YAML config."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
         raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
-    return config_from_dict({**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}},
-                            str(path), path.parent)
+    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent)
 
 
 def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> dict:
