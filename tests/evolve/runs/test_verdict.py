@@ -48,3 +48,23 @@ def test_the_report_marks_each_champion_with_the_rule_that_decided(tmp_path):
     assert line["sgr-Walker-v0-s0"].endswith("**knife-edge** |")
     assert line["sgr-Walker-v0-s3"].endswith("**holds** |")
     assert "knife-edge" in (tmp_path / "report.html").read_text()
+
+
+def test_a_short_default_run_ends_with_a_champion_that_holds_and_says_so(tmp_path, capsys, repo_root):
+    """`sgr evolve`'s packaged default, shortened: evolved under noise and chosen by final selection,
+    its champion holds, and the run's last console line says so by the rule."""
+    import yaml
+
+    from evolve.cli import main
+
+    cfg = yaml.safe_load((repo_root / "configs" / "sgr" / "quick.yaml").read_text())
+    assert cfg["robust"]["accumulate"] and cfg["final_selection"] is not None  # honest by default
+    cfg.update(generations=3, pop_size=16, episode_steps=100, render_champion=False, workers=1,
+               neat_config=str(repo_root / "configs" / "neat" / "sgr.ini"))
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
+    assert main(["evolve", "--config", str(tmp_path / "c.yaml"), "--out", str(tmp_path / "run")]) == 0
+    last = capsys.readouterr().out.strip().splitlines()[-1]
+    champ = load_champion(tmp_path / "run")
+    v = champ.verdict()
+    assert v.holds and last == f"champion {v.line()}"
+    assert champ.rollout() == champ.nominal  # its exact episode, as final selection recorded it
