@@ -202,10 +202,11 @@ def report_markdown(rows: list[dict]) -> str:
                   "recorded fitness of the champion file, scored afresh where the run chose it by "
                   "final selection (docs/EVOLVE.md).")
     out.write("\n\n")
-    noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels)
+    judged = verdict_rule.EPS in levels  # the verdict's column: how many champions hold
+    noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels) + (" hold |" if judged else "")
     out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
               f"100 / end) | champion | nominal |{noise_head}\n")
-    out.write("|---" * (11 + 2 * len(levels)) + "|\n")
+    out.write("|---" * (11 + 2 * len(levels) + judged) + "|\n")
     for (method, task), rs in sorted(groups.items()):
         gens = sorted({r["generations"] for r in rs})
         authors = AUTHORS.get((method, task))
@@ -223,6 +224,9 @@ def report_markdown(rows: list[dict]) -> str:
             have = [r for r in rob if noise_column(e, "mean") in r]
             cells.append(_ms([r[noise_column(e, "mean")] for r in have]) if have else "-")
             cells.append(f"{min(r[noise_column(e, 'min')] for r in have):.2f}" if have else "-")
+        if judged:
+            have = [r for r in rob if noise_column(verdict_rule.EPS, "mean") in r]
+            cells.append(f"{sum(_verdict(r).holds for r in have)} of {len(have)}" if have else "-")
         out.write(f"| {method} | {task} | {', '.join(str(r['seed']) for r in rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
                   + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
@@ -235,7 +239,6 @@ def report_markdown(rows: list[dict]) -> str:
                               for r in off) + ".\n")
     rob = [r for r in rows if "nominal" in r]
     if rob and levels:
-        judged = verdict_rule.EPS in levels
         out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
                   "the mean as a share of the nominal return and of the champion's recorded fitness "
                   "(- where that is not positive).")

@@ -43,6 +43,8 @@ def test_the_report_marks_each_champion_with_the_rule_that_decided(tmp_path):
     out = write_report(tmp_path, tmp_path / "report.md", levels=(1e-3,), replays=4, gallery=False)
     text = Path(out).read_text()
     assert "**1 of 2 champions hold.**" in text and "4 replays with uniform(±0.001)" in text
+    summary = next(x for x in text.splitlines() if x.startswith("| sgr | Walker-v0 |"))
+    assert summary.endswith("| 1 of 2 |")  # the method x task table: how many hold
     line = {n: next(x for x in text.splitlines() if x.startswith(f"| {n} |")) for n in ("sgr-Walker-v0-s0",
                                                                                          "sgr-Walker-v0-s3")}
     assert line["sgr-Walker-v0-s0"].endswith("**knife-edge** |")
