@@ -29,8 +29,8 @@ def main() -> None:
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        exp = Experiment.create(args.config, f"{tmp}/run", {"generations": args.generations,
-                                                           "pop_size": args.pop, "workers": args.workers},
+        flags = {"generations": args.generations, "pop_size": args.pop, "workers": args.workers}
+        exp = Experiment.create(args.config, f"{tmp}/run", {k: v for k, v in flags.items() if v is not None},
                                 quiet=True)
         rows = []
         t0 = time.perf_counter()

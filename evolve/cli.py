@@ -122,8 +122,9 @@ def _evolve(args: argparse.Namespace) -> int:
         print(f"resuming {args.resume} after generation {exp.search.generation}")
     else:
         config = _evolve_config(args)
-        overrides = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                     "workers": args.workers}
+        flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
+                 "workers": args.workers}
+        overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         cfg = load_config(config, overrides)
         stamp = time.strftime("%Y%m%d-%H%M%S")
         name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem

@@ -123,13 +123,22 @@ class Robust:
     """The `robust` config key: each genome's fitness is `statistic` over `episodes` perturbed
     episodes (`Perturbation`), all simulated in the generation's batch. `reevaluate`: elites are
     simulated again every generation, with that generation's noise, instead of keeping the score
-    of their first episodes (a lucky score then does not last)."""
+    of their first episodes (a lucky score then does not last). `accumulate` (with `reevaluate`):
+    a genome's fitness is the mean of its scores over every generation it has been evaluated in,
+    so one fresh episode a generation adds up to many for the genomes that survive, at the cost of
+    a nominal run. `race` (with `accumulate`): the `race` genomes ranked highest after a
+    generation's episodes get `episodes` more that generation (NeatSearch). `settle` (with
+    `accumulate`; 0: never): a genome scored `settle` times keeps that mean and is not simulated
+    again."""
     episodes: int = 4
     action_noise: str = "uniform"
     action_scale: float = 1e-3
     offset: float = 0.0
     statistic: str = "mean"
     reevaluate: bool = False
+    accumulate: bool = False
+    race: int = 0
+    settle: int = 0
 
     @property
     def perturbation(self) -> Perturbation:
@@ -158,8 +167,13 @@ class Robust:
         return np.quantile(returns, int(s[1:]) / 100.0, axis=0)
 
     def to_json(self) -> dict:
-        """The config mapping (every key)."""
-        return asdict(self)
+        """The config mapping: every key, but `accumulate`, `race` and `settle` only when set (the records
+        of runs made before they existed stay as they were)."""
+        out = asdict(self)
+        for key in ("accumulate", "race", "settle"):
+            if not out[key]:
+                del out[key]
+        return out
 
     @classmethod
     def from_config(cls, raw: object, source: str = "config") -> Robust | None:
@@ -183,6 +197,17 @@ class Robust:
             and 0 <= int(s[1:]) <= 100
         if s not in STATISTICS[:3] and not quantile:
             raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, got {s!r}")
-        if not isinstance(r.reevaluate, bool):
-            raise ValueError(f"{name}.reevaluate' must be true or false, got {r.reevaluate!r}")
-        return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s, r.reevaluate)
+        for key in ("reevaluate", "accumulate"):
+            if not isinstance(getattr(r, key), bool):
+                raise ValueError(f"{name}.{key}' must be true or false, got {getattr(r, key)!r}")
+        if r.accumulate and not r.reevaluate:
+            raise ValueError(f"{name}.accumulate' needs reevaluate: true (a survivor's scores are "
+                             "averaged over the generations it is simulated in)")
+        for key in ("race", "settle"):
+            v = getattr(r, key)
+            if not isinstance(v, int) or isinstance(v, bool) or v < 0:
+                raise ValueError(f"{name}.{key}' must be an int >= 0, got {v!r}")
+            if v and not r.accumulate:
+                raise ValueError(f"{name}.{key}' needs accumulate: true (a genome's scores are averaged)")
+        return cls(r.episodes, r.action_noise, float(r.action_scale), float(r.offset), s, r.reevaluate,
+                   r.accumulate, r.race, r.settle)

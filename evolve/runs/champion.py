@@ -23,6 +23,7 @@ from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
+from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS
@@ -60,8 +61,11 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
     fitness was scored: enough to score it again exactly (robust: the run's seed and the
     evaluation's tag give every episode's noise; the tag holds the search's own generation
     number, counted from 0)."""
-    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"],
-                  "tag": f"{best['generation']}/{best['key']}"}
+    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"]}
+    if "tags" in best:  # accumulated fitness: the mean of these evaluations' scores, in this order
+        evaluation["tags"] = list(best["tags"])
+    else:
+        evaluation["tag"] = f"{best['generation']}/{best['key']}"
     return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                            best["generation"] + 1, evaluation)
 
@@ -180,8 +184,16 @@ def rescore_champion(run_dir: str | Path) -> float:
     if robust is None:
         return float(_replay(champ, body, ctrl, EpisodeNoise(Perturbation(), np.zeros(1, np.uint64),
                                                              np.zeros(1, bool)))[0])
-    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
-    return float(robust.score(returns[:, None])[0])
+    if "tags" not in evaluation:
+        returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
+        return float(robust.score(returns[:, None])[0])
+    tags = evaluation["tags"]  # accumulated: each evaluation's score, summed in order, then the mean
+    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], tags))
+    scores = robust.score(returns.reshape(robust.episodes, len(tags)))
+    total = 0.0
+    for s in scores:
+        total += float(s)
+    return total / len(tags)
 
 
 def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0,
@@ -226,6 +238,17 @@ class Champion:
     fitness: float
     record: dict = field(repr=False)  # champion.json as read
 
+    @property
+    def nominal(self) -> float | None:
+        """The return of its exact, noise-free episode as evolution computed it (what `rollout()`
+        gives again): its fitness for a run scored by that episode, the recorded nominal return
+        for a champion chosen by final selection (whose fitness is its score under noise); None
+        for a champion scored under noise alone (`verdict()` replays it)."""
+        if (self.record.get("evaluation") or {}).get("robust") is None:
+            return self.fitness
+        selection = self.record.get("selection")
+        return None if selection is None else float(selection["nominal"])
+
     def policy(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
         return self.controller.act(obs)
@@ -242,9 +265,9 @@ class Champion:
 
     def rollout(self, env=None) -> float:
         """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
-        as evolution's episode was, so for a run scored by one exact episode it equals `fitness`
-        exactly. (A run with robust evaluation scored a statistic over perturbed episodes:
-        `rescore_champion(run_dir)` reproduces that.)"""
+        as evolution's episode was, so it equals `nominal` exactly (and `fitness`, for a run scored
+        by one exact episode). (A run with robust evaluation scored a statistic over perturbed
+        episodes: `rescore_champion(run_dir)` reproduces that.)"""
         env = self.env() if env is None else env
         obs, _ = env.reset(seed=0)
         total, done = 0.0, False
@@ -253,6 +276,15 @@ class Champion:
             total += reward
             done = terminated or truncated
         return total
+
+    def verdict(self, replays: int = verdict_rule.REPLAYS,
+                eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
+        """Whether it holds (evolve/runs/verdict.py): its episode replayed `replays` times with
+        uniform(+-eps) on every action, against its noise-free return. `verdict().line()` says it
+        in words; `verdict().holds` is the rule's answer."""
+        returns = _replay(self.record, self.body, self.controller,
+                          _replay_noise(replays + 1, eps, "uniform", 0.0, 0))
+        return verdict_rule.from_returns(returns, eps)
 
     def gif(self, out: str | Path, *, width: int = 640, height: int = 320, fps: float = 30.0) -> Path:
         """Render its episode to a GIF at `out`; returns the path."""

@@ -115,6 +115,9 @@ def check_config(raw: dict, source: str = "config") -> dict:
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
     robust = Robust.from_config(cfg["robust"], source)
+    if robust is not None and robust.accumulate and problem.reevaluate_elites:
+        raise ValueError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "
+                         "(the best of a search run for each body) is not a score to average")
     cfg["robust"] = None if robust is None else robust.to_json()
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
@@ -130,13 +133,13 @@ def check_config(raw: dict, source: str = "config") -> dict:
 
 
 def load_config(path: str | Path, overrides: dict | None = None) -> dict:
-    """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
+    """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
+    resolve relative paths and validate a YAML config."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
         raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
-    return config_from_dict({**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}},
-                            str(path), path.parent)
+    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent)
 
 
 def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> dict:

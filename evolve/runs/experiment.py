@@ -20,6 +20,7 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import RolloutPool
+from evolve.rollout.robust import Robust
 from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
@@ -57,10 +58,12 @@ class Experiment:
         if state is not None:
             self.problem.restore(state.get("problem", {}))
         self.selection = FinalSelection.from_config(cfg.get("final_selection"))
+        robust = Robust.from_config(cfg.get("robust")) or Robust(reevaluate=False)
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
                                  seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
-                                 state=state, reevaluate=method.reevaluate_elites
-                                 or bool((cfg.get("robust") or {}).get("reevaluate")))
+                                 state=state, reevaluate=method.reevaluate_elites or robust.reevaluate,
+                                 accumulate=robust.accumulate, race=robust.race,
+                                 settle=robust.settle)
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
@@ -201,9 +204,12 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
+            from evolve.runs.verdict import judge
+
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+            print(f"champion {judge(self.run.path).line()}", flush=True)
 
 
 def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:

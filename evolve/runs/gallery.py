@@ -145,7 +145,18 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
                 f"<figure><img alt='{name} episode' src='{_data_uri(e['gif'], 'image/gif')}'>"
                 f"<img alt='{name} body' src='{_data_uri(e['body'], 'image/png')}'>"
                 f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
-                f"{r['seed']} · fitness {r['champion_fitness']:.3f}</figcaption></figure>")
+                f"{r['seed']} · fitness {r['champion_fitness']:.3f}{_verdict_caption(r)}"
+                "</figcaption></figure>")
         parts.append("</div>")
     parts += ["<p id='images'>images not checked (scripts off)</p>", CHECK, "</body></html>"]
     return "\n".join(parts)
+
+
+def _verdict_caption(row: dict) -> str:
+    """" · holds" or " · knife-edge" (evolve/runs/verdict.py) where the row has the rule's replays."""
+    from evolve.runs.report import _verdict, noise_column
+    from evolve.runs.verdict import EPS
+
+    if "nominal" not in row or noise_column(EPS, "mean") not in row:
+        return ""
+    return f" · {_verdict(row).label}"

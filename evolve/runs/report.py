@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 import yaml
 
+from evolve.runs import verdict as verdict_rule
 from evolve.runs.files import atomic_write
 from evolve.runs.plots import read_generations, run_labels, save_png
 
@@ -126,7 +127,8 @@ def champion_robustness(run_dir: Path, replays: int = 10,
     from evolve.runs.rundir import RunDir
 
     champ = RunDir(run_dir).champion()
-    out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir)}
+    out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir),
+           "replays": replays}
     for eps in levels:
         total = replay_champion(run_dir, replays, eps)
         nominal, perturbed = float(total[0]), total[1:]
@@ -204,10 +206,11 @@ def report_markdown(rows: list[dict]) -> str:
                   "recorded fitness of the champion file, scored afresh where the run chose it by "
                   "final selection (docs/EVOLVE.md).")
     out.write("\n\n")
-    noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels)
+    judged = verdict_rule.EPS in levels  # the verdict's column: how many champions hold
+    noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels) + (" hold |" if judged else "")
     out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
               f"100 / end) | champion | nominal |{noise_head}\n")
-    out.write("|---" * (11 + 2 * len(levels)) + "|\n")
+    out.write("|---" * (11 + 2 * len(levels) + judged) + "|\n")
     for (method, task), rs in sorted(groups.items()):
         gens = sorted({r["generations"] for r in rs})
         authors = AUTHORS.get((method, task))
@@ -225,6 +228,9 @@ def report_markdown(rows: list[dict]) -> str:
             have = [r for r in rob if noise_column(e, "mean") in r]
             cells.append(_ms([r[noise_column(e, "mean")] for r in have]) if have else "-")
             cells.append(f"{min(r[noise_column(e, 'min')] for r in have):.2f}" if have else "-")
+        if judged:
+            have = [r for r in rob if noise_column(verdict_rule.EPS, "mean") in r]
+            cells.append(f"{sum(_verdict(r).holds for r in have)} of {len(have)}" if have else "-")
         out.write(f"| {method} | {task} | {', '.join(str(r['seed']) for r in rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
                   + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
@@ -239,10 +245,14 @@ def report_markdown(rows: list[dict]) -> str:
     if rob and levels:
         out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
                   "the mean as a share of the nominal return and of the champion's recorded fitness "
-                  "(- where that is not positive).\n\n")
-        out.write("| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of nominal "
-                                                          f"/ of champion |" for e in levels) + "\n")
-        out.write("|---" * (3 + 2 * len(levels)) + "|\n")
+                  "(- where that is not positive).")
+        if judged:
+            held = sum(_verdict(r).holds for r in rob)
+            out.write(f" **{held} of {len(rob)} champions hold.** Verdict, {_rule(rob)}.")
+        out.write("\n\n| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of "
+                                                              f"nominal / of champion |" for e in levels)
+                  + (" verdict |" if judged else "") + "\n")
+        out.write("|---" * (3 + 2 * len(levels) + judged) + "|\n")
 
         def pct(x: float) -> str:
             return f"{int(round(100 * x))} %" if math.isfinite(x) else "-"
@@ -254,9 +264,24 @@ def report_markdown(rows: list[dict]) -> str:
                 mean, champ = r[noise_column(e, "mean")], r["champion_fitness"]
                 cells += [f"{mean:.3f} / {r[noise_column(e, 'min')]:.3f}",
                           f"{pct(ratio)} / {pct(mean / champ if champ > 0 else math.nan)}"]
+            if judged:
+                cells.append(f"**{_verdict(r).label}**")
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     return out.getvalue()
+
+
+def _verdict(row: dict) -> verdict_rule.Verdict:
+    """A summary row's verdict (evolve/runs/verdict.py) from its replays at the rule's noise level."""
+    return verdict_rule.Verdict(row["nominal"], row[noise_column(verdict_rule.EPS, "mean")],
+                                row.get("replays", 0), verdict_rule.EPS)
+
+
+def _rule(rows: list[dict]) -> str:
+    """The verdict's rule as the report applies it (with its own replay count)."""
+    counts = sorted({r.get("replays", 0) for r in rows})
+    n = "/".join(str(c) for c in counts)
+    return verdict_rule.RULE.replace(f"{verdict_rule.REPLAYS} replays", f"{n} replays")
 
 
 def write_summary_csv(rows: list[dict], path: Path) -> None:

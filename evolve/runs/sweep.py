@@ -144,7 +144,8 @@ def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path,
     overrides.update(ov.get(run.method, {}))
     if sweep.get("imports"):
         overrides["imports"] = sweep["imports"]
-    load_config(path, {"imports": overrides.get("imports")})  # the config file's own errors name it
+    # the config file's own errors name it
+    load_config(path, {"imports": overrides["imports"]} if "imports" in overrides else {})
     try:
         load_config(path, {**overrides, "seed": run.seed})
     except ValueError as exc:  # an override's: name the sweep file, where it was written

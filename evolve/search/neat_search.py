@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import inspect
 import itertools
+import math
 import random
 import statistics
 import time
@@ -33,14 +34,29 @@ class NeatSearch:
     `state` checkpoints it exactly."""
     def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
                  body_distance_weight: float = 0.0, state: dict | None = None,
-                 reevaluate: bool = False):
+                 reevaluate: bool = False, accumulate: bool = False, race: int = 0, settle: int = 0):
         """`seed` None leaves Python's `random` as it is (populations nested in another search);
         `reevaluate` simulates elites again instead of reusing their fitness (when evaluation has
-        side effects, e.g. the nested baseline evolves a body's controllers)."""
+        side effects, e.g. the nested baseline evolves a body's controllers, or is noisy).
+        `accumulate` (with `reevaluate`): a genome's fitness is the mean of every score it has had,
+        so a survivor's fitness averages over the generations it survives, and a lucky score is
+        diluted instead of kept. `race` (with `accumulate`, in `step`): the `race` genomes with the
+        highest fitness after a generation's evaluation are evaluated once more (their tags get
+        "/race"), so those that could become elites or the champion get more episodes. `settle` (with
+        `accumulate`, 0: never): a genome with `settle` scores keeps their mean and is not simulated
+        again, so long-lived elites stop costing episodes."""
+        if accumulate and not reevaluate:
+            raise ValueError("accumulate needs reevaluate: elites must be simulated again")
+        if (race or settle) and not accumulate:
+            raise ValueError("race and settle need accumulate: a genome's scores are averaged")
         self.config = neat_config
         self.decode = decode
         self.evaluate = evaluate
         self.reevaluate = reevaluate
+        self.race, self.settle = race, settle
+        # genome key -> (sum of its scores so far, the tags of those evaluations in the order they
+        # were added); None: fitness is the latest score
+        self.scores: dict[int, tuple[float, list[str]]] | None = {} if accumulate else None
         gc = neat_config.genome_config
         gc.body_distance_weight = body_distance_weight
         gc.body_cache = {}
@@ -70,29 +86,63 @@ class NeatSearch:
         t0 = time.perf_counter()
         todo = self.ask()
         t1 = time.perf_counter()
-        phenotypes = [p for _, p in todo]
-        if not todo:
-            fit, episodes = np.zeros(0), 0
-        elif _takes_tags(self.evaluate):
-            fit, episodes = self.evaluate(phenotypes, [f"{self.generation}/{k}" for k, _ in todo])
-        else:  # a method written before tags existed
-            fit, episodes = self.evaluate(phenotypes)
+        fit, episodes = self._evaluate(todo, "")
+        if self.race and todo:
+            episodes += self._race(todo, fit)
         sim_s = time.perf_counter() - t1
         row = self.tell(fit, episodes)
         row.update(build_s=self._build_s, sim_s=sim_s, total_s=time.perf_counter() - t0)
         return row
 
+    def _evaluate(self, todo: list[tuple[int, Any]], suffix: str) -> tuple[np.ndarray, int]:
+        """Fitness and episodes of `todo`, each tagged "<generation>/<key><suffix>"."""
+        phenotypes = [p for _, p in todo]
+        if not todo:
+            return np.zeros(0), 0
+        if _takes_tags(self.evaluate):
+            return self.evaluate(phenotypes, [f"{self.generation}/{k}{suffix}" for k, _ in todo])
+        return self.evaluate(phenotypes)  # a method written before tags existed
+
+    def _race(self, todo: list[tuple[int, Any]], fit: np.ndarray) -> int:
+        """The extra evaluation of the `race` genomes of `todo` whose fitness with this generation's
+        score `fit` would be highest (ties: the lower key); their extra score joins `scores` here,
+        before `tell` adds `fit`. Returns the episodes simulated."""
+        ahead = [self._mean(k, f) for (k, _), f in zip(todo, fit, strict=True)]
+        order = sorted(range(len(todo)), key=lambda i: (-_rank_value(ahead[i]), todo[i][0]))
+        chosen = [todo[i] for i in order[:self.race]]
+        extra, episodes = self._evaluate(chosen, "/race")
+        for (k, _), f in zip(chosen, extra, strict=True):
+            self._add_score(k, float(f), f"{self.generation}/{k}/race")
+        return episodes
+
+    def _settled(self, key: int) -> bool:
+        """Whether `key` has the `settle` scores after which its mean stands."""
+        return bool(self.settle) and len(self.scores.get(key, (0.0, []))[1]) >= self.settle
+
+    def _mean(self, key: int, score: float) -> float:
+        """The fitness `key` would have with one more score."""
+        total, tags = self.scores.get(key, (0.0, []))
+        return (total + float(score)) / (len(tags) + 1)
+
+    def _add_score(self, key: int, score: float, tag: str) -> float:
+        """Adds the score of evaluation `tag` to `key`'s record; returns its fitness, the mean of all
+        its scores (summed in the order they came: `rescore_champion` sums them so)."""
+        total, tags = self.scores.get(key, (0.0, []))
+        self.scores[key] = (total + score, [*tags, tag])
+        return (total + score) / (len(tags) + 1)
+
     def ask(self) -> list[tuple[int, Any]]:
         """(key, phenotype) of the genomes of this generation that need a fitness."""
         self._build_s = self.pending_build_s + self._decode_all()
         self._todo = [k for k, g in self.population.items() if self.phenotypes[k].valid
-                      and (g.fitness is None or self.reevaluate)]
+                      and (g.fitness is None or self.reevaluate and not self._settled(k))]
         return [(k, self.phenotypes[k]) for k in self._todo]
 
     def tell(self, fitness: Sequence[float], episodes: int | None = None) -> dict:
         """Fitness for the genomes `ask` returned; breeds the next generation."""
         for k, f in zip(self._todo, fitness, strict=True):
-            self.population[k].fitness = float(f)
+            self.population[k].fitness = (float(f) if self.scores is None
+                                          else self._add_score(k, float(f), f"{self.generation}/{k}"))
         valid = {k: g for k, g in self.population.items() if self.phenotypes[k].valid}
         n_invalid = len(self.population) - len(valid)
         row = self._stats(valid, n_invalid, len(self._todo) if episodes is None else episodes)
@@ -106,6 +156,8 @@ class NeatSearch:
                                                            self.config.genome_config,
                                                            self.config.pop_size)
         self._trim_history()
+        if self.scores is not None:  # only the living can be scored again
+            self.scores = {k: v for k, v in self.scores.items() if k in self.population}
         neat_s = time.perf_counter() - t2
         self.pending_build_s = self._decode_all()
         t3 = time.perf_counter()
@@ -163,6 +215,8 @@ class NeatSearch:
         if self.best is None or g.fitness > self.best["fitness"]:
             self.best = {"fitness": g.fitness, "generation": self.generation, "key": k,
                          "genome": g, "phenotype": self.phenotypes[k]}
+            if self.scores is not None:  # the evaluations its fitness averages
+                self.best["tags"] = list(self.scores[k][1])
 
     # ------------------------------------------------------------------ checkpoint state
     def state(self) -> dict:
@@ -180,9 +234,12 @@ class NeatSearch:
         repro = dict(self.reproduction.__dict__, genome_indexer=genome_key, reporters=None)
         species = dict(self.species.__dict__, indexer=species_key, reporters=None)
         best = None if self.best is None else {k: v for k, v in self.best.items() if k != "phenotype"}
-        return {"format": STATE_FORMAT, "generation": self.generation, "population": self.population,
-                "species": species, "reproduction": repro, "node_indexer": node_key,
-                "random": random.getstate(), "best": best, "pending_build_s": self.pending_build_s}
+        state = {"format": STATE_FORMAT, "generation": self.generation, "population": self.population,
+                 "species": species, "reproduction": repro, "node_indexer": node_key,
+                 "random": random.getstate(), "best": best, "pending_build_s": self.pending_build_s}
+        if self.scores is not None:
+            state["scores"] = {k: (total, list(tags)) for k, (total, tags) in self.scores.items()}
+        return state
 
     def _restore(self, state: dict) -> None:
         self.generation = state["generation"]
@@ -200,11 +257,21 @@ class NeatSearch:
         nxt = state.get("node_indexer")
         gc.node_indexer = None if nxt is None else itertools.count(nxt)
         random.setstate(state["random"])
+        if self.scores is not None:
+            if state.get("scores") is None:
+                raise ValueError("the checkpoint holds no score records, which this run's accumulated "
+                                 "fitness needs")
+            self.scores = {k: (total, list(tags)) for k, (total, tags) in state["scores"].items()}
         self.pending_build_s = state["pending_build_s"]
         self._decode_all()
         self.best = state["best"]
         if self.best is not None:
             self.best["phenotype"] = self.decode(self.best["genome"])
+
+
+def _rank_value(f: float) -> float:
+    """A fitness for ranking: NaN (an unstable episode) last."""
+    return -math.inf if math.isnan(f) else f
 
 
 def _takes_tags(evaluate: Callable) -> bool:

@@ -143,8 +143,17 @@ def encode_search_state(state: dict) -> dict:
                                        for (i, o, t), n in tracker.generation_innovations.items()]},
         "best": None if best is None else {"fitness": float(best["fitness"]),
                                            "generation": best["generation"], "key": best["key"],
-                                           "genome": ref(best["genome"])},
-    } | {"genomes": encode_genomes(table)}
+                                           "genome": ref(best["genome"])}
+        | ({"tags": list(best["tags"])} if "tags" in best else {}),
+    } | {"genomes": encode_genomes(table)} | _encode_scores(state.get("scores"))
+
+
+def _encode_scores(scores: dict | None) -> dict:
+    """Accumulated fitness (NeatSearch `accumulate`): each living genome's key, score sum and tags;
+    nothing at all for a search that keeps none (its checkpoints stay as they were)."""
+    if scores is None:
+        return {}
+    return {"scores": [[k, float(total), list(tags)] for k, (total, tags) in scores.items()]}
 
 
 # ---------------------------------------------------------------------------------- decoding
@@ -329,6 +338,9 @@ def decode_search_state(data, neat_config, path: str = "search") -> dict:
                 "generation": get(best, "generation", f"{path}.best", "int"),
                 "key": get(best, "key", f"{path}.best", "int"),
                 "genome": deref(get(best, "genome", f"{path}.best", "int"), f"{path}.best.genome")}
+        if "tags" in data["best"]:
+            best["tags"] = [check(t, f"{path}.best.tags", "str")
+                            for t in get(data["best"], "tags", f"{path}.best", "list")]
     counters = {k: get(data, k, path, "int?") for k in ("node_indexer", "species_indexer", "genome_indexer")}
     for k in ("species_indexer", "genome_indexer"):
         if counters[k] is None:
@@ -345,5 +357,20 @@ def decode_search_state(data, neat_config, path: str = "search") -> dict:
         "random": decode_random(get(data, "random", path, "dict"), f"{path}.random"),
         "best": best,
         "pending_build_s": get(data, "pending_build_s", path, "float"),
+        "scores": _decode_scores(data, path),
     }
+
+
+def _decode_scores(data: dict, path: str) -> dict | None:
+    """`_encode_scores`'s records back as {key: (sum, tags)}; None when the checkpoint has none."""
+    if "scores" not in data:
+        return None
+    out = {}
+    for j, it in enumerate(get(data, "scores", path, "list")):
+        p = f"{path}.scores[{j}]"
+        k, total, tags = row(it, p, ("int", "float", "list"))
+        if not tags or k in out:
+            raise _fail(p, "a record needs at least one tag, and a key appears once")
+        out[k] = (total, [check(t, p, "str") for t in tags])
+    return out
 

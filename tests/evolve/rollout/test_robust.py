@@ -33,6 +33,9 @@ from tsim.sampling import sample_robot
 
 ROBUST = {"episodes": 3, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.01,
           "statistic": "q25"}
+# the cheap design (#33): one fresh episode a generation, a survivor's scores averaged, the top raced
+FAST = {"episodes": 1, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0, "statistic": "mean",
+        "reevaluate": True, "accumulate": True, "race": 4}
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 NESTED = {"pop_size": 6, "inner_pop_size": 6, "inner_generations": 1}
 
@@ -80,8 +83,9 @@ def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescor
         assert int(r["episodes"]) % ROBUST["episodes"] == 0 and int(r["episodes"]) > 0
 
 
-def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_same_run(tmp_path):
-    cfg = config("sgr", robust=ROBUST, generations=8, pop_size=24, checkpoint_every=2)
+@pytest.mark.parametrize("robust", [ROBUST, FAST], ids=["k3", "accumulate-race"])
+def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_same_run(tmp_path, robust):
+    cfg = config("sgr", robust=robust, generations=8, pop_size=24, checkpoint_every=2)
     (tmp_path / "c.yaml").write_text(yaml.safe_dump({**cfg, "neat_config": None}))
     crashed = RunDir(tmp_path / "crashed")
     env = {**os.environ, "PYTHONHASHSEED": "random"}
@@ -116,6 +120,34 @@ def test_with_reevaluate_elites_are_simulated_again_with_fresh_noise_and_the_run
         if int(r["generation"]) > 1:  # without: elites keep their score, fewer episodes
             assert int(rk["episodes"]) < k * int(rk["n_valid"])
     assert rescore_champion(once.path) == once.champion()["fitness"]
+
+
+@pytest.mark.parametrize("method", ["sgr", "direct"])
+def test_accumulated_runs_do_not_depend_on_the_worker_count_and_their_champion_rescores_exactly(
+        tmp_path, method):
+    """One fresh episode per genome and generation, a survivor's fitness the mean of all its scores,
+    the 4 best raced: the same run on 1 or 2 workers, and champion.json's list of evaluations alone
+    gives its fitness again, bit for bit (the mean over generations, summed in order)."""
+    cfg = config(method, robust=FAST, generations=5)
+    one = run(tmp_path, "w1", cfg)
+    two = run(tmp_path, "w2", {**cfg, "workers": 2})
+    assert rows(one) == rows(two)
+    champ = one.champion()
+    assert champ == two.champion()
+    tags = champ["evaluation"]["tags"]
+    assert champ["evaluation"]["robust"] == FAST and "tag" not in champ["evaluation"]
+    assert rescore_champion(one.path) == champ["fitness"]
+    for r in one.rows():  # every valid genome once, plus the raced four
+        assert int(r["episodes"]) == int(r["n_valid"]) + min(4, int(r["n_valid"]))
+    assert any(t.endswith("/race") for t in tags)
+
+
+def test_nested_neat_refuses_accumulated_fitness_in_one_line(tmp_path, capsys):
+    from evolve.cli import main
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(config("nested", robust=FAST)))
+    assert main(["evolve", "--config", str(tmp_path / "c.yaml"), "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert "key 'robust.accumulate' is not for method 'nested'" in err and err.count("\n") == 1, err
 
 
 def test_episode_noise_follows_the_episode_not_its_slot_in_the_batch_or_the_worker():
@@ -201,6 +233,10 @@ def test_a_robot_shift_moves_the_robot_alone():
     ({"statistic": "q250"}, "key 'robust.statistic' must be one of mean, min, median, qNN"),
     ({"episode": 4}, "key 'robust': unknown key 'episode'"),
     ({"reevaluate": "yes"}, "key 'robust.reevaluate' must be true or false"),
+    ({"accumulate": True}, "key 'robust.accumulate' needs reevaluate: true"),
+    ({"reevaluate": True, "race": 3}, "key 'robust.race' needs accumulate: true"),
+    ({"reevaluate": True, "settle": 3}, "key 'robust.settle' needs accumulate: true"),
+    ({"reevaluate": True, "accumulate": True, "race": -1}, "key 'robust.race' must be an int >= 0"),
     ([4], "key 'robust' must be dict or null"),
 ])
 def test_a_bad_robust_key_is_one_error_line_naming_it(tmp_path, capsys, robust, message):

@@ -31,7 +31,8 @@ from evolve.runs.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 GENERATIONS = 8
 SWEEP = {"methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": 1,
-         "overrides": {"generations": GENERATIONS, "pop_size": 8, "episode_steps": 10, "checkpoint_every": 1,
+         "overrides": {"robust": None, "final_selection": None,  # nominal
+                       "generations": GENERATIONS, "pop_size": 8, "episode_steps": 10, "checkpoint_every": 1,
                        "render_champion": False,
                        "nested": {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1}}}
 FAST_FAILURE_DETECTION = {"health_check_period_ms": 200, "health_check_failure_threshold": 5,

@@ -19,7 +19,8 @@ from evolve.runs.rundir import RunDir
 
 FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 TINY = {"methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": [0, 4],
-        "overrides": {"generations": 4, "pop_size": 8, "episode_steps": 12, "checkpoint_every": 2,
+        "overrides": {"robust": None, "final_selection": None,  # the paper's nominal evaluation
+                      "generations": 4, "pop_size": 8, "episode_steps": 12, "checkpoint_every": 2,
                       "render_champion": False, "workers": 1,
                       "nested": {"pop_size": 4, "inner_pop_size": 4, "inner_generations": 1}}}
 

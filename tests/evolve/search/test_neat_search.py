@@ -74,3 +74,99 @@ def test_ancestors_and_fitness_histories_stay_bounded_and_trimming_them_changes_
     assert trimmed[2] == 0 and untrimmed[2] > 300
     assert trimmed[3] == 1 and untrimmed[3] > 20  # longer than max_stagnation: stagnation was decided
     assert trimmed[4] == untrimmed[4] and len(trimmed[4]) >= 3  # the same species stagnated
+
+
+def _unit(text: str) -> float:
+    import hashlib
+    return int.from_bytes(hashlib.blake2b(text.encode(), digest_size=4).digest(), "little") / 2**32
+
+
+def _tag_score(tag: str) -> float:
+    """A stand-in score, a pure function of the evaluation's tag "<generation>/<key>[/race]" as robust
+    noise is: the genome's quality plus a little noise, so good genomes survive as elites."""
+    return _unit(tag.split("/")[1]) + 0.01 * _unit(tag)
+
+
+def _accumulating_search(neat_config, race: int, seen: list):
+    from types import SimpleNamespace
+
+    def evaluate(phenotypes, tags):
+        seen.extend(tags)
+        return np.array([_tag_score(t) for t in tags]), len(tags)
+
+    return NeatSearch(neat_config(pop=30), lambda g: SimpleNamespace(valid=True, body=np.ones((5, 5))),
+                      evaluate, seed=2, reevaluate=True, accumulate=True, race=race)
+
+
+def test_accumulated_fitness_is_the_mean_of_every_score_the_genome_had_in_order(neat_config):
+    """With `accumulate`, a survivor is scored again each generation (fresh tag) and its fitness is
+    the mean of all its scores, summed in the order they came: an elite's lucky first score is
+    diluted rather than kept."""
+    seen: list[str] = []
+    search = _accumulating_search(neat_config, 0, seen)
+    for _ in range(6):
+        search.step()
+    survivors = 0
+    for key, g in search.population.items():
+        if key not in search.scores:
+            assert g.fitness is None  # a newborn: not scored yet
+            continue
+        total, tags = search.scores[key]
+        expected = 0.0
+        for t in tags:
+            expected += _tag_score(t)
+        assert g.fitness == expected / len(tags) and total == expected
+        assert tags == [f"{gen}/{key}" for gen in range(int(tags[0].split("/")[0]), search.generation)]
+        survivors += len(tags) > 1
+    assert survivors >= 1  # an elite lived through several generations and was scored in each
+    assert search.best["tags"] and all(t in seen for t in search.best["tags"])
+
+
+def test_racing_gives_the_top_genomes_one_more_evaluation_each_generation(neat_config):
+    """`race`: after a generation's episodes, the `race` genomes whose fitness would rank highest are
+    evaluated once more (tag "<generation>/<key>/race") and that score is averaged in too."""
+    seen: list[str] = []
+    search = _accumulating_search(neat_config, 5, seen)
+    rows = [search.step() for _ in range(3)]
+    raced = [t for t in seen if t.endswith("/race")]
+    assert len(raced) == 5 * 3
+    for row, gen in zip(rows, range(3), strict=True):
+        base = [t for t in seen if t.startswith(f"{gen}/") and not t.endswith("/race")]
+        assert row["episodes"] == len(base) + 5
+        ahead = sorted(base, key=lambda t: -_tag_score(t))  # newborns: one score, the rank is the score
+        if gen == 0:
+            assert {t.split("/")[1] for t in ahead[:5]} == {t.split("/")[1] for t in raced[:5]}
+
+
+def test_accumulate_without_reevaluate_or_race_without_accumulate_is_refused(neat_config):
+    import pytest
+    with pytest.raises(ValueError, match="accumulate needs reevaluate"):
+        NeatSearch(neat_config(pop=10), lambda g: g, None, seed=0, accumulate=True)
+    with pytest.raises(ValueError, match="race and settle need accumulate"):
+        NeatSearch(neat_config(pop=10), lambda g: g, None, seed=0, reevaluate=True, race=3)
+
+
+def test_a_settled_genome_keeps_its_mean_and_is_not_simulated_again(neat_config):
+    """`settle`: once a genome has that many scores its mean stands, and it costs no more episodes."""
+    from types import SimpleNamespace
+
+    seen: list[str] = []
+
+    def evaluate(phenotypes, tags):
+        seen.extend(tags)
+        return np.array([_tag_score(t) for t in tags]), len(tags)
+
+    search = NeatSearch(neat_config(pop=30), lambda g: SimpleNamespace(valid=True, body=np.ones((5, 5))),
+                        evaluate, seed=2, reevaluate=True, accumulate=True, settle=2)
+    for _ in range(6):
+        search.step()
+    per_key: dict[str, int] = {}
+    for t in seen:
+        per_key[t.split("/")[1]] = per_key.get(t.split("/")[1], 0) + 1
+    assert max(per_key.values()) == 2  # nobody scored a third time
+    long_lived = [k for k, (_, tags) in search.scores.items() if len(tags) == 2
+                  and int(tags[-1].split("/")[0]) < search.generation - 1]
+    assert long_lived  # an elite that lived on after it settled, unsimulated
+    for k in long_lived:
+        total, tags = search.scores[k]
+        assert search.population[k].fitness == (_tag_score(tags[0]) + _tag_score(tags[1])) / 2
