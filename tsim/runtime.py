@@ -23,6 +23,11 @@ PROFILE_SKIP = tuple(p for p in os.environ.get("SGR_PROFILE_SKIP", "").split(","
 _ARCH: str | None = None
 
 
+def precision() -> str:
+    """The process's real type, "f64" (evogym's): what the kernels compile for."""
+    return "f64"
+
+
 def requested_arch(arch: str | None = None) -> str:
     """`arch`, else $SGR_ARCH, else cpu; raises ValueError for a name that is not an arch."""
     if arch is None and os.environ.get("SGR_ARCH"):
