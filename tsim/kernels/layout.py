@@ -82,7 +82,7 @@ TOLERANCES = {
     "f64": Tolerances(box_margin=C.BOX_MARGIN, skin_slack=1e-9, ref_max=1e6, sort_slack=1e-6,
                       grid_slack=1e-6),
     # f32 rounds at ~6e-8 relative: ~6e-5 at coordinate 1,000, where its lists stop
-    "f32": Tolerances(box_margin=1e-9, skin_slack=1e-3, ref_max=1e3, sort_slack=1e-3,
+    "f32": Tolerances(box_margin=1e-5, skin_slack=1e-3, ref_max=1e3, sort_slack=1e-3,
                       grid_slack=1e-3),
 }
 
