@@ -95,3 +95,9 @@ def test_metal_in_f64_is_refused_in_one_line_before_taichi_starts():
     assert line == ("arch 'metal' with precision f64: metal has no 64-bit floats; use SGR_PRECISION=f32 "
                     "(or SGR_ARCH=cpu for f64)")
     assert "Traceback" not in out.stderr
+
+
+def test_cli_choices_are_the_runtime_precisions():
+    from tasks.cli import PRECISIONS
+
+    assert PRECISIONS == runtime.PRECISIONS

@@ -1,0 +1,24 @@
+"""`--precision` on `sgr evolve`, `sgr bench` and `sgr validate`, and $SGR_PRECISION honoured by them:
+the commands run (in subprocesses: a process's precision is fixed when Taichi starts) in the real
+type asked for, and a run records it."""
+
+import json
+import os
+import subprocess
+import sys
+
+
+def run_cli(*args, cwd, env=None) -> subprocess.CompletedProcess:
+    base = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
+    return subprocess.run([sys.executable, "-m", "evolve.cli", *args], cwd=cwd, capture_output=True,
+                          text=True, env={**base, "SGR_THREADS": "1", **(env or {})}, timeout=300)
+
+
+def test_bench_runs_in_the_precision_of_its_flag_or_of_sgr_precision(tmp_path):
+    r = run_cli("bench", "--robots", "2", "--steps", "2", "--json", "--precision", "f32", cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.strip().splitlines()[-1])["precision"] == "f32"
+    r = run_cli("bench", "--robots", "2", "--steps", "2", "--json", cwd=tmp_path,
+                env={"SGR_PRECISION": "f32"})
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout.strip().splitlines()[-1])["precision"] == "f32"
