@@ -7,6 +7,8 @@ import os
 import subprocess
 import sys
 
+import yaml
+
 
 def run_cli(*args, cwd, env=None) -> subprocess.CompletedProcess:
     base = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
@@ -22,3 +24,14 @@ def test_bench_runs_in_the_precision_of_its_flag_or_of_sgr_precision(tmp_path):
                 env={"SGR_PRECISION": "f32"})
     assert r.returncode == 0, r.stderr
     assert json.loads(r.stdout.strip().splitlines()[-1])["precision"] == "f32"
+
+
+def test_evolve_records_the_precision_it_ran_in(tmp_path, repo_root):
+    cfg = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 2,
+           "render_champion": False, "workers": 1,
+           "neat_config": str(repo_root / "configs/neat/sgr.ini")}
+    (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(cfg))
+    r = run_cli("evolve", "--config", "tiny.yaml", "--out", "run", "--precision", "f32", "--quiet",
+                cwd=tmp_path)
+    assert r.returncode == 0, r.stderr
+    assert yaml.safe_load((tmp_path / "run/config.yaml").read_text())["precision"] == "f32"
