@@ -137,7 +137,7 @@ class BatchSim:
 
         t = self.world.terrain
         nt = max(1, len(t.corners))
-        ter_f = np.zeros((nt, 12), dtype=real)
+        ter_f = np.zeros((nt, 12))  # f64, then in the real type as the points are (below)
         ter_i = np.zeros((nt, 4), dtype=np.int32)
         if len(t.corners):
             ter_f[:, :8] = t.corners.reshape(-1, 8)
@@ -146,6 +146,7 @@ class BatchSim:
             ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
             ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
             ter_i[:] = t.open
+        ter_f = to_real(ter_f, real)
         self._pos0 = to_real(pos0, real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
@@ -356,7 +357,9 @@ def to_real(x: np.ndarray, dtype: type) -> np.ndarray:
     a terrain top of 0.1), so it first touches the ground a substep later. Rounded to float32
     both are 0.1: the robot would start in contact, and a contact pushes with >= 10,500 force
     units (a 1e-3 error after one step, Walker-v0). So a coordinate that float32 would put onto
-    the line (or past it) is moved to the float32 number next to the line on its float64 side."""
+    the line (or past it) is moved to the float32 number next to the line on its float64 side.
+    Terrain corners get the same treatment: evogym's terrain tops are at times 0.09999999999999998,
+    where a robot's bottom is too."""
     if dtype == np.float64:
         return x
     g = np.round(x / C.CELL) * C.CELL
