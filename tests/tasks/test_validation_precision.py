@@ -2,8 +2,9 @@
 of 4 of the 32 tasks (all 32 take ~2.5 minutes on 2 shared cores; their figures are in
 docs/VALIDATION.md, "Single precision"). The subset is the tasks where f32 passes the issue's
 criterion: the median over the 24 robots of the largest COM error over the episode within 2x
-evogym's spread under +-1e-6 action changes (`tasks.validate.chaos_check`); on the other 28 it
-does not (same page). Runs in a subprocess: a process's precision is fixed when Taichi starts."""
+evogym's spread under +-1e-6 action changes (`tasks.validate.chaos_check`, which `sgr validate`
+reports in f32); on the other 28 it does not (same page). Runs in a subprocess: a process's
+precision is fixed when Taichi starts."""
 
 import json
 import os
@@ -14,8 +15,8 @@ PASSING = ["Walker-v0", "UpStepper-v0", "Carrier-v1", "WingspanMazimizer-v0"]
 
 PROBE = """
 import json, sys
-from tasks.validate import chaos_check
-print(json.dumps(chaos_check(sys.argv[1], sys.argv[2:])))
+from tasks.validate import validate_evogym32
+print(json.dumps(validate_evogym32(sys.argv[1], sys.argv[2:])))
 """
 
 
