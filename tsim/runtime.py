@@ -54,6 +54,18 @@ def use_precision(precision: str | None) -> str:
     return p
 
 
+def check_real_type(arch: str, precision: str, arch_from_env: bool = False,
+                    precision_from_env: bool = False) -> None:
+    """ValueError, one line saying what is missing and what to use, when `arch` has no floats of
+    `precision` (Metal: no 64-bit floats). Checked once the arch is known to run here, so that a
+    missing device is reported as such first."""
+    if precision == "f64" and arch in NO_F64:
+        what = f"SGR_ARCH={arch}" if arch_from_env else f"arch {arch!r}"
+        how = "SGR_PRECISION=f64" if precision_from_env else "precision f64"
+        raise ValueError(f"{what} with {how}: {arch} has no 64-bit floats; use SGR_PRECISION=f32 "
+                         "(or SGR_ARCH=cpu for f64)")
+
+
 def precision() -> str:
     """The process's real type, "f64" or "f32": the one Taichi runs in once started, else the one
     it would start in (`requested_precision`). What the kernels compile for."""
@@ -107,11 +119,6 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
             raise ValueError(f"Taichi already runs in {_PRECISION}; cannot switch to {precision} in "
                              "one process")
         return _ARCH
-    if precision == "f64" and arch in NO_F64:
-        what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
-        how = "SGR_PRECISION=f64" if prec_from_env else "precision f64"
-        raise ValueError(f"{what} with {how}: {arch} has no 64-bit floats; use SGR_PRECISION=f32 "
-                         "(or SGR_ARCH=cpu for f64)")
     threads = _threads_env()
     kwargs = {"cpu_max_num_threads": threads} if threads else {}
     if PROFILE_SKIP:
@@ -137,6 +144,11 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
         what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
         raise ValueError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
                          "use SGR_ARCH=cpu")
+    try:
+        check_real_type(arch, precision, from_env, prec_from_env)
+    except ValueError:
+        ti.reset()
+        raise
     for line in out.getvalue().splitlines():
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
