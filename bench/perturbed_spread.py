@@ -26,7 +26,7 @@ DELTAS = (1e-5, -1e-5, 1e-4, -1e-4)
 
 def spread(task: str) -> dict:
     """{"floor_1e-5": ..., "floor_1e-4": ...} of one task."""
-    z = np.load(f"{FOLDER}/returns_{task}.npz")
+    z = np.load(f"{FOLDER}/returns_{task}.npz", allow_pickle=False)
     bodies, n_act, steps = list(z["body"]), z["n_act"], int(z["steps"])
     B, K = len(bodies), len(DELTAS)
     seeds = [int(s) for s in z["reset_seed"]] * K if "reset_seed" in z.files else None

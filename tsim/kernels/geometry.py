@@ -7,6 +7,7 @@ from tsim.runtime import ti
 
 @ti.func
 def cross(a, b):
+    """The 2-D cross product a x b (z component)."""
     return a[0] * b[1] - a[1] * b[0]
 
 
@@ -46,6 +47,7 @@ def intersects(a1, b1, a2, b2):
 
 @ti.func
 def dist_point_edge(p, a, b):
+    """Distance from p to the line through a and b (evogym's); 1000 for a degenerate edge."""
     base = b - a
     length = ti.sqrt(base[0] * base[0] + base[1] * base[1])
     d = 1000.0
@@ -57,6 +59,7 @@ def dist_point_edge(p, a, b):
 
 @ti.func
 def normalized(v):
+    """v / |v|, unguarded as in evogym."""
     return v / ti.sqrt(v[0] * v[0] + v[1] * v[1])
 
 

@@ -14,11 +14,13 @@ from tsim.runtime import ti
 
 @ti.func
 def qpt(qf: ti.template(), q, k):
+    """Position of corner k of scratch quad q."""
     return ti.Vector([qf[4 * q + k, 0], qf[4 * q + k, 1]])
 
 
 @ti.func
 def qvel(qf: ti.template(), q, k):
+    """vel_true of corner k of scratch quad q."""
     return ti.Vector([qf[4 * q + k, 2], qf[4 * q + k, 3]])
 
 
