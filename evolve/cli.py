@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from tasks.cli import nonnegative, output_path, parse_body, positive, register_task_commands
+from tasks.cli import PRECISIONS, nonnegative, output_path, parse_body, positive, register_task_commands
 
 
 def workers_arg(text: str) -> int | str:
@@ -113,8 +113,10 @@ def _evolve(args: argparse.Namespace) -> int:
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
+    runtime.requested_precision()  # and so does a misspelt SGR_PRECISION
     if args.resume:
-        if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
+        if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
+                or args.precision):
             raise ValueError("--resume continues a run with its own config; only --generations "
                              "(to extend it), --workers, --trust-imports and --quiet go with it")
         exp = Experiment.resume(_resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
@@ -123,7 +125,7 @@ def _evolve(args: argparse.Namespace) -> int:
     else:
         config = _evolve_config(args)
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                 "workers": args.workers}
+                 "workers": args.workers, "precision": args.precision}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         cfg = load_config(config, overrides)
         stamp = time.strftime("%Y%m%d-%H%M%S")
@@ -306,6 +308,9 @@ def main(argv: list[str] | None = None) -> int:
                         "cluster); default: the config's")
     e.add_argument("--resume", metavar="DIR",
                    help="continue a run from its last checkpoint (with --generations N: extend it to N)")
+    e.add_argument("--precision", choices=PRECISIONS,
+                   help="the simulator's real type: f64 (evogym's bits) or f32; default: the config's, "
+                        "else $SGR_PRECISION, else f64")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=_evolve)
     sw = sub.add_parser("sweep", help="every method x task x seed of a sweep file, resumable")

@@ -13,6 +13,11 @@ import numpy as np
 
 from tsim.files import atomic_write
 
+# tsim.runtime.PRECISIONS, written out: importing tsim starts Taichi's import (seconds), which a
+# parser must not wait for (tests/tasks/test_precision.py checks they agree)
+PRECISIONS = ("f64", "f32")
+PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default $SGR_PRECISION, else f64"
+
 
 def positive(cast):
     """argparse type: a positive number of type `cast` (int or float)."""
@@ -118,7 +123,9 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     from tasks.validate import validate
+    from tsim import runtime
 
+    runtime.use_precision(args.precision)
     report = validate(args.dir)
     if args.json:
         print(json.dumps(report))
@@ -137,7 +144,9 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
+    from tsim import runtime
 
+    runtime.use_precision(args.precision)
     r = bench(args.task, args.robots, args.steps)
     if args.json:
         print(json.dumps(r))
@@ -145,7 +154,7 @@ def _bench(args: argparse.Namespace) -> int:
         print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
               f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "
               f"{r['physics_robot_steps_per_s']:.0f} (physics only); compile {r['compile_s']:.1f} s; "
-              f"threads {r['threads']}" + (" (pinned)" if r["pinned"] else ""))
+              f"threads {r['threads']}" + (" (pinned)" if r["pinned"] else "") + f"; {r['precision']}")
     return 0
 
 
@@ -161,10 +170,12 @@ def register_task_commands(sub) -> None:
     v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
     v.add_argument("dir")
     v.add_argument("--json", action="store_true")
+    v.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
     b.add_argument("--task", default="Walker-v0")
     b.add_argument("--robots", type=positive(int), default=128)
     b.add_argument("--steps", type=positive(int), default=100)
     b.add_argument("--json", action="store_true")
+    b.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     b.set_defaults(fn=_bench)

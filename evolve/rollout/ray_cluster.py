@@ -144,8 +144,9 @@ class RayRolloutPool:
 
     def _new_actor(self, ray):
         env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
-        if os.environ.get("SGR_ARCH"):  # actors simulate where this process would
-            env["SGR_ARCH"] = os.environ["SGR_ARCH"]
+        for key in ("SGR_ARCH", "SGR_PRECISION"):  # actors simulate where and as this process would
+            if os.environ.get(key):
+                env[key] = os.environ[key]
         # the environment is set before the actor's process starts: Taichi reads it at its start
         cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=0, max_task_retries=0,
                                                 runtime_env={"env_vars": env})

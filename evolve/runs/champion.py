@@ -27,6 +27,7 @@ from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS
+from tsim import runtime
 from tsim.body import build_body, check_robot
 
 KEYS = ("task", "episode_steps", "body", "controller")
@@ -49,7 +50,7 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     method (`Problem.champion` gives the body and controller)."""
     champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
              "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
-             "genome": genome_json(genome)}
+             "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
     method_keys = problem.champion(phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
@@ -109,6 +110,12 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     if np.shape(actions) != (len(b.actuator_flat),):
         raise ValueError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
                          f"{len(b.actuator_flat)} actuators")
+    # its fitness is reproducible in the precision it was scored in (records without the key: f64)
+    try:
+        runtime.use_precision(champ.get("precision") or "f64")
+    except ValueError as exc:
+        raise ValueError(f"{f}: key 'precision': scored in {champ.get('precision') or 'f64'}, to be "
+                         f"replayed in it: {exc} (start a new process)") from None
     return champ, body, ctrl
 
 

@@ -21,6 +21,7 @@ from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
+from tsim import runtime
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -50,6 +51,9 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
     # evolve/runs/final_selection.py; null: the champion is the best-ever genome
     "final_selection": ((dict, type(None)), None),
+    # the simulator's real type, f64 (evogym's bits) or f32; null: $SGR_PRECISION, else f64. The run
+    # records the one it used, and a resumed run keeps it
+    "precision": ((str, type(None)), None),
 }
 
 
@@ -114,6 +118,10 @@ def check_config(raw: dict, source: str = "config") -> dict:
     w = cfg["workers"]
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
         raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
+    try:
+        cfg["precision"] = runtime.requested_precision(cfg["precision"])
+    except ValueError as exc:
+        raise ValueError(f"{source}: key 'precision': {exc}") from None
     robust = Robust.from_config(cfg["robust"], source)
     if robust is not None and robust.accumulate and problem.reevaluate_elites:
         raise ValueError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "

@@ -30,6 +30,7 @@ from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.specs import BUILTIN
+from tsim import runtime
 
 
 def rollout_pool(workers: int | str) -> RolloutPool:
@@ -51,6 +52,8 @@ class Experiment:
                  workers: int | str | None = None):
         """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
         self.run, self.cfg, self.quiet = run, cfg, quiet
+        # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
+        runtime.use_precision(cfg.get("precision"))
         self.neat_config = load_neat_config(run.path / "neat.ini")
         self.pool = rollout_pool(cfg.get("workers", "auto") if workers is None else workers)
         method = METHODS[cfg["method"]]
