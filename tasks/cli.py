@@ -1,6 +1,6 @@
 """The `sgr` commands that need only tasks and the simulator (demo, validate, bench), and the
 argument helpers every command shares; `register_task_commands` adds them to the dispatcher in
-evolve/cli.py."""
+evolve/cli/ (the sgr dispatcher)."""
 
 from __future__ import annotations
 
