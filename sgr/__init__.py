@@ -19,7 +19,7 @@ from __future__ import annotations
 import importlib
 
 _FROM = {
-    "tsim": ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",
+    "tsim": ["BatchSim", "Body", "Renderer", "SgrError", "World", "build_body", "check_robot", "has_actuator",
              "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix",
              "write_gif"],
     "tasks": ["TASKS", "BatchEnv", "Measure", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "register",

@@ -7,10 +7,11 @@ The simulator knows no task: tasks (placement, observations, rewards) live in th
 """
 
 from tsim.body import Body, build_body, check_robot, has_actuator, is_connected
+from tsim.errors import SgrError
 from tsim.render import Renderer, write_gif
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
 from tsim.world import World, load_world, world_from_dict, world_from_matrix
 
-__all__ = ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",
+__all__ = ["BatchSim", "Body", "Renderer", "SgrError", "World", "build_body", "check_robot", "has_actuator",
            "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix", "write_gif"]

@@ -10,6 +10,7 @@ import sys
 from pathlib import Path
 
 from tasks.cli import nonnegative, output_path, parse_body, positive
+from tsim.errors import SgrError
 
 __all__ = ["add_noise", "add_trust_imports", "add_workers", "nonnegative", "noise_level", "output_path",
            "parse_body", "positive", "resume_dir", "workers_arg", "ClosedStdoutTolerant"]
@@ -57,11 +58,11 @@ def resume_dir(path: str) -> str:
     """The run directory to resume, or a ValueError a person can act on."""
     p = Path(path)
     if not p.exists():
-        raise ValueError(f"{path} does not exist")
+        raise SgrError(f"{path} does not exist")
     if (p / "sweep.yaml").is_file():
-        raise ValueError(f"{path} is a sweep directory, not a run: continue the sweep with "
-                         f"sgr sweep --resume {path}, or one of its runs with sgr evolve --resume "
-                         f"{p / 'runs' / '<run>'}")
+        raise SgrError(f"{path} is a sweep directory, not a run: continue the sweep with "
+                       f"sgr sweep --resume {path}, or one of its runs with sgr evolve --resume "
+                       f"{p / 'runs' / '<run>'}")
     return path
 
 

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from tsim.errors import SgrError
+
 
 def register(sub) -> argparse.ArgumentParser:
     """Add `convert-checkpoints` to the dispatcher's subparsers."""
@@ -21,9 +23,9 @@ def run(args: argparse.Namespace) -> int:
     from evolve.runs.legacy import convert_run, run_dirs
 
     if not args.trust_pickle:
-        raise ValueError("an older sgr's checkpoints are pickles, and loading a pickle runs any code "
-                         "its author put in it: add --trust-pickle only if you trust everyone who "
-                         f"could write {args.dir}")
+        raise SgrError("an older sgr's checkpoints are pickles, and loading a pickle runs any code "
+                       "its author put in it: add --trust-pickle only if you trust everyone who "
+                       f"could write {args.dir}")
     for run_ in run_dirs(args.dir):
         written = convert_run(run_)
         if written:

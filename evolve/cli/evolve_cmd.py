@@ -8,6 +8,7 @@ import time
 from pathlib import Path
 
 from evolve.cli.common import add_workers, output_path, positive, resume_dir
+from tsim.errors import SgrError
 
 
 def register(sub) -> argparse.ArgumentParser:
@@ -39,25 +40,25 @@ def evolve_config(args: argparse.Namespace) -> Path:
     from tasks.specs import TASKS, unknown_name, unknown_task
 
     if args.config and (args.task or args.method):
-        raise ValueError("give --config, or --task (with --method), not both")
+        raise SgrError("give --config, or --task (with --method), not both")
     if args.config:
         return find_config(args.config)
     if args.method and not args.task:
-        raise ValueError("--method goes with --task (e.g. sgr evolve --task Climber-v2 --method direct)")
+        raise SgrError("--method goes with --task (e.g. sgr evolve --task Climber-v2 --method direct)")
     if not args.task:
         return configs_dir() / "sgr" / "quick.yaml"
     method = args.method or "sgr"
     if method not in METHODS:
-        raise ValueError(unknown_name("method", method, METHODS))
+        raise SgrError(unknown_name("method", method, METHODS))
     path = configs_dir() / method / f"{args.task}.yaml"
     if path.is_file():
         return path
     if args.task not in TASKS:
-        raise ValueError(f"{unknown_task(args.task)} (a task of your own: --config FILE with "
-                         "task: and imports:, docs/TASKS.md)")
+        raise SgrError(f"{unknown_task(args.task)} (a task of your own: --config FILE with "
+                       "task: and imports:, docs/TASKS.md)")
     shipped = sorted(f.stem for f in (configs_dir() / method).glob("*.yaml"))
-    raise ValueError(f"no packaged config for {method} on {args.task} (there are: {', '.join(shipped)}); "
-                     "write one and give --config FILE")
+    raise SgrError(f"no packaged config for {method} on {args.task} (there are: {', '.join(shipped)}); "
+                   "write one and give --config FILE")
 
 
 def run(args: argparse.Namespace) -> int:
@@ -69,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
     if args.resume:
         if args.config or args.pop or args.seed is not None or args.out or args.task or args.method:
-            raise ValueError("--resume continues a run with its own config; only --generations "
-                             "(to extend it), --workers, --trust-imports and --quiet go with it")
+            raise SgrError("--resume continues a run with its own config; only --generations "
+                           "(to extend it), --workers, --trust-imports and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
@@ -88,22 +89,17 @@ def run(args: argparse.Namespace) -> int:
     return run_experiment(exp)
 
 
-def last_checkpoint(run_path: Path) -> int | None:
-    """Generations done at the newest checkpoint file (checkpoints/gen-NNNNN.*), None without one."""
-    gens = [int(f.name[4:9]) for f in (run_path / "checkpoints").glob("gen-*") if f.name[4:9].isdigit()]
-    return max(gens) if gens else None
-
-
 def run_experiment(exp) -> int:
     """Run `exp` to its end; a stop (Ctrl-C, a dead worker, a full disk) says how to resume."""
     from evolve.rollout.pool import WorkerDied
 
     try:
-        exp.run_all()
-        exp.finish()
+        with exp:
+            exp.run_all()
+            exp.finish()
     except KeyboardInterrupt:
         done, want = exp.search.generation, exp.cfg["generations"]
-        ckpt = last_checkpoint(exp.run.path)
+        ckpt = exp.run.last_checkpoint_generation()
         where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
                  f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
                  f"generation {ckpt}")
@@ -118,6 +114,4 @@ def run_experiment(exp) -> int:
               f"{exp.search.generation + 1} and keeps its last checkpoint: make room, then "
               f"sgr evolve --resume {exp.run.path}", file=sys.stderr)
         return 1
-    finally:
-        exp.close()
     return 0

@@ -8,6 +8,7 @@ import argparse
 import numpy as np
 
 from evolve.cli.common import add_noise, nonnegative, output_path, parse_body, positive
+from tsim.errors import SgrError
 
 
 def register(sub) -> argparse.ArgumentParser:
@@ -45,14 +46,14 @@ def run(args: argparse.Namespace) -> int:
         output_path(args.out)
     if args.run_dir:
         if args.task or args.body:
-            raise ValueError("give either RUN_DIR or --task with --body, not both")
+            raise SgrError("give either RUN_DIR or --task with --body, not both")
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
     else:
         if not (args.task and args.body):
-            raise ValueError("sgr render needs RUN_DIR, or --task and --body")
+            raise SgrError("sgr render needs RUN_DIR, or --task and --body")
         if args.replay:
-            raise ValueError("--replay renders a perturbed episode of a run's champion: give RUN_DIR")
+            raise SgrError("--replay renders a perturbed episode of a run's champion: give RUN_DIR")
         body = check_robot(parse_body(args.body))
         n_act = int(np.count_nonzero((body == 3) | (body == 4)))
         frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,

@@ -7,6 +7,7 @@ import time
 from pathlib import Path
 
 from evolve.cli.common import positive
+from tsim.errors import SgrError
 
 
 def register(sub) -> argparse.ArgumentParser:
@@ -39,16 +40,16 @@ def run(args: argparse.Namespace) -> int:
         from evolve.rollout.ray_cluster import require_ray
         require_ray("--backend ray")  # before the sweep directory exists
     elif args.address:
-        raise ValueError("--address goes with --backend ray")
+        raise SgrError("--address goes with --backend ray")
     if args.resume:
         if args.config or args.out:
-            raise ValueError("--resume continues a sweep with its own sweep file; drop --config and --out")
+            raise SgrError("--resume continues a sweep with its own sweep file; drop --config and --out")
         if not Path(args.resume).exists():
-            raise ValueError(f"{args.resume} does not exist")
+            raise SgrError(f"{args.resume} does not exist")
         sweep = Sweep.open(args.resume)
     else:
         if not args.config:
-            raise ValueError("sgr sweep needs --config SWEEP.yaml (or --resume DIR)")
+            raise SgrError("sgr sweep needs --config SWEEP.yaml (or --resume DIR)")
         from evolve.runs.config import find_config
 
         config = find_config(args.config, "sweep file")  # a path, or a packaged sweep's name (paper)

@@ -18,6 +18,7 @@ import numpy as np
 
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
+from tsim.errors import SgrError
 
 # config key -> (type or tuple of types, default)
 Schema = dict[str, tuple[Any, Any]]
@@ -121,4 +122,4 @@ def positive(cfg: dict, source: str, *keys: str) -> None:
     """Raise naming the first of `keys` whose value is below 1."""
     for key in keys:
         if cfg[key] < 1:
-            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")

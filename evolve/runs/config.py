@@ -21,6 +21,7 @@ from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
+from tsim.errors import SgrError
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -61,22 +62,22 @@ def _type_name(t) -> str:
 def check_config(raw: dict, source: str = "config") -> dict:
     """Fill defaults and validate; raises ValueError naming the offending key."""
     if not isinstance(raw, dict):
-        raise ValueError(f"{source}: a config must be a mapping of keys to values")
+        raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
     if method not in METHODS:
-        raise ValueError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
-                         f"{closest(method, METHODS)}")
+        raise SgrError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
+                       f"{closest(method, METHODS)}")
     problem = METHODS[method]
     schema = {**COMMON, **problem.config_keys}
     for key in raw:
         if key not in schema:
-            raise ValueError(f"{source}: unknown key {key!r} for method {method!r}; "
-                             f"known keys: {', '.join(sorted(schema))}")
+            raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
+                           f"known keys: {', '.join(sorted(schema))}")
     cfg = {}
     for key, (typ, default) in schema.items():
         if key not in raw:
             if key == "task":
-                raise ValueError(f"{source}: missing required key {key!r}")
+                raise SgrError(f"{source}: missing required key {key!r}")
             cfg[key] = default
             continue
         val = raw[key]
@@ -85,46 +86,51 @@ def check_config(raw: dict, source: str = "config") -> dict:
         types = typ if isinstance(typ, tuple) else (typ,)
         ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
-            raise ValueError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
+            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
         cfg[key] = val
     imports = cfg["imports"]
     if not all(isinstance(m, str) for m in imports):
-        raise ValueError(f"{source}: key 'imports' must be a list of module names or .py files, "
-                         f"got {imports!r}")
+        raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
+                       f"got {imports!r}")
     for ref in imports:  # they register the user's tasks before the task is looked up
         try:
             import_tasks(ref)
         except ValueError as exc:
-            raise ValueError(f"{source}: key 'imports': {exc}") from None
+            raise SgrError(f"{source}: key 'imports': {exc}") from None
     if cfg["task"] not in TASKS:
-        raise ValueError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
+        raise SgrError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
     for key in ("generations", "pop_size", "checkpoint_every"):
         if cfg[key] < 1:
-            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
     shape = cfg["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
-        raise ValueError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
+        raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
     steps = cfg["episode_steps"]
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
-        raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
-                         f"got {steps!r}")
+        raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
+                       f"got {steps!r}")
     spec = TASKS[cfg["task"]]  # the run records the episode length it uses, not a rule for it
     cfg["episode_steps"] = (spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym"
                             else steps)
     w = cfg["workers"]
     if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
-        raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
-    robust = Robust.from_config(cfg["robust"], source)
+        raise SgrError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
+    try:  # robust.py raises ValueError naming the key: the user's to fix
+        robust = Robust.from_config(cfg["robust"], source)
+    except SgrError:
+        raise
+    except ValueError as exc:
+        raise SgrError(str(exc)) from None
     cfg["robust"] = None if robust is None else robust.to_json()
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
-        raise ValueError(f"{source}: key 'final_selection' {not_for(method)}")
+        raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
     cfg["final_selection"] = None if selection is None else selection.to_json()
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)
         if not Path(cfg[key]).is_file():
-            raise ValueError(f"{source}: key {key!r}: file not found: {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r}: file not found: {cfg[key]}")
     problem.validate(cfg, source)
     return cfg
 
@@ -134,7 +140,7 @@ def load_config(path: str | Path, overrides: dict | None = None) -> dict:
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
-        raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
+        raise SgrError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
     return config_from_dict({**raw, **{k: v for k, v in (overrides or {}).items() if v is not None}},
                             str(path), path.parent)
 
@@ -143,8 +149,8 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
     `base` (default: the current folder)."""
     if not isinstance(raw, dict):
-        raise ValueError(f"{source}: a config must be a mapping of keys to values, "
-                         f"got a {type(raw).__name__}")
+        raise SgrError(f"{source}: a config must be a mapping of keys to values, "
+                       f"got a {type(raw).__name__}")
     problem = METHODS.get(raw.get("method"))
     raw = dict(raw)
     for key in problem.default_files if problem else ():
@@ -177,8 +183,8 @@ def find_config(ref: str, what: str = "config") -> Path:
     if found is not None:
         return found
     if Path(ref).exists():
-        raise ValueError(f"{what} {ref} is not a file")
+        raise SgrError(f"{what} {ref} is not a file")
     names = [str(f.relative_to(configs_dir()).with_suffix("")) for f in sorted(configs_dir().glob("*/*.yaml"))
              if f.parent.name != "neat"]
-    raise ValueError(f"{what} {ref} does not exist, nor is it the name of a packaged config"
-                     f"{closest(ref.removesuffix('.yaml'), names) or ' (e.g. sgr/Climber-v2, quick, paper)'}")
+    raise SgrError(f"{what} {ref} does not exist, nor is it the name of a packaged config"
+                   f"{closest(ref.removesuffix('.yaml'), names) or ' (e.g. sgr/Climber-v2, quick, paper)'}")

@@ -19,7 +19,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from evolve.methods import METHODS
-from evolve.rollout.pool import RolloutPool
+from evolve.rollout.pool import BasePool, RolloutPool
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
@@ -28,9 +28,10 @@ from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.registry import import_tasks
+from tsim.errors import SgrError
 
 
-def rollout_pool(workers: int | str) -> RolloutPool:
+def rollout_pool(workers: int | str) -> BasePool:
     """Local worker processes (a number, 'auto'), or the actors of a Ray cluster ('ray')."""
     if workers == "ray":
         from evolve.rollout.ray_cluster import RayRolloutPool
@@ -39,10 +40,12 @@ def rollout_pool(workers: int | str) -> RolloutPool:
 
 
 class Experiment:
-    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers.
+    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers. It
+    holds worker processes and the run's lock: use it in a `with` block (or call `close`).
 
-        exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5}, "runs/x")
-        exp.run_all(); exp.finish()
+        cfg = {"method": "sgr", "task": "Walker-v0", "generations": 5}
+        with Experiment.from_config(cfg, "runs/x") as exp:
+            exp.run_all(); exp.finish()
     """
 
     def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
@@ -81,14 +84,10 @@ class Experiment:
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")
         run = RunDir(out)
-        run.lock()
-        try:
+        with run.locked_unless_it_fails():
             run.create(cfg, ini)
             exp = cls(run, cfg, quiet=quiet)
             run.save_checkpoint(0, exp.state())
-        except BaseException:
-            run.unlock()
-            raise
         return exp
 
     @classmethod
@@ -100,27 +99,23 @@ class Experiment:
         cfg = run.config()
         for ref in cfg.get("imports") or ():  # the modules that register the run's own task
             import_tasks(ref, named_in=run.path / "config.yaml")
-        run.lock()
-        try:
+        with run.locked_unless_it_fails():
             state = load_checkpoint(run, cfg)
             if state is None:
-                raise ValueError(f"{out} has no checkpoint to resume from")
+                raise SgrError(f"{out} has no checkpoint to resume from")
             done = state["generation"]
             if generations is not None:
                 if generations < done:
-                    raise ValueError(f"{out} has already run {done} generations; --generations must be "
-                                     f">= {done}")
+                    raise SgrError(f"{out} has already run {done} generations; --generations must be "
+                                   f">= {done}")
                 if generations != cfg["generations"]:
                     cfg = {**cfg, "generations": generations}
                     run.update_config(cfg)
             if done >= cfg["generations"]:
-                raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
-                                 "add --generations N to extend it")
+                raise SgrError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                               "add --generations N to extend it")
             run.truncate_rows(done)
             return cls(run, cfg, state=state, quiet=quiet, workers=workers)
-        except BaseException:
-            run.unlock()
-            raise
 
     def state(self) -> dict:
         """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own
@@ -176,9 +171,15 @@ class Experiment:
               f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
     def close(self) -> None:
-        """Stop the rollout worker processes and let go of the run directory."""
+        """Stop the rollout worker processes and let go of the run directory (again: nothing)."""
         self.pool.close()
         self.run.unlock()
+
+    def __enter__(self) -> Experiment:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
     def finish(self) -> None:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set."""
@@ -230,19 +231,13 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
         import_tasks(ref, named_in=run.path / "config.yaml")
     state = load_checkpoint(run, cfg)
     if state is None:
-        raise ValueError(f"{run_dir} has no checkpoint")
+        raise SgrError(f"{run_dir} has no checkpoint")
     if state["generation"] < cfg["generations"]:
-        raise ValueError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
-                         "generations): resume it first")
+        raise SgrError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
+                       "generations): resume it first")
     settings = FinalSelection.from_config({**(cfg.get("final_selection") or {}), **(overrides or {})},
                                           "sgr select-champion")
-    run.lock()
-    try:
+    with run.locked_unless_it_fails():
         exp = Experiment(run, cfg, state=state, quiet=True, workers=workers)
-    except BaseException:
-        run.unlock()
-        raise
-    try:
+    with exp:
         return select_champion(exp, settings)
-    finally:
-        exp.close()

@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 
 from evolve.runs.plots import read_generations, run_labels
+from tsim.errors import SgrError
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -95,12 +96,12 @@ def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
         return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
-        raise ValueError(f"not a folder: {folder}")
+        raise SgrError(f"not a folder: {folder}")
     base = folder / "runs" if (folder / "runs").is_dir() else folder
     runs = sorted(d for d in base.iterdir()
                   if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())
     if not runs:
-        raise ValueError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
+        raise SgrError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
     return runs
 
 
