@@ -18,15 +18,15 @@ __all__ = ["add_noise", "add_trust_imports", "add_workers", "nonnegative", "nois
 
 def workers_arg(text: str) -> int | str:
     """argparse type of --workers: a positive int, 'auto' or 'ray'."""
-    if text in ("auto", "ray"):
-        return text
+    from evolve.rollout.pool import workers_problem
+
     try:
-        n = int(text)
+        value = int(text)
     except ValueError:
-        n = 0
-    if n < 1:
-        raise argparse.ArgumentTypeError(f"must be a positive int, 'auto' or 'ray', got {text!r}")
-    return n
+        value = text
+    if workers_problem(value) is not None:
+        raise argparse.ArgumentTypeError(workers_problem(text))
+    return value
 
 
 def add_workers(parser: argparse.ArgumentParser, default: int | None, help: str) -> None:

@@ -36,6 +36,14 @@ from tsim.errors import SgrError
 PolicyFactory = Callable[[BatchEnv, Sequence], BatchPolicy]
 
 
+def workers_problem(workers: object) -> str | None:
+    """What is wrong with a `workers` value (the config key, --workers, `RolloutPool`), or None: a
+    positive int, 'auto' or 'ray'. The one place the rule is written."""
+    if workers in ("auto", "ray") or type(workers) is int and workers >= 1:
+        return None
+    return f"must be a positive int, 'auto' or 'ray', got {workers!r}"
+
+
 def resolve_workers(workers: int | str) -> int:
     """'auto' -> the CPUs this process may use; an int is taken as is (>= 1)."""
     if workers == "auto":
@@ -43,7 +51,7 @@ def resolve_workers(workers: int | str) -> int:
             return max(1, len(os.sched_getaffinity(0)))
         except AttributeError:  # not on Linux
             return max(1, os.cpu_count() or 1)
-    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
+    if workers == "ray" or workers_problem(workers) is not None:  # (Ray's actors: RayRolloutPool)
         raise SgrError(f"workers must be a positive int or 'auto', got {workers!r}")
     return workers
 
@@ -215,5 +223,5 @@ class RolloutPool(BasePool):
         self._procs = []
 
     def __del__(self) -> None:
-        if self._procs:
+        if getattr(self, "_procs", None):  # (none when __init__ refused its workers)
             self.close()

@@ -194,8 +194,7 @@ def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> Ep
 def episode_steps(task: str, steps: int | str | None) -> int:
     """The episode length a record stands for: runs record theirs; older ones wrote null (the
     paper's length for the task) or "evogym" (evogym's)."""
-    spec = TASKS[task]
-    return spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym" else int(steps)
+    return TASKS[task].episode_length(steps if steps is None or steps == "evogym" else int(steps))
 
 
 @dataclass(frozen=True)

@@ -2,9 +2,13 @@
 
 The schema is the common keys below plus the method's own (`Problem.config_keys`). Paths inside a
 config (neat_config, ...) are relative to the YAML file; left out, they are the method's packaged
-defaults in configs/neat/. `load_config` returns a plain dict with every key present (defaults
-filled, `episode_steps` resolved to the number of steps a run uses), which is what a run
-directory stores.
+defaults in configs/neat/. `load_config` returns a `RunConfig`: frozen and typed, every key
+present (defaults filled from the schema, the one place they live), checked once, `episode_steps`
+resolved to the number of steps a run uses and `robust`/`final_selection` parsed once into their
+dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
+run directory stores (config.yaml); it also records the arch and precision the run was created
+with. `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
+null) included.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
@@ -13,12 +17,13 @@ directory stores.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from evolve.methods import METHODS
+from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
+from evolve.runs.run_config import COMMON, RunConfig, run_precision
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 from tsim.errors import SgrError
@@ -34,33 +39,14 @@ def configs_dir() -> Path:
     return Path(__file__).resolve().parents[1] / "configs"
 
 
-# key: (type or tuple of types, default); the method's own keys come from its Problem class
-COMMON: dict[str, tuple[Any, Any]] = {
-    "method": (str, None),
-    "task": (str, None),
-    "generations": (int, 250),
-    "pop_size": (int, 128),
-    "seed": (int, 0),
-    "robot_shape": (list, [5, 5]),
-    "episode_steps": ((int, str, type(None)), None),
-    "neat_config": ((str, type(None)), None),
-    "checkpoint_every": (int, 5),
-    "render_champion": (bool, True),
-    "workers": ((int, str), "auto"),
-    "imports": (list, []),
-    "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
-    # evolve/runs/final_selection.py; null: the champion is the best-ever genome
-    "final_selection": ((dict, type(None)), None),
-}
-
-
 def _type_name(t) -> str:
     ts = t if isinstance(t, tuple) else (t,)
     return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
 
-def check_config(raw: dict, source: str = "config") -> dict:
-    """Fill defaults and validate; raises ValueError naming the offending key."""
+def check_config(raw: dict, source: str = "config") -> RunConfig:
+    """Fill defaults and validate, once; raises SgrError naming the offending key. Keys `arch` and
+    `precision` (a run folder's config.yaml used as a config) are replaced by this run's."""
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
@@ -69,6 +55,7 @@ def check_config(raw: dict, source: str = "config") -> dict:
                        f"{closest(method, METHODS)}")
     problem = METHODS[method]
     schema = {**COMMON, **problem.config_keys}
+    raw = {k: v for k, v in raw.items() if k not in ("arch", "precision")}  # recorded, not chosen
     for key in raw:
         if key not in schema:
             raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
@@ -109,33 +96,32 @@ def check_config(raw: dict, source: str = "config") -> dict:
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                        f"got {steps!r}")
-    spec = TASKS[cfg["task"]]  # the run records the episode length it uses, not a rule for it
-    cfg["episode_steps"] = (spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym"
-                            else steps)
-    w = cfg["workers"]
-    if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
-        raise SgrError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
+    # the run records the episode length it uses, not a rule for it
+    cfg["episode_steps"] = TASKS[cfg["task"]].episode_length(steps)
+    if (why := workers_problem(cfg["workers"])) is not None:
+        raise SgrError(f"{source}: key 'workers' {why}")
     try:  # robust.py raises ValueError naming the key: the user's to fix
         robust = Robust.from_config(cfg["robust"], source)
     except SgrError:
         raise
     except ValueError as exc:
         raise SgrError(str(exc)) from None
-    cfg["robust"] = None if robust is None else robust.to_json()
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
         raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
-    cfg["final_selection"] = None if selection is None else selection.to_json()
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)
         if not Path(cfg[key]).is_file():
             raise SgrError(f"{source}: key {key!r}: file not found: {cfg[key]}")
     problem.validate(cfg, source)
-    return cfg
+    from tsim.runtime import requested_arch
+
+    return RunConfig.build(cfg, problem.config_keys, arch=requested_arch(), precision=run_precision(),
+                           robust=robust, selection=selection)
 
 
-def load_config(path: str | Path, overrides: dict | None = None) -> dict:
+def load_config(path: str | Path, overrides: dict | None = None) -> RunConfig:
     """Read, override (CLI flags), resolve relative paths and validate a YAML config."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
@@ -145,7 +131,7 @@ def load_config(path: str | Path, overrides: dict | None = None) -> dict:
                             str(path), path.parent)
 
 
-def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> dict:
+def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> RunConfig:
     """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
     `base` (default: the current folder)."""
     if not isinstance(raw, dict):

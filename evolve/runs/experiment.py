@@ -22,7 +22,7 @@ from evolve.methods import METHODS
 from evolve.rollout.pool import BasePool, RolloutPool
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
-from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.config import RunConfig, config_from_dict, load_config
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
@@ -48,21 +48,24 @@ class Experiment:
             exp.run_all(); exp.finish()
     """
 
-    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
+    def __init__(self, run: RunDir, cfg: RunConfig | dict, state: dict | None = None, quiet: bool = False,
                  workers: int | str | None = None):
-        """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
+        """`cfg`: the run's config (a run folder's config.yaml as read: `RunConfig.of`); `workers`
+        overrides the config's (a resumed run may use another machine's CPUs)."""
+        cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self.neat_config = load_neat_config(run.path / "neat.ini")
-        self.pool = rollout_pool(cfg.get("workers", "auto") if workers is None else workers)
-        method = METHODS[cfg["method"]]
+        self.pool = rollout_pool(cfg.workers if workers is None else workers)
+        method = METHODS[cfg.method]
         self.problem = method(cfg, self.neat_config, self.pool)
         if state is not None:
             self.problem.restore(state.get("problem", {}))
-        self.selection = FinalSelection.from_config(cfg.get("final_selection"))
+        self.selection = cfg.final_selection
+        # (body_distance_weight is a key of sgr and direct; nested has none: plain NEAT speciation)
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
-                                 seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
+                                 seed=cfg.seed, body_distance_weight=cfg.get("body_distance_weight", 0.0),
                                  state=state, reevaluate=method.reevaluate_elites
-                                 or bool((cfg.get("robust") or {}).get("reevaluate")))
+                                 or (cfg.robust is not None and cfg.robust.reevaluate))
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
@@ -77,10 +80,10 @@ class Experiment:
         return cls._start(config_from_dict(config, "config"), out, quiet)
 
     @classmethod
-    def _start(cls, cfg: dict, out: str | Path, quiet: bool) -> Experiment:
+    def _start(cls, cfg: RunConfig, out: str | Path, quiet: bool) -> Experiment:
         ini = neat_ini_text(cfg["neat_config"], cfg, METHODS[cfg["method"]].neat_overrides(cfg))
         neat_config_from_text(ini, cfg["neat_config"])  # a bad INI must fail before the run exists
-        if cfg["workers"] == "ray":
+        if cfg.workers == "ray":
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")
         run = RunDir(out)
@@ -190,7 +193,7 @@ class Experiment:
         plot_run(self.run.path, self.run.path / "fitness.png")
         if self.search.best is None:
             return
-        if self.cfg.get("render_champion", True):
+        if self.cfg.render_champion:
             champion_gif(self.run.path)
         if not self.quiet:
             best = self.run.champion()

@@ -57,7 +57,7 @@ def episode_length(cfg: dict, task: str) -> int | None:
     if isinstance(steps, int):
         return steps
     spec = TASKS.get(task)
-    return None if spec is None else spec.evogym_steps if steps == "evogym" else spec.paper_steps
+    return None if spec is None else spec.episode_length(steps)
 
 
 def authors_not_comparable(task: str, episode_steps: list) -> str | None:

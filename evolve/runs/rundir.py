@@ -160,7 +160,7 @@ class RunDir:
             raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                            "or another --out")
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
         atomic_write(self.path / "neat.ini", neat_ini.encode())
         for name, text in (extra_files or {}).items():
             atomic_write(self.path / name, text.encode())
@@ -178,7 +178,7 @@ class RunDir:
 
     def update_config(self, cfg: dict) -> None:
         """Replace config.yaml atomically (a resume that extends `generations` does)."""
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:

@@ -111,7 +111,7 @@ class NeatSearch:
 
     def _step(self) -> dict:
         t0 = time.perf_counter()
-        todo = self._ask()
+        todo = self.ask()
         t1 = time.perf_counter()
         phenotypes = [p for _, p in todo]
         if not todo:
@@ -121,7 +121,7 @@ class NeatSearch:
         else:  # a method written before tags existed
             fit, episodes = self.evaluate(phenotypes)
         sim_s = time.perf_counter() - t1
-        row = self._tell(fit, episodes)
+        row = self.tell(fit, episodes)
         row.update(build_s=self._build_s, sim_s=sim_s, total_s=time.perf_counter() - t0)
         return row
 
