@@ -42,10 +42,7 @@ class BatchEnv:
         (`BatchSim.shift_robots`; a perturbed start for robustness tests)."""
         self.spec = task_spec(task)
         self.task = task
-        if episode_steps is None:
-            episode_steps = self.spec.paper_steps
-        elif episode_steps == "evogym":
-            episode_steps = self.spec.evogym_steps
+        episode_steps = self.spec.episode_length(episode_steps)
         if not isinstance(episode_steps, int) or episode_steps < 1:
             raise ValueError(f"episode_steps must be a positive int, 'evogym' or None, got {episode_steps!r}")
         self.episode_steps = episode_steps
@@ -94,7 +91,7 @@ class BatchEnv:
     def _object_index(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Row and point indices (B, n) of free object k's points in `sim.state`."""
         n = self.sim.free_objects[k].body.n_points
-        off = np.array(self.sim._obj_offsets[k])
+        off = self.sim.object_offsets(k)
         return np.arange(self.n_worlds)[:, None], off[:, None] + np.arange(n)[None, :]
 
     def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -126,7 +123,7 @@ class BatchEnv:
     def _object_pos0(self, name: str) -> np.ndarray:
         """(B, n, 2) positions of free object `name` at reset (its orientation's reference)."""
         rows, pts = self._obj_index[name]
-        return self.sim._pos0[rows, pts]
+        return self.sim.initial_positions[rows, pts]
 
     def _measure(self, com: np.ndarray) -> Measure:
         objects = {}

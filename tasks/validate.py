@@ -16,22 +16,23 @@ from scipy.stats import spearmanr
 
 from tasks.env import BatchEnv
 from tsim import runtime
+from tsim.errors import SgrError
 
 
 def _json(path: Path):
     try:
         return json.loads(path.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise SgrError(f"{path}: not valid JSON ({exc})") from None
 
 
 def _npz(path: Path):
     if not zipfile.is_zipfile(path):
-        raise ValueError(f"{path}: not a .npz file")
+        raise SgrError(f"{path}: not a .npz file")
     try:
         return np.load(path, allow_pickle=False)
     except (ValueError, EOFError, OSError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{path}: unreadable .npz file ({exc})") from None
+        raise SgrError(f"{path}: unreadable .npz file ({exc})") from None
 
 
 def validate_traces(folder: Path) -> dict:
@@ -140,7 +141,7 @@ def validate(folder: str | Path) -> dict:
     """Validate every reference set found in `folder` (trace format, returns format, or both)."""
     folder = Path(folder)
     if not folder.is_dir():
-        raise ValueError(f"not a folder: {folder}")
+        raise SgrError(f"not a folder: {folder}")
     out: dict = {"cases": [], "tasks": {}}
     if any(folder.glob("returns_*.npz")):  # tests/data/evogym32
         out["tasks"] = validate_evogym32(folder)
@@ -156,7 +157,7 @@ def validate(folder: str | Path) -> dict:
         for task, vals in validate_returns(folder)["tasks"].items():
             out["tasks"].setdefault(task, {}).update(vals)
     if not found:
-        raise ValueError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
+        raise SgrError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
     return out
 
 

@@ -8,6 +8,8 @@ import sys
 import threading
 import time
 
+from tsim.errors import SgrError
+
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
 # warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0
 # keeps Taichi from wrapping every kernel call because stdout is redirected meanwhile (no kernel
@@ -84,10 +86,10 @@ def requested_arch(arch: str | None = None) -> str:
     if arch is None and os.environ.get("SGR_ARCH"):
         arch = os.environ["SGR_ARCH"]
         if arch not in ARCHS:
-            raise ValueError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
+            raise SgrError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
     arch = arch or "cpu"
     if arch not in ARCHS:
-        raise ValueError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
+        raise SgrError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
     return arch
 
 
@@ -142,8 +144,8 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
         what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
-        raise ValueError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
-                         "use SGR_ARCH=cpu")
+        raise SgrError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
+                       "use SGR_ARCH=cpu")
     try:
         check_real_type(arch, precision, from_env, prec_from_env)
     except ValueError:
@@ -261,7 +263,7 @@ def _threads_env() -> int | None:
     except ValueError:
         n = 0
     if n < 1:
-        raise ValueError(f"SGR_THREADS={text}: must be a positive int")
+        raise SgrError(f"SGR_THREADS={text}: must be a positive int")
     return n
 
 

@@ -21,6 +21,8 @@ from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connecte
 from tsim.launch import CachedLaunch
 from tsim.world import World
 
+# a world's status codes (`BatchSim.status`): only RUNNING worlds advance
+RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
 
 def _as_body(body: Body | object, passive_ok: bool) -> Body:
     matrix = body.matrix if isinstance(body, Body) else body
@@ -300,12 +302,56 @@ class BatchSim:
         sel = mask & (self.counts[:, K.STATUS] == K.RUNNING)
         self.counts[sel, K.STATUS] = K.INACTIVE
 
+    def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0) -> None:
+        """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
+        compare them; every variant gives the same bits): `serial` runs on the calling thread
+        (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
+        arrays that many tiers bigger than needed."""
+        if serial is not None:
+            self._serial = bool(serial)
+        self.capacity_tier += int(extra_capacity_tiers)
+        self._launch = None
+
+    def ignore_robot_self_collisions(self) -> None:
+        """No instability rule for these worlds: evogym's rule counts only robots' self-collisions,
+        and a world led by an object that is no robot (sgr.evogym's EvoSim without robots) has
+        none. Kept across resets."""
+        self._counts0[:, K.N_SURF_ROBOT] = 0
+        self.counts[:, K.N_SURF_ROBOT] = 0
+
+    def set_world_status(self, w: int, status: int) -> None:
+        """Set world w's status code (RUNNING, UNSTABLE, ...): RUNNING lets a frozen world advance
+        again after its state was restored (evogym's revert); UNSTABLE freezes it."""
+        self.counts[w, K.STATUS] = status
+
     # ------------------------------------------------------------------ read-out
     @property
     def status(self) -> np.ndarray:
-        """(B,) copy of each world's status code (kernels.RUNNING, UNSTABLE, NONFINITE, INACTIVE);
-        only RUNNING worlds advance."""
+        """(B,) copy of each world's status code (RUNNING, UNSTABLE, NONFINITE, INACTIVE, in this
+        module); only RUNNING worlds advance."""
         return self.counts[:, K.STATUS].copy()
+
+    def world_status(self, w: int) -> int:
+        """World w's status code, as `status` (a scalar read, cheap enough for every step)."""
+        return int(self.counts[w, K.STATUS])
+
+    @property
+    def n_points(self) -> np.ndarray:
+        """(B,) simulated points of each world: its robot's, then its free objects' (`state`'s
+        rows, in that order; padding after them)."""
+        return self.counts[:, K.N_PTS].copy()
+
+    def object_offsets(self, k: int) -> np.ndarray:
+        """(B,) the row in `state` where free object k (`free_objects[k]`) starts in each world;
+        its points follow in its body's order."""
+        return np.array(self._obj_offsets[k])
+
+    @property
+    def initial_positions(self) -> np.ndarray:
+        """(B, P, 2) every point's position at reset, as `state`'s rows (the reference of an
+        object's orientation). Writing it moves where the next reset starts, as `place_object`
+        and `shift_robots` do."""
+        return self._pos0
 
     @property
     def unstable(self) -> np.ndarray:
