@@ -217,6 +217,13 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
     return _replay(champ, body, ctrl, _replay_noise(replays + 1, eps, kind, offset, seed))
 
 
+def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
+          eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
+    """The verdict (evolve/runs/verdict.py) on a run folder's champion.json: its robot replayed
+    from the JSON alone, `replays` times under uniform(+-eps) and once without noise."""
+    return verdict_rule.from_returns(replay_champion(run_dir, replays, eps), eps)
+
+
 def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
     """The perturbations of replays 0 (none) to n - 1."""
     if kind not in NOISE_KINDS:

@@ -211,7 +211,7 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
-            from evolve.runs.verdict import judge
+            from evolve.runs.champion import judge
 
             best = self.run.champion()
             print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "

@@ -69,10 +69,3 @@ def from_returns(returns: np.ndarray, eps: float = EPS) -> Verdict:
     if len(returns) < 2:
         raise ValueError("a verdict needs the noise-free return and at least one noisy replay")
     return Verdict(float(returns[0]), float(returns[1:].mean()), len(returns) - 1, eps)
-
-
-def judge(run_dir, replays: int = REPLAYS, eps: float = EPS) -> Verdict:
-    """The verdict on a run folder's champion.json (its robot replayed from the JSON alone)."""
-    from evolve.runs.champion import replay_champion
-
-    return from_returns(replay_champion(run_dir, replays, eps), eps)
