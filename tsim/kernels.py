@@ -22,6 +22,7 @@ state copied into local arrays (see the note above `capacity`).
 
 
 from tsim import constants as C
+from tsim import portable
 from tsim.runtime import PROFILE_SKIP, ti  # ti imported there with its banner sent to stderr
 
 # counts columns
@@ -235,7 +236,7 @@ def _resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, sc
                     proj = -proj
                     ut = -ut
                 fric = (C.CONTACT_FRICTION * ut * (-1.0) * C.FRICTION_DYN * mag
-                        * ti.tanh(proj / (C.FRICTION_DYN * mag)))
+                        * portable.tanh(proj / (C.FRICTION_DYN * mag)))
                 if pid >= 0:
                     fp = scale * (nf + damp_p + fric)
                     fcol[2 * pid] += fp[0]
@@ -653,7 +654,7 @@ def _rk4(n_pts, n_edges, pos: ti.template(), vel: ti.template(), fcol: ti.templa
                             normal = y * (-C.GROUND_K)
                             fy += normal
                             fx += ((-10.0 * C.FRICTION_DYN) * normal
-                                   * ti.tanh(vx * normal * C.FRICTION_DYN))
+                                   * portable.tanh(vx * normal * C.FRICTION_DYN))
                     acc = vec2(fx / C.POINT_MASS, fy / C.POINT_MASS)
                     for d in ti.static(range(2)):
                         i = 2 * p + d

@@ -94,6 +94,23 @@ PIN_WORK = 1_000_000  # multiply-adds each worker runs after the rendezvous (~1.
 PIN_SPIN_LIMIT = 20_000_000  # spins (~0.1-0.5 s) after which a task stops waiting for the others
 
 
+# Taichi's backends that compile to SPIR-V: they have no 64-bit transcendental functions
+SPIRV_ARCHS = ("vulkan", "metal", "opengl", "gles")
+
+
+def backend() -> str:
+    """The Taichi arch the kernels run on ("x64", "arm64", "cuda", "vulkan", "metal", ...):
+    what "cpu" or "gpu" resolved to."""
+    return ti.lang.impl.current_cfg().arch.name
+
+
+def native_tanh() -> bool:
+    """Whether `ti.tanh` compiles for the real type on this backend (not f64 on SPIR-V): read
+    when a kernel is compiled (tsim/portable.py)."""
+    f64 = ti.lang.impl.get_runtime().default_fp == ti.f64
+    return not (f64 and backend() in SPIRV_ARCHS)
+
+
 def pin_threads() -> dict[int, int]:
     """Pin each of Taichi's CPU worker threads to its own CPU when they are as many as the CPUs
     this process may use (the `sgr bench` / one-process case); $SGR_PIN=0 turns it off.
