@@ -28,8 +28,9 @@ sys.path.insert(0, str(ROOT))
 MEDIAN_TOL = 1e-9  # the CPU's median |return - evogym| is <= 7e-11 on every task
 
 
-def record(robots: int, steps: int, seed: int) -> dict:
-    """{task: {"returns": [...], "final_x": [...]}} on this process's arch."""
+def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None) -> dict:
+    """{task: {"returns": [...], "final_x": [...]}} on this process's arch (every task, or
+    `tasks`)."""
     from tasks.bench import sinusoid
     from tasks.env import BatchEnv
     from tasks.specs import TASKS
@@ -38,7 +39,7 @@ def record(robots: int, steps: int, seed: int) -> dict:
 
     arch = runtime.init()
     out: dict = {"arch": arch, "robots": robots, "steps": steps, "seed": seed, "tasks": {}}
-    for task in TASKS:
+    for task in tasks or TASKS:
         rng = np.random.default_rng(seed)
         bodies = [sample_robot((5, 5), rng) for _ in range(robots)]
         t0 = time.perf_counter()
@@ -77,6 +78,7 @@ def main() -> int:
     p.add_argument("--robots", type=int, default=16)
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--tasks", nargs="+", help="these tasks only (default: all 32)")
     p.add_argument("--out", help="write the record (JSON) here")
     p.add_argument("--compare", nargs=2, metavar="JSON", help="compare two records instead")
     args = p.parse_args()
@@ -87,7 +89,7 @@ def main() -> int:
         print("\n".join(lines))
         print("FAILED: " + "; ".join(bad) if bad else f"{b['arch']} matches {a['arch']} on every task")
         return 1 if bad else 0
-    rec = record(args.robots, args.steps, args.seed)
+    rec = record(args.robots, args.steps, args.seed, args.tasks)
     text = json.dumps(rec)
     if args.out:
         Path(args.out).write_text(text)

@@ -4,6 +4,7 @@ import contextlib
 import io
 import os
 import sys
+import tempfile
 import threading
 import time
 
@@ -67,17 +68,23 @@ def init(arch: str | None = None) -> str:
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
     # log_level ERROR while Taichi probes the arch: its probe warnings (e.g. "libcuda.so lib not
     # found") and its fallback to the CPU would otherwise print before our error
+    # Taichi's C++ side prints its probe errors ("RHI Error: Can not create Vulkan instance") on
+    # file descriptor 2: they are held back and shown only if the arch works
     out = io.StringIO()
-    with contextlib.redirect_stdout(out):
+    with contextlib.redirect_stdout(out), _held_stderr() as held:
         ti.init(arch=_taichi_archs(arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
                 advanced_optimization=False, make_cpu_multithreading_loop=False,
                 log_level=ti.ERROR, **kwargs)
     ti.set_logging_level(ti.WARN)
+    what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
-        what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
-        raise ValueError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
-                         "use SGR_ARCH=cpu")
+        raise ValueError(f"{what}: {MISSING.get(arch, 'no usable GPU')}; use SGR_ARCH=cpu")
+    if backend() in SPIRV_ARCHS and not _runs_f64():
+        ti.reset()
+        raise ValueError(f"{what}: this {backend()} device has no 64-bit floats, which sgr's f64 "
+                         "physics needs; use SGR_ARCH=cpu (or f32, SGR_PRECISION=f32, where available)")
+    sys.stderr.write(held.getvalue())
     for line in out.getvalue().splitlines():
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
@@ -85,6 +92,58 @@ def init(arch: str | None = None) -> str:
     if arch == "cpu":
         pin_threads()
     return _ARCH
+
+
+# what is missing when Taichi cannot start an arch (it does not say why)
+MISSING = {
+    "cuda": "Taichi found no CUDA device here (it needs an NVIDIA GPU and its driver, libcuda.so)",
+    "metal": "Taichi found no Metal device here (Metal exists only on macOS with an Apple or AMD GPU)",
+    "vulkan": "Taichi found no Vulkan device here (it needs a Vulkan driver: a GPU's, or Mesa's "
+              "software one, Debian's mesa-vulkan-drivers)",
+    "gpu": "Taichi found no GPU here (tried CUDA, Metal and Vulkan)",
+}
+
+
+@contextlib.contextmanager
+def _held_stderr():
+    """Collects what is written to file descriptor 2 meanwhile (C++ code included) into a
+    StringIO, yielded; nothing is shown."""
+    held = io.StringIO()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no real stderr (e.g. under some test runners)
+        yield held
+        return
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield held
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            held.write(tmp.read().decode(errors="replace"))
+
+
+def _runs_f64() -> bool:
+    """Whether a small f64 kernel (multiply-add, square root, division) compiles and runs here:
+    a SPIR-V device may lack 64-bit floats (Metal always does)."""
+    try:
+        with _held_stderr():
+            a = ti.ndarray(ti.f64, 2)
+            _f64_probe(a)
+            ti.sync()
+            return abs(a.to_numpy()[1] - 0.5) < 1e-12
+    except Exception:  # noqa: BLE001 - Taichi raises RuntimeError or its own errors
+        return False
+
+
+@ti.kernel
+def _f64_probe(a: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+    a[0] = 3.0
+    a[1] = ti.sqrt(a[0] * a[0] + 7.0) / 8.0  # sqrt(16) / 8
 
 
 PINNED: dict[int, int] = {}  # Taichi worker thread id -> the CPU it is pinned to
