@@ -17,7 +17,7 @@ grep -v '^#' bench/device-requirements.txt | grep . > "$DIR/requirements.txt"
 n=$(ls "$DIR"/*.whl | wc -l)
 want=$(wc -l < "$DIR/requirements.txt")
 [ "$n" -eq "$want" ] || { echo "device_wheels: $n wheels in $DIR for $want pins (an old version left there?)" >&2; exit 1; }
-"$PY" bench/strip_wheel.py "$DIR"/taichi-*.whl taichi/_lib/c_api/
+"$PY" bench/strip_wheel.py "$DIR"/taichi-*.whl taichi/_lib/c_api/ taichi/examples/
 "$PY" - "$DIR" <<'PY'
 import json, os, sys
 d = sys.argv[1]
