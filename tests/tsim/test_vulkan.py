@@ -119,7 +119,8 @@ def test_vulkan_matches_the_cpu_within_the_chaos_floor_on_every_task(vulkan, pre
     assert not bad, bad
 
 
-BENCH = "from evolve.cli import main; main(['bench', '--task', 'Walker-v0', '--robots', '2', '--steps', '1'])"
+BENCH = ("from evolve.cli import main; "
+         "raise SystemExit(main(['bench', '--task', 'Walker-v0', '--robots', '2', '--steps', '1']))")
 
 
 @pytest.mark.parametrize("arch, missing", [
