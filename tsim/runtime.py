@@ -5,6 +5,7 @@ import contextlib
 import io
 import os
 import sys
+import tempfile
 import threading
 import time
 
@@ -135,22 +136,28 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
     # log_level ERROR while Taichi probes the arch: its probe warnings (e.g. "libcuda.so lib not
     # found") and its fallback to the CPU would otherwise print before our error
+    # Taichi's C++ side prints its probe errors ("RHI Error: Can not create Vulkan instance") on
+    # file descriptor 2: they are held back and shown only if the arch works
     out = io.StringIO()
-    with contextlib.redirect_stdout(out):
+    with contextlib.redirect_stdout(out), _held_stderr() as held:
         ti.init(arch=_taichi_archs(arch), default_fp=ti.f32 if precision == "f32" else ti.f64,
                 default_ip=ti.i32, fast_math=False, advanced_optimization=False,
                 make_cpu_multithreading_loop=False, log_level=ti.ERROR, **kwargs)
     ti.set_logging_level(ti.WARN)
+    what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
-        what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
-        raise SgrError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
-                       "use SGR_ARCH=cpu")
+        raise SgrError(f"{what}: {MISSING.get(arch, 'no usable GPU')}; use SGR_ARCH=cpu")
     try:
         check_real_type(arch, precision, from_env, prec_from_env)
     except ValueError:
         ti.reset()
         raise
+    if precision == "f64" and backend() in SPIRV_ARCHS and not _runs_f64():
+        ti.reset()
+        raise SgrError(f"{what}: this {backend()} device has no 64-bit floats, which sgr's f64 "
+                       "physics needs; use SGR_ARCH=cpu, or SGR_PRECISION=f32")
+    sys.stderr.write(held.getvalue())
     for line in out.getvalue().splitlines():
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
@@ -161,11 +168,80 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     return _ARCH
 
 
+# what is missing when Taichi cannot start an arch (it does not say why)
+MISSING = {
+    "cuda": "Taichi found no CUDA device here (it needs an NVIDIA GPU and its driver, libcuda.so)",
+    "metal": "Taichi found no Metal device here (Metal exists only on macOS with an Apple or AMD GPU)",
+    "vulkan": "Taichi found no Vulkan device here (it needs a Vulkan driver: a GPU's, or Mesa's "
+              "software one, Debian's mesa-vulkan-drivers)",
+    "gpu": "Taichi found no GPU here (tried CUDA, Metal and Vulkan)",
+}
+
+
+@contextlib.contextmanager
+def _held_stderr():
+    """Collects what is written to file descriptor 2 meanwhile (C++ code included) into a
+    StringIO, yielded; nothing is shown."""
+    held = io.StringIO()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no real stderr (e.g. under some test runners)
+        yield held
+        return
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield held
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            held.write(tmp.read().decode(errors="replace"))
+
+
+def _runs_f64() -> bool:
+    """Whether a small f64 kernel (multiply-add, square root, division) compiles and runs here:
+    a SPIR-V device may lack 64-bit floats (Metal always does)."""
+    try:
+        with _held_stderr():
+            a = ti.ndarray(ti.f64, 2)
+            _f64_probe(a)
+            ti.sync()
+            return abs(a.to_numpy()[1] - 0.5) < 1e-12
+    except Exception:  # noqa: BLE001 - Taichi raises RuntimeError or its own errors
+        return False
+
+
+@ti.kernel
+def _f64_probe(a: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+    a[0] = 3.0
+    a[1] = ti.sqrt(a[0] * a[0] + 7.0) / 8.0  # sqrt(16) / 8
+
+
 PINNED: dict[int, int] = {}  # Taichi worker thread id -> the CPU it is pinned to
 PIN_TRIES = 8  # rendezvous loops at most to single out the workers, PIN_PAUSE_S apart
 PIN_PAUSE_S = 0.005  # lets another thread's burst (Taichi's, after a first launch) end
 PIN_WORK = 1_000_000  # multiply-adds each worker runs after the rendezvous (~1.3 ms)
 PIN_SPIN_LIMIT = 20_000_000  # spins (~0.1-0.5 s) after which a task stops waiting for the others
+
+
+# Taichi's backends that compile to SPIR-V: they have no 64-bit transcendental functions
+SPIRV_ARCHS = ("vulkan", "metal", "opengl", "gles")
+
+
+def backend() -> str:
+    """The Taichi arch the kernels run on ("x64", "arm64", "cuda", "vulkan", "metal", ...):
+    what "cpu" or "gpu" resolved to."""
+    return ti.lang.impl.current_cfg().arch.name
+
+
+def native_tanh() -> bool:
+    """Whether `ti.tanh` compiles for the real type on this backend (not f64 on SPIR-V): read
+    when a kernel is compiled (tsim/portable.py)."""
+    f64 = ti.lang.impl.get_runtime().default_fp == ti.f64
+    return not (f64 and backend() in SPIRV_ARCHS)
 
 
 def pin_threads() -> dict[int, int]:

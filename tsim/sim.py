@@ -16,7 +16,7 @@ import numpy as np
 from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
-from tsim import runtime
+from tsim import runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
 from tsim.launch import CachedLaunch
 from tsim.world import World
@@ -179,6 +179,7 @@ class BatchSim:
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         self._launch: CachedLaunch | None = None  # see `step`
+        self._spirv = runtime.backend() in runtime.SPIRV_ARCHS  # see tsim/spirv.py
         # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
         # that they stay on the device instead of crossing the bus at every launch. On the CPU the
         # numpy arrays themselves are passed (flattened once, so every step passes the same
@@ -283,6 +284,9 @@ class BatchSim:
                     self.pair_list)
             if self._serial:
                 kernel = K.step_kernel_serial
+            elif self._spirv:
+                kernel = spirv.step_kernel_sized
+                args = (*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds))
             else:
                 kernel = K.step_kernel
                 args = (*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)

@@ -2,6 +2,7 @@
 forces frozen across the stages), and the fixed points held where they were."""
 
 from tsim import constants as C
+from tsim import portable
 from tsim.kernels.layout import N_FIXED
 from tsim.kernels.springs import spring_forces
 from tsim.runtime import ti
@@ -39,7 +40,7 @@ def rk4(n_pts, n_edges, s: ti.template()):
                             normal = y * (-C.GROUND_K)
                             fy += normal
                             fx += ((-10.0 * C.FRICTION_DYN) * normal
-                                   * ti.tanh(vx * normal * C.FRICTION_DYN))
+                                   * portable.tanh(vx * normal * C.FRICTION_DYN))
                     acc = ti.Vector([fx / C.POINT_MASS, fy / C.POINT_MASS])
                     for d in ti.static(range(2)):
                         i = 2 * p + d

@@ -7,6 +7,7 @@ update of fixed points.
 """
 
 from tsim import constants as C
+from tsim import portable
 from tsim.kernels import layout as L
 from tsim.kernels.geometry import dist_point_edge, intersects, normalized, point_in_quad
 from tsim.runtime import ti
@@ -89,7 +90,7 @@ def resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, sca
                     proj = -proj
                     ut = -ut
                 fric = (C.CONTACT_FRICTION * ut * (-1.0) * C.FRICTION_DYN * mag
-                        * ti.tanh(proj / (C.FRICTION_DYN * mag)))
+                        * portable.tanh(proj / (C.FRICTION_DYN * mag)))
                 if pid >= 0:
                     fp = scale * (nf + damp_p + fric)
                     fcol[2 * pid] += fp[0]
