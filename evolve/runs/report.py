@@ -159,6 +159,8 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         row["best_final"] = float(best[-1]) if len(best) else math.nan
         if robustness and (d / "champion.json").is_file():
             row.update(champion_robustness(d, replays, levels))
+            if verdict_rule.EPS in levels:  # the gallery's caption says it too
+                row["verdict"] = _verdict(row).label
         rows.append(row)
     return rows
 

@@ -63,11 +63,13 @@ def test_the_workers_rule_is_the_same_in_the_config_the_flag_and_the_pool(tmp_pa
 def test_the_run_folder_records_arch_and_precision(tmp_path, repo_root, monkeypatch):
     monkeypatch.delenv("SGR_ARCH", raising=False)
     monkeypatch.setenv("SGR_PRECISION", "f32")
-    (tmp_path / "c.yaml").write_text(yaml.safe_dump(tiny(repo_root, arch="cuda", precision="f64")))
-    cfg = load_config(tmp_path / "c.yaml")  # a run's config.yaml used as a config: recorded keys replaced
-    assert (cfg.arch, cfg.precision) == ("cpu", "f32")
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(tiny(repo_root, arch="cuda")))
+    cfg = load_config(tmp_path / "c.yaml")  # a run's config.yaml used as a config: its arch replaced
+    assert (cfg.arch, cfg.precision) == ("cpu", "f32")  # precision left out: $SGR_PRECISION's
+    (tmp_path / "d.yaml").write_text(yaml.safe_dump(tiny(repo_root, arch="cuda", precision="f64")))
+    assert load_config(tmp_path / "d.yaml").precision == "f64"  # a config's own precision is chosen
     monkeypatch.setenv("SGR_PRECISION", "f16")
-    with pytest.raises(ValueError, match="SGR_PRECISION=f16: use one of f64, f32"):
+    with pytest.raises(ValueError, match="SGR_PRECISION=f16: unknown precision; use one of f64, f32"):
         load_config(tmp_path / "c.yaml")
 
 
