@@ -147,7 +147,8 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
-        raise SgrError(f"{what}: {MISSING.get(arch, 'no usable GPU')}; use SGR_ARCH=cpu")
+        raise SgrError(f"{what}: Taichi cannot run on {arch} here: {MISSING.get(arch, 'no usable GPU')}; "
+                       "use SGR_ARCH=cpu")
     try:
         check_real_type(arch, precision, from_env, prec_from_env)
     except ValueError:
@@ -170,11 +171,11 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
 
 # what is missing when Taichi cannot start an arch (it does not say why)
 MISSING = {
-    "cuda": "Taichi found no CUDA device here (it needs an NVIDIA GPU and its driver, libcuda.so)",
-    "metal": "Taichi found no Metal device here (Metal exists only on macOS with an Apple or AMD GPU)",
-    "vulkan": "Taichi found no Vulkan device here (it needs a Vulkan driver: a GPU's, or Mesa's "
-              "software one, Debian's mesa-vulkan-drivers)",
-    "gpu": "Taichi found no GPU here (tried CUDA, Metal and Vulkan)",
+    "cuda": "no CUDA device (it needs an NVIDIA GPU and its driver, libcuda.so)",
+    "metal": "no Metal device (Metal exists only on macOS with an Apple or AMD GPU)",
+    "vulkan": "no Vulkan device (it needs a Vulkan driver: a GPU's, or Mesa's software one, Debian's "
+              "mesa-vulkan-drivers)",
+    "gpu": "no GPU (tried CUDA, Metal and Vulkan)",
 }
 
 
