@@ -71,7 +71,7 @@ BREAKS = [
     # contact-order change, a pair's two directions or a voxel's terrain partners visited in the
     # other order, changes no recorded number: docs/VALIDATION.md, "Catch rate")
     Break("force_order", "spring forces added to their second ends before their first ends "
-          "(not evogym's order)", "tsim/kernels.py", "    for half in ti.static(range(2)):",
+          "(not evogym's order)", "tsim/kernels/springs.py", "    for half in ti.static(range(2)):",
           "    for half in ti.static((1, 0)):", (E32,)),
     # issue 27: a spring constant off by 1e-6 relative, which only the recorded evogym data sees
     Break("k_soft_1e6", "soft springs 1e-6 relative stiffer (K_SOFT_MAIN)", "tsim/constants.py",

@@ -4,7 +4,7 @@
 # so that they travel with the working tree:  bash bench/device_wheels.sh [DIR]
 # taichi's C API (taichi/_lib/c_api/, 20 MB packed, never loaded by `import taichi`) is dropped from
 # its wheel (bench/strip_wheel.py), and every file is checked against bench/device-wheels.json, the
-# sizes tests/test_tree_size.py counts against the 60 MiB budget.
+# sizes tests/test_tree_size.py counts against the 56 MiB budget.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 DIR=${1:-device-wheels}
@@ -17,7 +17,7 @@ grep -v '^#' bench/device-requirements.txt | grep . > "$DIR/requirements.txt"
 n=$(ls "$DIR"/*.whl | wc -l)
 want=$(wc -l < "$DIR/requirements.txt")
 [ "$n" -eq "$want" ] || { echo "device_wheels: $n wheels in $DIR for $want pins (an old version left there?)" >&2; exit 1; }
-"$PY" bench/strip_wheel.py "$DIR"/taichi-*.whl taichi/_lib/c_api/
+"$PY" bench/strip_wheel.py "$DIR"/taichi-*.whl --symbols taichi/_lib/c_api/ taichi/examples/
 "$PY" - "$DIR" <<'PY'
 import json, os, sys
 d = sys.argv[1]

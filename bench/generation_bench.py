@@ -14,7 +14,7 @@ import statistics
 import tempfile
 import time
 
-from evolve.cli import workers_arg
+from evolve.cli.common import workers_arg
 from evolve.runs.experiment import Experiment
 from tasks.specs import task_spec
 

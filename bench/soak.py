@@ -28,7 +28,7 @@ from pathlib import Path
 
 import yaml
 
-from evolve.cli import workers_arg
+from evolve.cli.common import workers_arg
 from evolve.runs.experiment import Experiment
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -22,7 +22,7 @@ import importlib
 import tasks  # noqa: F401  (registers the gymnasium ids: gym.make("sgr/Walker-v0") after import sgr)
 
 _FROM = {
-    "tsim": ["BatchSim", "Body", "Renderer", "World", "build_body", "check_robot", "has_actuator",
+    "tsim": ["BatchSim", "Body", "Renderer", "SgrError", "World", "build_body", "check_robot", "has_actuator",
              "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix",
              "write_gif"],
     "tasks": ["TASKS", "BatchEnv", "Measure", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "register",

@@ -42,6 +42,7 @@ def bench_bodies(task: str, bodies: list[np.ndarray], steps: int, physics: bool 
     wall = time.perf_counter() - t0
     out = {"robot_steps_per_s": robots * steps / wall, "compile_s": compile_s,
            "threads": runtime.threads(), "pinned": len(runtime.PINNED) > 0, "robots": robots,
+           "precision": runtime.precision(),
            "steps": steps, "task": task}
     if physics:  # no observations or rewards
         env.reset()

@@ -1,6 +1,6 @@
 """The `sgr` commands that need only tasks and the simulator (demo, validate, bench), and the
 argument helpers every command shares; `register_task_commands` adds them to the dispatcher in
-evolve/cli.py."""
+evolve/cli/ (the sgr dispatcher)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,13 @@ from pathlib import Path
 
 import numpy as np
 
+from tsim.errors import SgrError
 from tsim.files import atomic_write
+
+# tsim.runtime.PRECISIONS, written out: importing tsim starts Taichi's import (seconds), which a
+# parser must not wait for (tests/tasks/test_precision.py checks they agree)
+PRECISIONS = ("f64", "f32")
+PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default $SGR_PRECISION, else f64"
 
 
 def positive(cast):
@@ -46,11 +52,11 @@ def output_path(path: str | Path, flag: str = "--out", *, folder: bool = False) 
     work is done."""
     path = Path(path)
     if path.exists() and path.is_dir() != folder:
-        raise ValueError(f"{flag} {path}: is a {'file' if folder else 'folder'}")
+        raise SgrError(f"{flag} {path}: is a {'file' if folder else 'folder'}")
     for above in path.parents:
         if above.exists():
             if not above.is_dir():
-                raise ValueError(f"{flag} {path}: {above} is a file, not a folder")
+                raise SgrError(f"{flag} {path}: {above} is a file, not a folder")
             break
     return path
 
@@ -61,28 +67,28 @@ def parse_body(text: str) -> np.ndarray:
     path = Path(text)
     if path.suffix in (".json", ".npy"):
         if not path.is_file():
-            raise ValueError(f"bad body matrix: file not found: {path}")
+            raise SgrError(f"bad body matrix: file not found: {path}")
         if path.suffix == ".npy":
             with path.open("rb") as f:
                 if f.read(6) != b"\x93NUMPY":
-                    raise ValueError(f"bad body matrix: {path}: not a .npy file")
+                    raise SgrError(f"bad body matrix: {path}: not a .npy file")
             try:
                 return np.load(path, allow_pickle=False)
             except (ValueError, EOFError, OSError) as exc:  # e.g. truncated
-                raise ValueError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
+                raise SgrError(f"bad body matrix: {path}: unreadable .npy file ({exc})") from None
         try:
             data = json.loads(path.read_text())
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise ValueError(f"bad body matrix: {path}: not valid JSON ({exc})") from None
+            raise SgrError(f"bad body matrix: {path}: not valid JSON ({exc})") from None
         if isinstance(data, dict):
             if "body" not in data and "matrix" not in data:
-                raise ValueError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
+                raise SgrError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
             data = data.get("body", data.get("matrix"))
         return np.asarray(data)
     rows = text.split(",")
     if not all(r and r.isdigit() for r in rows) or len({len(r) for r in rows}) != 1:
-        raise ValueError(f"bad body matrix: {text!r} is not equal-length rows of digits separated "
-                         "by commas (e.g. 33333,33333,33033,33033,33033)")
+        raise SgrError(f"bad body matrix: {text!r} is not equal-length rows of digits separated "
+                       "by commas (e.g. 33333,33333,33033,33033,33033)")
     return np.array([[int(ch) for ch in r] for r in rows])
 
 
@@ -118,7 +124,9 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     from tasks.validate import validate
+    from tsim import runtime
 
+    runtime.use_precision(args.precision)
     report = validate(args.dir)
     if args.json:
         print(json.dumps(report))
@@ -137,7 +145,9 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
+    from tsim import runtime
 
+    runtime.use_precision(args.precision)
     r = bench(args.task, args.robots, args.steps)
     if args.json:
         print(json.dumps(r))
@@ -145,7 +155,7 @@ def _bench(args: argparse.Namespace) -> int:
         print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
               f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "
               f"{r['physics_robot_steps_per_s']:.0f} (physics only); compile {r['compile_s']:.1f} s; "
-              f"threads {r['threads']}" + (" (pinned)" if r["pinned"] else ""))
+              f"threads {r['threads']}" + (" (pinned)" if r["pinned"] else "") + f"; {r['precision']}")
     return 0
 
 
@@ -161,10 +171,12 @@ def register_task_commands(sub) -> None:
     v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
     v.add_argument("dir")
     v.add_argument("--json", action="store_true")
+    v.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
     b.add_argument("--task", default="Walker-v0")
     b.add_argument("--robots", type=positive(int), default=128)
     b.add_argument("--steps", type=positive(int), default=100)
     b.add_argument("--json", action="store_true")
+    b.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     b.set_defaults(fn=_bench)

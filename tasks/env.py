@@ -1,6 +1,7 @@
 """`BatchEnv`: one task, many robots (bodies may differ), stepped together.
 
-Layout: observations are a (B, max_obs_dim) float64 array, row b holding robot b's evogym
+Layout: observations are a (B, max_obs_dim) array of the simulator's real type (float64, or
+float32 in an f32 process: `tsim.backend`; rewards follow it too), row b holding robot b's evogym
 observation in its first `obs_dims[b]` entries and zeros after; actions are (B, max_actuators) with
 robot b using its first `n_actuators[b]` entries (or a list of per-robot arrays). Rewards,
 `terminated` and `truncated` are (B,) arrays. A robot that terminated stops moving and earns 0 from
@@ -35,21 +36,19 @@ class BatchEnv:
 
     def __init__(self, task: str, bodies: Sequence[Body | object],
                  episode_steps: int | str | None = None, *, arch: str | None = None,
-                 passive_ok: bool = False, seeds: Sequence[int] | int | None = None,
-                 robot_shift: Sequence[float] | None = None):
+                 precision: str | None = None, passive_ok: bool = False,
+                 seeds: Sequence[int] | int | None = None, robot_shift: Sequence[float] | None = None):
         """`robot_shift` (B,) starts each robot that much right of its task's placement
         (`BatchSim.shift_robots`; a perturbed start for robustness tests)."""
         self.spec = task_spec(task)
         self.task = task
-        if episode_steps is None:
-            episode_steps = self.spec.paper_steps
-        elif episode_steps == "evogym":
-            episode_steps = self.spec.evogym_steps
+        episode_steps = self.spec.episode_length(episode_steps)
         if not isinstance(episode_steps, int) or episode_steps < 1:
             raise ValueError(f"episode_steps must be a positive int, 'evogym' or None, got {episode_steps!r}")
         self.episode_steps = episode_steps
         self.sim = BatchSim(task_world(task), bodies, self.spec.origin, arch=arch,
-                            passive_ok=passive_ok)
+                            precision=precision, passive_ok=passive_ok)
+        self.dtype = self.sim.dtype
         if robot_shift is not None:
             self.sim.shift_robots(np.asarray(robot_shift))
         self.n_worlds = self.sim.n_worlds
@@ -61,7 +60,7 @@ class BatchEnv:
         self._mask = np.arange(N)[None, :] < self.n_points[:, None]
         world = self.sim.world
         self._terrain = (np.concatenate([o.pos0 for o in world.fixed_objects], axis=1)
-                         if world.fixed_objects else np.zeros((2, 0)))
+                         if world.fixed_objects else np.zeros((2, 0))).astype(self.dtype, copy=False)
         self._head = self.spec.head_width()
         self._rel_cols = self._relative_columns()
         self._obj_index = {o.name: self._object_index(k) for k, o in enumerate(self.sim.free_objects)}
@@ -92,7 +91,7 @@ class BatchEnv:
     def _object_index(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Row and point indices (B, n) of free object k's points in `sim.state`."""
         n = self.sim.free_objects[k].body.n_points
-        off = np.array(self.sim._obj_offsets[k])
+        off = self.sim.object_offsets(k)
         return np.arange(self.n_worlds)[:, None], off[:, None] + np.arange(n)[None, :]
 
     def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
@@ -124,7 +123,7 @@ class BatchEnv:
     def _object_pos0(self, name: str) -> np.ndarray:
         """(B, n, 2) positions of free object `name` at reset (its orientation's reference)."""
         rows, pts = self._obj_index[name]
-        return self.sim._pos0[rows, pts]
+        return self.sim.initial_positions[rows, pts]
 
     def _measure(self, com: np.ndarray) -> Measure:
         objects = {}
@@ -222,7 +221,7 @@ class BatchEnv:
             over = active & over
             reward = np.where(over, reward + extra, reward)
             done |= over
-        reward = np.where(active, reward, 0.0)
+        reward = np.where(active, reward, 0.0).astype(self.dtype, copy=False)
         self.terminated |= done
         self.sim.deactivate(self.terminated)
         self._obs = self._observe(com_after, vcom_after)
@@ -253,7 +252,7 @@ class BatchEnv:
                         pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
                         object_pos0=self._object_pos0, state=self.task_state,
                         object_now=self._object_now)
-        obs = np.zeros((B, self.max_obs_dim + 1))
+        obs = np.zeros((B, self.max_obs_dim + 1), dtype=self.dtype)
         col, after_points = 0, None  # blocks after the points start at head + 2 n per robot
         for block in self.spec.observation:
             if block.width < 0:

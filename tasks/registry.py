@@ -25,6 +25,7 @@ import gymnasium as gym
 
 from tasks.spec import TaskSpec
 from tasks.specs import BUILTIN, TASKS, task_world
+from tsim.errors import SgrError
 
 _SGR = ("tasks", "tsim", "evolve")
 _TRUST_ALL = False  # --trust-imports: import code named in any file, whoever wrote it
@@ -40,11 +41,11 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
     if not isinstance(spec, TaskSpec):
         raise TypeError(f"register takes a tasks.TaskSpec, got {type(spec).__name__}")
     if spec.name in BUILTIN:
-        raise ValueError(f"task {spec.name!r} is one of sgr's own tasks; give yours another name")
+        raise SgrError(f"task {spec.name!r} is one of sgr's own tasks; give yours another name")
     old = TASKS.get(spec.name)
     if old is not None and old is not spec and not replace:
-        raise ValueError(f"task {spec.name!r} is registered already; register(spec, replace=True) "
-                         "replaces it")
+        raise SgrError(f"task {spec.name!r} is registered already; register(spec, replace=True) "
+                       "replaces it")
     TASKS[spec.name] = spec
     task_world.cache_clear()
     env_id = f"sgr/{spec.name}"
@@ -73,24 +74,29 @@ def _yours(path: Path) -> bool:
     return st.st_uid == os.getuid() and not st.st_mode & 0o022
 
 
+class TaskModuleError(RuntimeError):
+    """A user's task module raised while it was imported. Not an SgrError: the `sgr` command shows
+    the traceback of the user's own code (chained as its cause)."""
+
+
 def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = None) -> None:
     """Import the module that registers your tasks: a module name (`mytasks`) or a .py file
     (relative to `base`, default the current folder). Importing the same file twice runs it once.
     `named_in`: the file in a run or sweep folder that names `ref` (resuming, reporting); its code
     is imported only when that file and the .py are yours alone (`_yours`) or after
-    `trust_imports()`, since a folder someone else could write must not run code. ValueError naming
-    `ref` when it cannot or may not be imported."""
+    `trust_imports()`, since a folder someone else could write must not run code. SgrError naming
+    `ref` when it cannot or may not be imported; TaskModuleError when its code raises."""
     path = None
     if ref.endswith(".py"):
         path = Path(ref) if Path(ref).is_absolute() else (base or Path.cwd()) / ref
         path = path.resolve()
         if not path.is_file():
-            raise ValueError(f"task module {ref!r}: file not found: {path}")
+            raise SgrError(f"task module {ref!r}: file not found: {path}")
     if named_in is not None and not _TRUST_ALL:
         others = [p for p in (Path(named_in), path) if p is not None and not _yours(p)]
         if others:
-            raise ValueError(f"{named_in} names code to import ({ref}) and {others[0]} could have been "
-                             f"written by someone else: {HOW_TO_TRUST}")
+            raise SgrError(f"{named_in} names code to import ({ref}) and {others[0]} could have been "
+                           f"written by someone else: {HOW_TO_TRUST}")
     if path is not None:
         name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
         if name in sys.modules:
@@ -100,15 +106,16 @@ def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = 
         sys.modules[name] = module  # cloudpickle and dataclasses look modules up by name
         try:
             loader.loader.exec_module(module)
-        except Exception as exc:
+        except Exception as exc:  # a bug in the user's code: its traceback is theirs to read
             del sys.modules[name]
-            raise ValueError(f"task module {ref!r}: {type(exc).__name__}: {exc}") from None
+            raise TaskModuleError(f"task module {path} raised {type(exc).__name__}: {exc}; "
+                                  "its traceback is above") from exc
         return
     try:
         importlib.import_module(ref)
     except ImportError as exc:
-        raise ValueError(f"task module {ref!r} cannot be imported ({exc}); give a module on the path "
-                         "or a .py file") from None
+        raise SgrError(f"task module {ref!r} cannot be imported ({exc}); give a module on the path "
+                       "or a .py file") from None
 
 
 def load_task_file(path: Path, named_in: Path) -> str:
@@ -120,14 +127,14 @@ def load_task_file(path: Path, named_in: Path) -> str:
     if not _TRUST_ALL:
         others = [p for p in (Path(named_in), path) if not _yours(p)]
         if others:
-            raise ValueError(f"{path} holds the code of the run's own task, and {others[0]} could have "
+            raise SgrError(f"{path} holds the code of the run's own task, and {others[0]} could have "
                              f"been written by someone else: {HOW_TO_TRUST}")
     try:
         spec = pickle.loads(path.read_bytes())
     except Exception as exc:  # a damaged file, or code that no longer loads (a module gone)
-        raise ValueError(f"{path}: the run's task does not load ({type(exc).__name__}: {exc})") from None
+        raise SgrError(f"{path}: the run's task does not load ({type(exc).__name__}: {exc})") from None
     if not isinstance(spec, TaskSpec):
-        raise ValueError(f"{path}: not a task (a pickled {type(spec).__name__})")
+        raise SgrError(f"{path}: not a task (a pickled {type(spec).__name__})")
     if spec.name not in TASKS:
         register(spec)
     return spec.name

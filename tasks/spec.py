@@ -92,6 +92,11 @@ class TaskSpec:
     objects: tuple[AddedObject, ...] = ()  # objects added in code, in the order evogym adds them
     placement: Placement | None = None  # cells of the per_world objects from a world's state
 
+    def episode_length(self, steps: int | str | None) -> int:
+        """The episode length that `steps` stands for: None is the paper's, "evogym" evogym's, an
+        int itself (the one place these are resolved)."""
+        return self.paper_steps if steps is None else self.evogym_steps if steps == "evogym" else steps
+
     def __post_init__(self) -> None:
         """A per_world object with no placement function (or a placement with no per_world object
         to place) would otherwise fail only at the first reset, far from the spec: fail here, at

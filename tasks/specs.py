@@ -28,6 +28,7 @@ from tasks.suite import (
     traverser,
     walker,
 )
+from tsim.errors import SgrError
 from tsim.world import World, add_world_finder, load_object, load_world
 
 TASKS: dict[str, TaskSpec] = {s.name: s for s in (
@@ -91,7 +92,7 @@ def task_spec(name: str) -> TaskSpec:
     try:
         return TASKS[name]
     except (KeyError, TypeError):
-        raise ValueError(unknown_task(name)) from None
+        raise SgrError(unknown_task(name)) from None
 
 
 @cache
@@ -109,8 +110,8 @@ def task_world(name: str) -> World:
     elif Path(spec.world).is_file():
         world = load_world(spec.world)
     else:
-        raise ValueError(f"task {name}: world file {spec.world!r} is neither in tasks/worlds nor a path "
-                         "that exists")
+        raise SgrError(f"task {name}: world file {spec.world!r} is neither in tasks/worlds nor a path "
+                       "that exists")
     if not spec.objects:
         return world
     extra = []

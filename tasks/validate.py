@@ -15,22 +15,24 @@ import numpy as np
 from scipy.stats import spearmanr
 
 from tasks.env import BatchEnv
+from tsim import runtime
+from tsim.errors import SgrError
 
 
 def _json(path: Path):
     try:
         return json.loads(path.read_text())
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{path}: not valid JSON ({exc})") from None
+        raise SgrError(f"{path}: not valid JSON ({exc})") from None
 
 
 def _npz(path: Path):
     if not zipfile.is_zipfile(path):
-        raise ValueError(f"{path}: not a .npz file")
+        raise SgrError(f"{path}: not a .npz file")
     try:
         return np.load(path, allow_pickle=False)
     except (ValueError, EOFError, OSError, zipfile.BadZipFile) as exc:
-        raise ValueError(f"{path}: unreadable .npz file ({exc})") from None
+        raise SgrError(f"{path}: unreadable .npz file ({exc})") from None
 
 
 def validate_traces(folder: Path) -> dict:
@@ -139,7 +141,7 @@ def validate(folder: str | Path) -> dict:
     """Validate every reference set found in `folder` (trace format, returns format, or both)."""
     folder = Path(folder)
     if not folder.is_dir():
-        raise ValueError(f"not a folder: {folder}")
+        raise SgrError(f"not a folder: {folder}")
     out: dict = {"cases": [], "tasks": {}}
     if any(folder.glob("returns_*.npz")):  # tests/data/evogym32
         out["tasks"] = validate_evogym32(folder)
@@ -155,13 +157,13 @@ def validate(folder: str | Path) -> dict:
         for task, vals in validate_returns(folder)["tasks"].items():
             out["tasks"].setdefault(task, {}).update(vals)
     if not found:
-        raise ValueError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
+        raise SgrError(f"{folder} holds neither reference traces (index.json) nor returns (<task>.npz)")
     return out
 
 
 def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dict:
     """Per task of tests/data/evogym32 that the registry knows (or `tasks`): the returns and
-    traces summaries of `evogym32_returns` and `evogym32_traces`."""
+    traces summaries of `evogym32_returns` and `evogym32_traces`; in f32, `chaos_check`'s figures."""
     from tasks.specs import TASKS
 
     folder = Path(folder)
@@ -169,6 +171,11 @@ def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dic
     out = {}
     for task in tasks or [t for t in index["all_tasks"] if t in TASKS]:
         r = evogym32_returns(folder, task)
+        if runtime.precision() != "f64":  # no bits to match: evogym's chaos floor is the measure
+            c = chaos_row(r, _npz(folder / f"returns_{task}.npz"))
+            out[task] = {k: c[k] for k in ("com_err_median", "chaos_floor", "com_ratio", "com_ok",
+                                           "spearman", "spearman_evogym_rerun", "rank_ok")}
+            continue
         t = evogym32_traces(folder, task)
         out[task] = {"median_abs_diff": r["median_abs_diff"], "max_abs_diff": r["max_abs_diff"],
                      "term_agree": f"{r['term_agree']}/{r['n_cases']}",
@@ -241,6 +248,7 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
     run = z["steps_run"]
     com_err = [float(np.nanmax(np.linalg.norm(com[i, :run[i] + 1] - z["com"][i, :run[i] + 1], axis=1)))
                for i in range(B)]
+    com_err_final = [float(np.linalg.norm(com[i, run[i]] - z["com"][i, run[i]])) for i in range(B)]
     return {"task": task, "n_cases": B, "returns": ret, "returns_evogym": z["returns"],
             "abs_diff": d, "median_abs_diff": float(np.median(d)), "max_abs_diff": float(d.max()),
             "term_step": term_step, "term_step_evogym": z["term_step"],
@@ -248,7 +256,7 @@ def evogym32_returns(folder: str | Path, task: str) -> dict:
             "obs_len_ok": all(same_len), "obs_err": float(max(obs_err)),
             "obs_err_orientation": float(max(obs_err_ort)), "com_err": np.array(com_err),
             "com_err_max": float(max(com_err)),
-            "com_err_median": float(np.median(com_err))}
+            "com_err_median": float(np.median(com_err)), "com_err_final": np.array(com_err_final)}
 
 
 def state_steps(z) -> np.ndarray:
@@ -297,3 +305,47 @@ def evogym32_traces(folder: str | Path, task: str) -> dict:
                                               else 0.0),
                       "reward_err_max": float(np.abs(np.array(rew[w][:n - 1]) - z["reward"][:n - 1]).max())})
     return {"task": task, "cases": cases, "com_err_max": max(c["com_err_max"] for c in cases)}
+
+
+# ---------------------------------------------------------------------- against evogym's chaos floor
+CHAOS_FACTOR = 2.0  # a precision passes a task within this many times evogym's own spread
+
+
+def chaos_check(folder: str | Path, tasks: list[str] | None = None,
+                factor: float = CHAOS_FACTOR) -> dict:
+    """Per task of tests/data/evogym32 (or `tasks`): our disagreement with evogym against evogym's
+    own under +-1e-6 action changes (its chaos floor), for a precision that cannot match bits (f32).
+
+    - COM: per case, the largest |COM(ours) - COM(evogym)| over the episode (`com_err`) and at its
+      end (`com_err_final`); evogym's spread per case is the larger of its +1e-6 and -1e-6 reruns'
+      largest COM deviation (`max_com_dev_p6`, `_m6`: recorded over the episode, not at its end).
+      The task passes if the median over its 24 cases of ours is within `factor` x the median of
+      evogym's (`chaos_floor`); `chaos_floor_pooled` is the median over all 48 reruns.
+    - Ranking: Spearman's rho of our returns against evogym's, passing if its distance from 1 is
+      within `factor` x that of evogym's own reruns (the lower of the + and - reruns' rho), or
+      within 1e-3 (rank swaps of returns closer than the reruns' spread)."""
+    from tasks.specs import TASKS
+
+    folder = Path(folder)
+    index = _json(folder / "index.json")
+    return {task: chaos_row(evogym32_returns(folder, task), _npz(folder / f"returns_{task}.npz"), factor)
+            for task in tasks or [t for t in index["all_tasks"] if t in TASKS]}
+
+
+def chaos_row(r: dict, z, factor: float = CHAOS_FACTOR) -> dict:
+    """`chaos_check`'s figures of one task from `evogym32_returns`'s result `r` and its file `z`."""
+    p6, m6 = z["max_com_dev_p6"], z["max_com_dev_m6"]
+    floor = float(np.median(np.maximum(p6, m6)))
+    rho = float(spearmanr(r["returns"], z["returns"]).statistic)
+    rho_evogym = float(min(spearmanr(z["returns_p6"], z["returns"]).statistic,
+                           spearmanr(z["returns_m6"], z["returns"]).statistic))
+    com_med = float(np.median(r["com_err"]))
+    return {"com_err_median": com_med, "com_err_final_median": float(np.median(r["com_err_final"])),
+            "com_err_max": r["com_err_max"], "chaos_floor": floor,
+            "chaos_floor_pooled": float(np.median(np.concatenate([p6, m6]))),
+            "com_ratio": com_med / floor if floor > 0 else float("inf"),
+            "com_ok": bool(com_med <= factor * floor),
+            "spearman": rho, "spearman_evogym_rerun": rho_evogym,
+            "rank_ok": bool(1 - rho <= max(factor * (1 - rho_evogym), 1e-3)),
+            "median_abs_return_diff": r["median_abs_diff"],
+            "term_agree": f"{r['term_agree']}/{r['n_cases']}"}

@@ -1,7 +1,8 @@
 """What travels to a GPU machine fits it (issue 27): the working tree it receives (tracked files
 plus untracked ones git does not ignore) and the device wheels (bench/device-wheels.json: CI does
-not download them, bench/device_wheels.sh checks them against it) stay within 60 MiB of the 64 MiB
-a device machine takes; and bench/gpu_check.sh's default reference folders are in the tree."""
+not download them, bench/device_wheels.sh checks them against it) stay within 56 MiB of the 64 MiB
+a device machine takes (issue 34: a margin for run records committed later); and
+bench/gpu_check.sh's default reference folders are in the tree."""
 
 import json
 import re
@@ -12,7 +13,7 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-BUDGET = 60 * 2**20  # bytes; the device machine takes 64 MiB, the rest is slack for $OUT and notes
+BUDGET = 56 * 2**20  # bytes; the device machine takes 64 MiB, the rest is slack for $OUT and notes
 
 
 def git_files(*args: str) -> list[str]:
@@ -32,7 +33,7 @@ def size(paths: list[str]) -> int:
     return sum((ROOT / p).stat().st_size for p in paths if (ROOT / p).is_file())
 
 
-def test_tree_and_device_wheels_fit_60_mib(files):
+def test_tree_and_device_wheels_fit_56_mib(files):
     wheels = json.loads((ROOT / "bench" / "device-wheels.json").read_text())
     assert wheels["total"] == sum(wheels["files"].values())
     tracked, untracked = size(files["tracked"]), size(files["untracked"])

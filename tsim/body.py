@@ -14,6 +14,7 @@ from functools import lru_cache
 import numpy as np
 
 from tsim import constants as C
+from tsim.errors import SgrError
 
 # side indices used for voxel edges: evogym's `Boxel::edges` order
 TOP, RIGHT, BOTTOM, LEFT = 0, 1, 2, 3
@@ -22,21 +23,21 @@ TL, TR, BR, BL = 0, 1, 2, 3
 
 
 def as_body_matrix(matrix: object, *, allow_fixed: bool = False) -> np.ndarray:
-    """Return `matrix` as a 2-D int array of material codes, or raise ValueError naming the problem."""
+    """Return `matrix` as a 2-D int array of material codes, or raise SgrError naming the problem."""
     try:
         arr = np.asarray(matrix, dtype=float)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"bad body matrix: not a numeric array ({exc})") from None
+        raise SgrError(f"bad body matrix: not a numeric array ({exc})") from None
     if arr.ndim != 2:
-        raise ValueError(f"bad body matrix: must be 2-D, got {arr.ndim}-D with shape {arr.shape}")
+        raise SgrError(f"bad body matrix: must be 2-D, got {arr.ndim}-D with shape {arr.shape}")
     if arr.size == 0:
-        raise ValueError(f"bad body matrix: empty (shape {arr.shape})")
+        raise SgrError(f"bad body matrix: empty (shape {arr.shape})")
     if not np.all(np.isfinite(arr)) or not np.all(arr == np.round(arr)):
-        raise ValueError("bad body matrix: entries must be integers")
+        raise SgrError("bad body matrix: entries must be integers")
     top = C.FIXED if allow_fixed else C.V_ACT
     if arr.min() < 0 or arr.max() > top:
         bad = sorted({int(v) for v in arr.ravel() if v < 0 or v > top})
-        raise ValueError(f"bad body matrix: material codes must be 0-{top}, got {bad}")
+        raise SgrError(f"bad body matrix: material codes must be 0-{top}, got {bad}")
     return arr.astype(np.int64)
 
 
@@ -85,11 +86,11 @@ def check_robot(matrix: object) -> np.ndarray:
     """Validate a robot body: 2-D, codes 0-4, non-empty, 4-connected, with an actuator."""
     m = as_body_matrix(matrix)
     if not np.any(m):
-        raise ValueError("bad body matrix: all voxels are empty")
+        raise SgrError("bad body matrix: all voxels are empty")
     if not is_connected(m):
-        raise ValueError("bad body matrix: voxels are not 4-connected (disconnected body)")
+        raise SgrError("bad body matrix: voxels are not 4-connected (disconnected body)")
     if not has_actuator(m):
-        raise ValueError("bad body matrix: no actuator voxel (3 or 4); a robot needs one")
+        raise SgrError("bad body matrix: no actuator voxel (3 or 4); a robot needs one")
     return m
 
 

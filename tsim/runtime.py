@@ -1,11 +1,15 @@
-"""Taichi start-up: one `ti.init` per process, f64, CPU unless a GPU is asked for."""
+"""Taichi start-up: one `ti.init` per process, on one arch and in one real type (f64 unless f32 is
+asked for), CPU unless a GPU is asked for."""
 
 import contextlib
 import io
 import os
 import sys
+import tempfile
 import threading
 import time
+
+from tsim.errors import SgrError
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
 # warnings and its one-line errors, its stdout its output (`sgr ... --json`). TI_ENABLE_PYBUF=0
@@ -21,6 +25,61 @@ ARCHS = ("cpu", "gpu", "cuda", "vulkan", "metal")
 # results are then wrong, so such a process neither reads nor writes Taichi's offline cache
 PROFILE_SKIP = tuple(p for p in os.environ.get("SGR_PROFILE_SKIP", "").split(",") if p)
 _ARCH: str | None = None
+# the real type of the kernels, numpy arrays at their boundary and the tasks' numbers: f64 is
+# evogym's (bit for bit), f32 is faster and within evogym's chaos floor (docs/VALIDATION.md)
+PRECISIONS = ("f64", "f32")
+_PRECISION: str | None = None
+NO_F64 = ("metal",)  # archs without 64-bit floats
+
+
+def requested_precision(precision: str | None = None) -> str:
+    """`precision`, else $SGR_PRECISION, else f64; raises ValueError for a name that is not one."""
+    if precision is None and os.environ.get("SGR_PRECISION"):
+        precision = os.environ["SGR_PRECISION"]
+        if precision not in PRECISIONS:
+            raise ValueError(f"SGR_PRECISION={precision}: unknown precision; use one of "
+                             f"{', '.join(PRECISIONS)}")
+    precision = precision or "f64"
+    if precision not in PRECISIONS:
+        raise ValueError(f"unknown precision {precision!r}; use one of {', '.join(PRECISIONS)}")
+    return precision
+
+
+def use_precision(precision: str | None) -> str:
+    """Choose the precision of this process and of the processes it starts (rollout workers read
+    $SGR_PRECISION): `precision`, else $SGR_PRECISION, else f64. ValueError, one line, for an
+    unknown name or when Taichi already runs in another precision. For CLI flags and run configs,
+    before the first simulator is built."""
+    p = requested_precision(precision)
+    if _PRECISION is not None and p != _PRECISION:
+        raise ValueError(f"Taichi already runs in {_PRECISION}; cannot switch to {p} in one process")
+    os.environ["SGR_PRECISION"] = p
+    return p
+
+
+def check_real_type(arch: str, precision: str, arch_from_env: bool = False,
+                    precision_from_env: bool = False) -> None:
+    """ValueError, one line saying what is missing and what to use, when `arch` has no floats of
+    `precision` (Metal: no 64-bit floats). Checked once the arch is known to run here, so that a
+    missing device is reported as such first."""
+    if precision == "f64" and arch in NO_F64:
+        what = f"SGR_ARCH={arch}" if arch_from_env else f"arch {arch!r}"
+        how = "SGR_PRECISION=f64" if precision_from_env else "precision f64"
+        raise ValueError(f"{what} with {how}: {arch} has no 64-bit floats; use SGR_PRECISION=f32 "
+                         "(or SGR_ARCH=cpu for f64)")
+
+
+def precision() -> str:
+    """The process's real type, "f64" or "f32": the one Taichi runs in once started, else the one
+    it would start in (`requested_precision`). What the kernels compile for."""
+    return _PRECISION or requested_precision()
+
+
+def real_dtype() -> type:
+    """numpy's type for the process's real type (np.float64 or np.float32)."""
+    import numpy as np
+
+    return np.float32 if precision() == "f32" else np.float64
 
 
 def requested_arch(arch: str | None = None) -> str:
@@ -28,10 +87,10 @@ def requested_arch(arch: str | None = None) -> str:
     if arch is None and os.environ.get("SGR_ARCH"):
         arch = os.environ["SGR_ARCH"]
         if arch not in ARCHS:
-            raise ValueError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
+            raise SgrError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
     arch = arch or "cpu"
     if arch not in ARCHS:
-        raise ValueError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
+        raise SgrError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
     return arch
 
 
@@ -41,17 +100,27 @@ def _taichi_archs(arch: str) -> list:
     return [ti.cuda, ti.metal, ti.vulkan] if arch == "gpu" else [getattr(ti, arch)]
 
 
-def init(arch: str | None = None) -> str:
-    """Initialise Taichi once; later calls with another arch raise (Taichi cannot switch).
+def init(arch: str | None = None, precision: str | None = None) -> str:
+    """Initialise Taichi once, on `arch` in `precision` (default: $SGR_ARCH, $SGR_PRECISION, else
+    cpu, f64; once started, precision None is the one it runs in); later calls with another arch
+    or precision raise (Taichi cannot switch).
 
-    An arch that Taichi cannot use here (no device, driver or backend) raises ValueError rather
-    than running on the CPU as Taichi would."""
-    global _ARCH
+    An arch that Taichi cannot use here (no device, driver or backend), or that has no 64-bit
+    floats for f64, raises ValueError (one line: what is missing, what to use) rather than running
+    on the CPU as Taichi would."""
+    global _ARCH, _PRECISION
     from_env = arch is None and bool(os.environ.get("SGR_ARCH"))
+    prec_from_env = precision is None and bool(os.environ.get("SGR_PRECISION"))
     arch = requested_arch(arch)
+    # None: the precision the process already runs in, if started (like a kernel's real type)
+    precision = requested_precision(precision) if precision is not None or _PRECISION is None \
+        else _PRECISION
     if _ARCH is not None:
         if arch != _ARCH:
             raise ValueError(f"Taichi already runs on {_ARCH}; cannot switch to {arch} in one process")
+        if precision != _PRECISION:
+            raise ValueError(f"Taichi already runs in {_PRECISION}; cannot switch to {precision} in "
+                             "one process")
         return _ARCH
     threads = _threads_env()
     kwargs = {"cpu_max_num_threads": threads} if threads else {}
@@ -67,24 +136,89 @@ def init(arch: str | None = None) -> str:
     # (cold cache) and gave no measurable speed over LLVM's; with them off it takes ~4 s
     # log_level ERROR while Taichi probes the arch: its probe warnings (e.g. "libcuda.so lib not
     # found") and its fallback to the CPU would otherwise print before our error
+    # Taichi's C++ side prints its probe errors ("RHI Error: Can not create Vulkan instance") on
+    # file descriptor 2: they are held back and shown only if the arch works
     out = io.StringIO()
-    with contextlib.redirect_stdout(out):
-        ti.init(arch=_taichi_archs(arch), default_fp=ti.f64, default_ip=ti.i32, fast_math=False,
-                advanced_optimization=False, make_cpu_multithreading_loop=False,
-                log_level=ti.ERROR, **kwargs)
+    with contextlib.redirect_stdout(out), _held_stderr() as held:
+        ti.init(arch=_taichi_archs(arch), default_fp=ti.f32 if precision == "f32" else ti.f64,
+                default_ip=ti.i32, fast_math=False, advanced_optimization=False,
+                make_cpu_multithreading_loop=False, log_level=ti.ERROR, **kwargs)
     ti.set_logging_level(ti.WARN)
+    what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
-        what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
-        raise ValueError(f"{what}: Taichi cannot run on {arch} here (no usable device or driver); "
-                         "use SGR_ARCH=cpu")
+        raise SgrError(f"{what}: Taichi cannot run on {arch} here: {MISSING.get(arch, 'no usable GPU')}; "
+                       "use SGR_ARCH=cpu")
+    try:
+        check_real_type(arch, precision, from_env, prec_from_env)
+    except ValueError:
+        ti.reset()
+        raise
+    if precision == "f64" and backend() in SPIRV_ARCHS and not _runs_f64():
+        ti.reset()
+        raise SgrError(f"{what}: this {backend()} device has no 64-bit floats, which sgr's f64 "
+                       "physics needs; use SGR_ARCH=cpu, or SGR_PRECISION=f32")
+    sys.stderr.write(held.getvalue())
     for line in out.getvalue().splitlines():
         if not line.startswith("[Taichi] Starting on arch="):
             print(line, file=sys.stderr)
     _ARCH = arch
+    _PRECISION = precision
     if arch == "cpu":
         pin_threads()
     return _ARCH
+
+
+# what is missing when Taichi cannot start an arch (it does not say why)
+MISSING = {
+    "cuda": "no CUDA device (it needs an NVIDIA GPU and its driver, libcuda.so)",
+    "metal": "no Metal device (Metal exists only on macOS with an Apple or AMD GPU)",
+    "vulkan": "no Vulkan device (it needs a Vulkan driver: a GPU's, or Mesa's software one, Debian's "
+              "mesa-vulkan-drivers)",
+    "gpu": "no GPU (tried CUDA, Metal and Vulkan)",
+}
+
+
+@contextlib.contextmanager
+def _held_stderr():
+    """Collects what is written to file descriptor 2 meanwhile (C++ code included) into a
+    StringIO, yielded; nothing is shown."""
+    held = io.StringIO()
+    try:
+        sys.stderr.flush()
+        saved = os.dup(2)
+    except (OSError, ValueError):  # no real stderr (e.g. under some test runners)
+        yield held
+        return
+    with tempfile.TemporaryFile(mode="w+b") as tmp:
+        os.dup2(tmp.fileno(), 2)
+        try:
+            yield held
+        finally:
+            sys.stderr.flush()
+            os.dup2(saved, 2)
+            os.close(saved)
+            tmp.seek(0)
+            held.write(tmp.read().decode(errors="replace"))
+
+
+def _runs_f64() -> bool:
+    """Whether a small f64 kernel (multiply-add, square root, division) compiles and runs here:
+    a SPIR-V device may lack 64-bit floats (Metal always does)."""
+    try:
+        with _held_stderr():
+            a = ti.ndarray(ti.f64, 2)
+            _f64_probe(a)
+            ti.sync()
+            return abs(a.to_numpy()[1] - 0.5) < 1e-12
+    except Exception:  # noqa: BLE001 - Taichi raises RuntimeError or its own errors
+        return False
+
+
+@ti.kernel
+def _f64_probe(a: ti.types.ndarray(dtype=ti.f64, ndim=1)):
+    a[0] = 3.0
+    a[1] = ti.sqrt(a[0] * a[0] + 7.0) / 8.0  # sqrt(16) / 8
 
 
 PINNED: dict[int, int] = {}  # Taichi worker thread id -> the CPU it is pinned to
@@ -92,6 +226,23 @@ PIN_TRIES = 8  # rendezvous loops at most to single out the workers, PIN_PAUSE_S
 PIN_PAUSE_S = 0.005  # lets another thread's burst (Taichi's, after a first launch) end
 PIN_WORK = 1_000_000  # multiply-adds each worker runs after the rendezvous (~1.3 ms)
 PIN_SPIN_LIMIT = 20_000_000  # spins (~0.1-0.5 s) after which a task stops waiting for the others
+
+
+# Taichi's backends that compile to SPIR-V: they have no 64-bit transcendental functions
+SPIRV_ARCHS = ("vulkan", "metal", "opengl", "gles")
+
+
+def backend() -> str:
+    """The Taichi arch the kernels run on ("x64", "arm64", "cuda", "vulkan", "metal", ...):
+    what "cpu" or "gpu" resolved to."""
+    return ti.lang.impl.current_cfg().arch.name
+
+
+def native_tanh() -> bool:
+    """Whether `ti.tanh` compiles for the real type on this backend (not f64 on SPIR-V): read
+    when a kernel is compiled (tsim/portable.py)."""
+    f64 = ti.lang.impl.get_runtime().default_fp == ti.f64
+    return not (f64 and backend() in SPIRV_ARCHS)
 
 
 def pin_threads() -> dict[int, int]:
@@ -189,7 +340,7 @@ def _threads_env() -> int | None:
     except ValueError:
         n = 0
     if n < 1:
-        raise ValueError(f"SGR_THREADS={text}: must be a positive int")
+        raise SgrError(f"SGR_THREADS={text}: must be a positive int")
     return n
 
 

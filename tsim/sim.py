@@ -2,7 +2,9 @@
 
 The simulator knows bodies, worlds and actions; it knows nothing of tasks, rewards or evolution.
 Positions and velocities it reports are evogym's snapshot values (world units); a world that
-became unstable or non-finite is frozen at its last good snapshot and flagged.
+became unstable or non-finite is frozen at its last good snapshot and flagged. Its real arrays
+(state, actions, ...) have the backend's dtype: float64 (evogym's bits) unless the process runs in
+f32 (`tsim.backend`).
 """
 
 from __future__ import annotations
@@ -11,13 +13,16 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
-from tsim import runtime
+from tsim import runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
 from tsim.launch import CachedLaunch
 from tsim.world import World
 
+# a world's status codes (`BatchSim.status`): only RUNNING worlds advance
+RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
 
 def _as_body(body: Body | object, passive_ok: bool) -> Body:
     matrix = body.matrix if isinstance(body, Body) else body
@@ -33,13 +38,16 @@ def _as_body(body: Body | object, passive_ok: bool) -> Body:
 class BatchSim:
     """B worlds of `world`, robot b built from `bodies[b]` and placed with its matrix's bottom-left
     cell at grid cell `origin`. `passive_ok` admits bodies without actuators (evogym loads those as
-    plain objects; the reference traces contain a few)."""
+    plain objects; the reference traces contain a few). `arch` and `precision` choose the process's
+    backend (`tsim.backend.get`: None means $SGR_ARCH / $SGR_PRECISION, else cpu / f64)."""
 
     def __init__(self, world: World, bodies: Sequence[Body | object], origin: tuple[int, int],
-                 *, arch: str | None = None, passive_ok: bool = False):
+                 *, arch: str | None = None, precision: str | None = None, passive_ok: bool = False):
         if len(bodies) == 0:
             raise ValueError("BatchSim needs at least one body")
-        self._arch = runtime.init(arch)
+        self.backend = backend_mod.get(arch, precision)
+        self._arch = self.backend.arch
+        self.dtype = self.backend.dtype
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
         self.bodies = [_as_body(b, passive_ok) for b in bodies]
@@ -64,9 +72,10 @@ class BatchSim:
         self.max_actuators = int(self.n_actuators.max())
         self.max_robot_points = int(self.n_robot_points.max())
 
-        pos0 = np.zeros((B, P, 2))
+        real = self.dtype
+        pos0 = np.zeros((B, P, 2))  # evogym's f64 placement, then in the real type (below)
         edge_i = np.zeros((B, E, 4), dtype=np.int32)
-        edge_f = np.zeros((B, E, K.N_EDGE_F))
+        edge_f = np.zeros((B, E, K.N_EDGE_F), dtype=real)
         vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
         # fixed points: corners of material-5 voxels of simulated objects (never the robot's)
         fixed = [np.unique(o.body.voxel_points[o.body.voxel_type == C.FIXED]) for o in objs]
@@ -130,7 +139,7 @@ class BatchSim:
 
         t = self.world.terrain
         nt = max(1, len(t.corners))
-        ter_f = np.zeros((nt, 12))
+        ter_f = np.zeros((nt, 12))  # f64, then in the real type as the points are (below)
         ter_i = np.zeros((nt, 4), dtype=np.int32)
         if len(t.corners):
             ter_f[:, :8] = t.corners.reshape(-1, 8)
@@ -139,7 +148,8 @@ class BatchSim:
             ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
             ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
             ter_i[:] = t.open
-        self._pos0 = pos0
+        ter_f = to_real(ter_f, real)
+        self._pos0 = to_real(pos0, real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -149,8 +159,8 @@ class BatchSim:
         self.ter_f = ter_f
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
-        self.state = np.zeros((B, P, K.NS))
-        self.actions = np.ones((B, A))
+        self.state = np.zeros((B, P, K.NS), dtype=real)
+        self.actions = np.ones((B, A), dtype=real)
         # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
         self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]
         # the smallest local-array capacity tier that holds every world (a compiled kernel each)
@@ -159,7 +169,7 @@ class BatchSim:
         while any(n > c for n, c in zip((P, E, n_surf), K.capacity(self.capacity_tier), strict=True)):
             self.capacity_tier += 1
         # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
-        self._serial = self._arch == "cpu" and (runtime.threads() == 1 or self.n_worlds == 1)
+        self._serial = self._arch == "cpu" and (self.backend.threads == 1 or self.n_worlds == 1)
         # how contact pairs are found (the same pairs either way): with the kernel that can sweep
         # and prune only when some world is long enough to gain from it (tests force either)
         self.sweep_mode = K.SWEEP_AUTO if any(
@@ -169,6 +179,7 @@ class BatchSim:
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         self._launch: CachedLaunch | None = None  # see `step`
+        self._spirv = runtime.backend() in runtime.SPIRV_ARCHS  # see tsim/spirv.py
         # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
         # that they stay on the device instead of crossing the bus at every launch. On the CPU the
         # numpy arrays themselves are passed (flattened once, so every step passes the same
@@ -177,7 +188,7 @@ class BatchSim:
         # edge_f, vox_i, lists and ter_* are read-only after construction
         static = (self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists,
                   self.ter_f, self.ter_i, self.ter_grid)
-        self._static = (tuple(np.ascontiguousarray(a) for a in static) if self._arch == "cpu"
+        self._static = (tuple(np.ascontiguousarray(a) for a in static) if self.backend.cached_launch
                         else tuple(_taichi_array(a) for a in static))
         self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
 
@@ -208,7 +219,8 @@ class BatchSim:
         Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        self._pos0[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
+        self._pos0[w, off:off + obj.body.n_points] = to_real(obj.body.place(int(cell[0]), int(cell[1])).T,
+                                                             self.dtype)
 
     def shift_robots(self, dx: np.ndarray) -> None:
         """Start each world's robot `dx[w]` further right (left when negative; evogym's length
@@ -272,6 +284,9 @@ class BatchSim:
                     self.pair_list)
             if self._serial:
                 kernel = K.step_kernel_serial
+            elif self._spirv:
+                kernel = spirv.step_kernel_sized
+                args = (*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds))
             else:
                 kernel = K.step_kernel
                 args = (*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
@@ -282,7 +297,7 @@ class BatchSim:
                 cached.launch()
             else:
                 kernel(*args)
-                self._launch = CachedLaunch.build(kernel, args) if self._arch == "cpu" else None
+                self._launch = CachedLaunch.build(kernel, args) if self.backend.cached_launch else None
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
 
     def deactivate(self, mask: np.ndarray) -> None:
@@ -291,12 +306,56 @@ class BatchSim:
         sel = mask & (self.counts[:, K.STATUS] == K.RUNNING)
         self.counts[sel, K.STATUS] = K.INACTIVE
 
+    def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0) -> None:
+        """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
+        compare them; every variant gives the same bits): `serial` runs on the calling thread
+        (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
+        arrays that many tiers bigger than needed."""
+        if serial is not None:
+            self._serial = bool(serial)
+        self.capacity_tier += int(extra_capacity_tiers)
+        self._launch = None
+
+    def ignore_robot_self_collisions(self) -> None:
+        """No instability rule for these worlds: evogym's rule counts only robots' self-collisions,
+        and a world led by an object that is no robot (sgr.evogym's EvoSim without robots) has
+        none. Kept across resets."""
+        self._counts0[:, K.N_SURF_ROBOT] = 0
+        self.counts[:, K.N_SURF_ROBOT] = 0
+
+    def set_world_status(self, w: int, status: int) -> None:
+        """Set world w's status code (RUNNING, UNSTABLE, ...): RUNNING lets a frozen world advance
+        again after its state was restored (evogym's revert); UNSTABLE freezes it."""
+        self.counts[w, K.STATUS] = status
+
     # ------------------------------------------------------------------ read-out
     @property
     def status(self) -> np.ndarray:
-        """(B,) copy of each world's status code (kernels.RUNNING, UNSTABLE, NONFINITE, INACTIVE);
-        only RUNNING worlds advance."""
+        """(B,) copy of each world's status code (RUNNING, UNSTABLE, NONFINITE, INACTIVE, in this
+        module); only RUNNING worlds advance."""
         return self.counts[:, K.STATUS].copy()
+
+    def world_status(self, w: int) -> int:
+        """World w's status code, as `status` (a scalar read, cheap enough for every step)."""
+        return int(self.counts[w, K.STATUS])
+
+    @property
+    def n_points(self) -> np.ndarray:
+        """(B,) simulated points of each world: its robot's, then its free objects' (`state`'s
+        rows, in that order; padding after them)."""
+        return self.counts[:, K.N_PTS].copy()
+
+    def object_offsets(self, k: int) -> np.ndarray:
+        """(B,) the row in `state` where free object k (`free_objects[k]`) starts in each world;
+        its points follow in its body's order."""
+        return np.array(self._obj_offsets[k])
+
+    @property
+    def initial_positions(self) -> np.ndarray:
+        """(B, P, 2) every point's position at reset, as `state`'s rows (the reference of an
+        object's orientation). Writing it moves where the next reset starts, as `place_object`
+        and `shift_robots` do."""
+        return self._pos0
 
     @property
     def unstable(self) -> np.ndarray:
@@ -340,9 +399,34 @@ class BatchSim:
         return s / self.n_robot_points[:, None]
 
 
+def to_real(x: np.ndarray, dtype: type) -> np.ndarray:
+    """Positions x (float64, world units) in the real type `dtype`, each on the same side of the
+    grid line nearest to it (k * CELL, where terrain corners lie) as in float64.
+
+    Why: evogym places a robot a few float64 ulps above the ground (y = 0.10000000000000003 over
+    a terrain top of 0.1), so it first touches the ground a substep later. Rounded to float32
+    both are 0.1: the robot would start in contact, and a contact pushes with >= 10,500 force
+    units (a 1e-3 error after one step, Walker-v0). So a coordinate that float32 would put onto
+    the line (or past it) is moved to the float32 number next to the line on its float64 side.
+    Terrain corners get the same treatment: evogym's terrain tops are at times 0.09999999999999998,
+    where a robot's bottom is too."""
+    if dtype == np.float64:
+        return x
+    g = np.round(x / C.CELL) * C.CELL
+    r = x.astype(dtype)
+    g_r = g.astype(dtype)
+    above = (x > g) & (r <= g_r)
+    below = (x < g) & (r >= g_r)
+    r[above] = np.nextafter(g_r[above], dtype(np.inf))
+    r[below] = np.nextafter(g_r[below], dtype(-np.inf))
+    return r
+
+
 def _taichi_array(a: np.ndarray):
-    """A Taichi-owned copy of a numpy int32 or float64 array."""
-    t = runtime.ti.ndarray(runtime.ti.i32 if a.dtype == np.int32 else runtime.ti.f64, a.shape)
+    """A Taichi-owned copy of a numpy int32 or real (float64 or float32) array."""
+    ti = runtime.ti
+    t = ti.ndarray(ti.i32 if a.dtype == np.int32 else ti.f32 if a.dtype == np.float32 else ti.f64,
+                   a.shape)
     t.from_numpy(np.ascontiguousarray(a))
     return t
 

@@ -7,6 +7,7 @@ from evolve.methods.base import Problem
 from evolve.methods.direct import DirectProblem
 from evolve.methods.nested import NestedProblem
 from evolve.methods.sgr import SgrProblem
+from tsim.errors import SgrError
 
 METHODS: dict[str, type[Problem]] = {p.name: p for p in (
     SgrProblem,
@@ -21,7 +22,7 @@ def method(name: str) -> type[Problem]:
     try:
         return METHODS[name]
     except KeyError:
-        raise ValueError(f"unknown method {name!r}; known methods: {', '.join(METHODS)}") from None
+        raise SgrError(f"unknown method {name!r}; known methods: {', '.join(METHODS)}") from None
 
 
 __all__ = ["METHODS", "DirectProblem", "NestedProblem", "Problem", "SgrProblem", "method"]

@@ -10,14 +10,18 @@ evolve/methods/__init__.py's registry.
 
 from __future__ import annotations
 
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from typing import Any, ClassVar, Protocol
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol
 
 import numpy as np
 
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
+from tsim.errors import SgrError
+
+if TYPE_CHECKING:
+    from evolve.runs.run_config import RunConfig
 
 # config key -> (type or tuple of types, default)
 Schema = dict[str, tuple[Any, Any]]
@@ -40,9 +44,12 @@ class Problem:
     default_files: ClassVar[dict[str, str]] = {}
     reevaluate_elites: ClassVar[bool] = False  # True when evaluation changes state (nested's inner search)
 
-    def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
-        """`cfg` is the resolved config (every key present); `pool` simulates episodes."""
-        self.cfg = cfg
+    def __init__(self, cfg: RunConfig | Mapping, neat_config, pool: RolloutPool | None = None):
+        """`cfg` is the run's config (`RunConfig`; a resolved config mapping is read as one);
+        `pool` simulates episodes."""
+        from evolve.runs.run_config import RunConfig  # (here: evolve.runs imports the methods)
+
+        self.cfg = RunConfig.of(cfg)
         self.neat_config = neat_config
         self.pool = pool or RolloutPool(1)
 
@@ -74,7 +81,7 @@ class Problem:
         perturbed episodes, the K episodes of every robot in one batch; episode k of the robot
         tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`)."""
         cfg = self.cfg
-        robust = Robust.from_config(cfg.get("robust"))
+        robust = cfg.robust  # parsed once, with the config
         if robust is None:
             return self.pool.run(cfg["task"], bodies, items, factory, cfg["episode_steps"]), len(bodies)
         n, k = len(bodies), robust.episodes
@@ -86,11 +93,14 @@ class Problem:
         return robust.score(returns.reshape(k, n)), n * k
 
     @contextmanager
-    def scored_with(self, robust: dict | None) -> Iterator[None]:
-        """Inside, `evaluate` scores as the `robust` mapping says (None: one exact episode) instead
-        of as the run's config does (a run's final selection scores its candidates this way)."""
+    def scored_with(self, robust: Robust | dict | None) -> Iterator[None]:
+        """Inside, `evaluate` scores as `robust` says (a mapping is the config key; None: one exact
+        episode) instead of as the run's config does (a run's final selection scores its
+        candidates this way)."""
         cfg = self.cfg
-        self.cfg = {**cfg, "robust": robust}
+        if not isinstance(robust, Robust | None):
+            robust = Robust.from_config(robust)
+        self.cfg = cfg.replace(robust=robust)
         try:
             yield
         finally:
@@ -121,4 +131,4 @@ def positive(cfg: dict, source: str, *keys: str) -> None:
     """Raise naming the first of `keys` whose value is below 1."""
     for key in keys:
         if cfg[key] < 1:
-            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")

@@ -27,6 +27,7 @@ from evolve.nn.graph import GraphController
 from evolve.rollout.pool import RolloutPool
 from tasks.env import obs_dim
 from tsim.body import build_body
+from tsim.errors import SgrError
 
 N_COORDS = 2
 
@@ -76,8 +77,8 @@ class DirectProblem(Problem):
     def validate(cls, cfg: dict, source: str) -> None:
         """`layout` must be per_output or per_cell."""
         if cfg["layout"] not in LAYOUTS:
-            raise ValueError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
-                             f"got {cfg['layout']!r}")
+            raise SgrError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
+                           f"got {cfg['layout']!r}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:

@@ -42,6 +42,7 @@ from evolve.search.state_codec import (
 )
 from tasks.env import obs_dim
 from tsim.body import build_body
+from tsim.errors import SgrError
 
 
 @dataclass
@@ -106,8 +107,8 @@ class NestedProblem(Problem):
         positive(cfg, source, "inner_pop_size", "inner_generations")
         keep = cfg["inner_keep_generations"]
         if keep is not None and keep < 1:
-            raise ValueError(f"{source}: key 'inner_keep_generations' must be a positive int or null "
-                             f"(never forget), got {keep}")
+            raise SgrError(f"{source}: key 'inner_keep_generations' must be a positive int or null "
+                           f"(never forget), got {keep}")
         cls.controller_config(cfg, 1)
 
     @staticmethod

@@ -10,6 +10,7 @@ from evolve.methods.base import Problem
 from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
 from evolve.rollout.episodes import dense_policy
 from evolve.rollout.pool import RolloutPool
+from tsim.errors import SgrError
 
 
 class SgrProblem(Problem):
@@ -31,7 +32,7 @@ class SgrProblem(Problem):
     def validate(cls, cfg: dict, source: str) -> None:
         """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller)."""
         if cfg["cppn_outputs"] not in (1, 2):
-            raise ValueError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
+            raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:

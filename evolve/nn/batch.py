@@ -70,6 +70,7 @@ class NetworkBatch:
         self._used = [sorted(set(np.unique(a).tolist())) for *_, a in self.blocks]
         # source slots with a weight in some network of the batch, per depth, in slot order
         self._sources = [np.nonzero(np.any(W != 0.0, axis=(0, 2)))[0].tolist() for _, W, *_ in self.blocks]
+        self._cast: dict = {}  # dtype -> the blocks rounded to it
 
     def forward(self, x: np.ndarray) -> np.ndarray:
         """x (B, Q, n_in) -> (B, Q, n_out), network b on its Q rows; ValueError for another B or
@@ -77,15 +78,21 @@ class NetworkBatch:
         B, Q, n = x.shape
         if n != self.n_in or B != len(self.out_slot):
             raise ValueError(f"expected inputs ({len(self.out_slot)}, Q, {self.n_in}), got {x.shape}")
-        v = np.zeros((B, Q, self.n_slots))
+        blocks = self.blocks
+        if blocks and x.dtype != blocks[0][1].dtype:  # x's real type (float32 in f32 runs)
+            if x.dtype not in self._cast:
+                self._cast[x.dtype] = [(start, W.astype(x.dtype), bias.astype(x.dtype),
+                                        resp.astype(x.dtype), act) for start, W, bias, resp, act in blocks]
+            blocks = self._cast[x.dtype]
+        v = np.zeros((B, Q, self.n_slots), dtype=x.dtype)
         v[:, :, :n] = x
-        for (start, W, bias, resp, act), used, srcs in zip(self.blocks, self._used, self._sources,
+        for (start, W, bias, resp, act), used, srcs in zip(blocks, self._used, self._sources,
                                                           strict=True):
             # each node's weighted inputs summed one by one in slot order (inputs, then earlier
             # nodes by depth and key): the order of `GraphController`, whatever the batch's
             # padding; einsum's grouping of the terms moved with the padding, so a network's
             # outputs depended in the last bits on the batch it was in
-            acc = np.zeros((B, Q, W.shape[2]))
+            acc = np.zeros((B, Q, W.shape[2]), dtype=x.dtype)
             for s in srcs:
                 acc += v[:, :, s, None] * W[:, None, s, :]
             z = bias[:, None, :] + resp[:, None, :] * acc
@@ -122,16 +129,16 @@ class GraphPolicy:
                 self.query_xy[b, :len(cells)] = np.asarray(cell_xy)[np.asarray(cells, dtype=np.int64)]
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """(B, D) padded observations -> (B, action_width) actions 1.1 + 0.5 y; observation entries
-        beyond the networks' inputs are dropped."""
+        """(B, D) padded observations -> (B, action_width) actions 1.1 + 0.5 y, in the observations'
+        real type; observation entries beyond the networks' inputs are dropped."""
         B, D = obs.shape
         w = min(D, self.nets.n_in - self.input_offset)
         if self.query_xy is None:
-            x = np.zeros((B, 1, self.nets.n_in))
+            x = np.zeros((B, 1, self.nets.n_in), dtype=obs.dtype)
             x[:, 0, self.input_offset:self.input_offset + w] = obs[:, :w]
             y = self.nets.forward(x)[:, 0, :]
             return to_action(y[self._rows, self.cols])
-        x = np.zeros((B, self.query_xy.shape[1], self.nets.n_in))
+        x = np.zeros((B, self.query_xy.shape[1], self.nets.n_in), dtype=obs.dtype)
         x[:, :, 0:2] = self.query_xy
         x[:, :, self.input_offset:self.input_offset + w] = obs[:, None, :w]
         return to_action(self.nets.forward(x)[:, :, self.output_offset])

@@ -11,6 +11,7 @@ import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, NEAT_AGGREGATIONS
 from evolve.nn.feedforward import compile_genome
+from tsim.errors import SgrError
 
 
 class CompiledCPPN:
@@ -23,11 +24,11 @@ class CompiledCPPN:
         self.steps = []
         for n in net.nodes:
             if n.activation not in NEAT_ACTIVATIONS:
-                raise ValueError(f"activation {n.activation!r} is not supported by the "
-                                 f"vectorized CPPN; use one of {sorted(NEAT_ACTIVATIONS)}")
+                raise SgrError(f"activation {n.activation!r} is not supported by the "
+                               f"vectorized CPPN; use one of {sorted(NEAT_ACTIVATIONS)}")
             if n.aggregation not in NEAT_AGGREGATIONS:
-                raise ValueError(f"aggregation {n.aggregation!r} is not supported; use one of "
-                                 f"{sorted(NEAT_AGGREGATIONS)}")
+                raise SgrError(f"aggregation {n.aggregation!r} is not supported; use one of "
+                               f"{sorted(NEAT_AGGREGATIONS)}")
             srcs = [i for i, _ in n.links]
             w = np.array([w for _, w in n.links], dtype=np.float64)
             self.steps.append((n.key, srcs, w, n.bias, n.response, NEAT_ACTIVATIONS[n.activation],

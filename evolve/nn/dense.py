@@ -39,8 +39,10 @@ class DenseController:
     def act(self, obs: np.ndarray) -> np.ndarray:
         """One robot's actions, computed exactly as evolution computed them (`ControllerBatch`,
         bit for bit): a champion's episode is often chaotic, and the ~1e-16 rounding difference of
-        another summation order (`reference_act`) can change its return completely."""
-        obs = np.asarray(obs, dtype=np.float64)
+        another summation order (`reference_act`) can change its return completely. In the
+        observation's real type (float32 in an f32 process, as evolution there), else float64."""
+        obs = np.asarray(obs)
+        obs = obs if obs.dtype == np.float32 else obs.astype(np.float64, copy=False)
         if obs.shape != (self.input_size,):
             raise ValueError(f"controller expects an observation of length {self.input_size}, "
                              f"got {obs.shape}")
@@ -98,10 +100,17 @@ class ControllerBatch:
         for i, c in enumerate(controllers):
             self.cells[i, :len(c.action_cells)] = c.action_cells
         self._rows = np.arange(B)[:, None]
+        self._cast: dict = {}  # dtype -> the weights and biases rounded to it
 
     def act(self, obs: np.ndarray) -> np.ndarray:
-        """(B, obs_width) padded observations -> (B, action_width) padded actions."""
+        """(B, obs_width) padded observations -> (B, action_width) padded actions, computed in the
+        observations' real type (float32 in an f32 process: weights rounded to it once)."""
         x = obs
-        for W, b, a in zip(self.Ws, self.bs, self.activations, strict=True):
+        Ws, bs = self.Ws, self.bs
+        if obs.dtype != Ws[0].dtype:
+            if obs.dtype not in self._cast:
+                self._cast[obs.dtype] = ([W.astype(obs.dtype) for W in Ws], [b.astype(obs.dtype) for b in bs])
+            Ws, bs = self._cast[obs.dtype]
+        for W, b, a in zip(Ws, bs, self.activations, strict=True):
             x = PLAIN_ACTIVATIONS[a](np.einsum("bi,bio->bo", x, W) + b)
         return to_action(x[self._rows, self.cells])

@@ -20,6 +20,7 @@ import pickle
 import subprocess
 import sys
 from collections.abc import Callable, Sequence
+from contextlib import AbstractContextManager, nullcontext
 
 import numpy as np
 
@@ -28,10 +29,19 @@ from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
 from tasks.env import BatchEnv
+from tsim.errors import SgrError
 
 # factory(env, items) -> batched policy for the robots of env; items[i] drives robot i. With
 # workers > 1 it is pickled: a module-level function or a functools.partial of one.
 PolicyFactory = Callable[[BatchEnv, Sequence], BatchPolicy]
+
+
+def workers_problem(workers: object) -> str | None:
+    """What is wrong with a `workers` value (the config key, --workers, `RolloutPool`), or None: a
+    positive int, 'auto' or 'ray'. The one place the rule is written."""
+    if workers in ("auto", "ray") or type(workers) is int and workers >= 1:
+        return None
+    return f"must be a positive int, 'auto' or 'ray', got {workers!r}"
 
 
 def resolve_workers(workers: int | str) -> int:
@@ -41,8 +51,8 @@ def resolve_workers(workers: int | str) -> int:
             return max(1, len(os.sched_getaffinity(0)))
         except AttributeError:  # not on Linux
             return max(1, os.cpu_count() or 1)
-    if not isinstance(workers, int) or isinstance(workers, bool) or workers < 1:
-        raise ValueError(f"workers must be a positive int or 'auto', got {workers!r}")
+    if workers == "ray" or workers_problem(workers) is not None:  # (Ray's actors: RayRolloutPool)
+        raise SgrError(f"workers must be a positive int or 'auto', got {workers!r}")
     return workers
 
 
@@ -71,41 +81,83 @@ class WorkerDied(RuntimeError):
     """A rollout worker process died twice on the same chunk."""
 
 
-class RolloutPool:
+class BasePool:
+    """What every rollout pool shares: `run` (check, split into balanced chunks, gather the returns
+    in input order). A pool says how many chunks it takes at once (`_width`) and simulates jobs
+    (`_run_jobs`); a width of 1 with `_runs_here` simulates in this process, without a job."""
+
+    _runs_here = False  # whether a width of 1 means "in this process" (local pools)
+
+    def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
+            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
+        """Episode return of each body driven by its item (`factory(env, items)` builds the policy),
+        in input order, each episode perturbed by its row of `noise` (if any); an exception raised
+        where a chunk was simulated is raised here."""
+        if len(bodies) != len(items):
+            raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
+        if len(bodies) == 0:
+            return np.zeros(0)
+        with self._session():
+            width = self._width()
+            if width == 1 and self._runs_here:
+                return run_chunk(task, list(bodies), list(items), factory, episode_steps, noise)
+            chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], width)
+            jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
+            out = np.zeros(len(bodies))
+            for c, returns in zip(chunks, self._run_jobs(jobs), strict=True):
+                out[c] = returns
+            return out
+
+    def _session(self) -> AbstractContextManager:
+        """What surrounds one `run` (nothing here; Ray keeps Python's `random` as it was)."""
+        return nullcontext()
+
+    def _width(self) -> int:
+        """How many chunks a batch is split into."""
+        raise NotImplementedError
+
+    def _run_jobs(self, jobs: list[tuple]) -> list[np.ndarray]:
+        """The returns of each job (`chunk_job`), in order."""
+        raise NotImplementedError
+
+    def close(self) -> None:
+        """Let go of what the pool started."""
+
+    def __enter__(self) -> BasePool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class RolloutPool(BasePool):
     """Episode returns of (body, policy item) pairs, in this process (workers=1) or split over
-    persistent worker processes (`python -m evolve.rollout`), started on first use.
+    persistent worker processes (`python -m evolve.rollout`), started on first use; WorkerDied
+    when a worker dies twice on a chunk.
 
     Workers are plain subprocesses fed pickles over pipes rather than a multiprocessing pool: a
     spawned multiprocessing child re-imports the caller's main module, which breaks scripts and
     notebooks that lack an `if __name__ == "__main__"` guard.
     """
 
+    _runs_here = True
+
     def __init__(self, workers: int | str = 1):
         self.workers = resolve_workers(workers)
         self._procs: list[subprocess.Popen] = []
 
-    def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
-        """Episode return of each body driven by its item (`factory(env, items)` builds the policy),
-        in input order, each episode perturbed by its row of `noise` (if any); a worker's exception
-        is raised here, WorkerDied when a worker dies twice on a chunk."""
-        if len(bodies) != len(items):
-            raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
-        if len(bodies) == 0:
-            return np.zeros(0)
-        if self.workers == 1:
-            return run_chunk(task, list(bodies), list(items), factory, episode_steps, noise)
-        chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], self.workers)
-        jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
-        for proc, job in zip(self._start(len(chunks)), jobs, strict=True):
+    def _width(self) -> int:
+        return self.workers
+
+    def _run_jobs(self, jobs: list[tuple]) -> list[np.ndarray]:
+        for proc, job in zip(self._start(len(jobs)), jobs, strict=True):
             self._send(proc, job)
-        out = np.zeros(len(bodies))
+        out: list = []
         failure = None
-        for i, (c, job) in enumerate(zip(chunks, jobs, strict=True)):  # every reply, even after a failure
+        for i, job in enumerate(jobs):  # every reply, even after a failure
             ok, value = self._reply(i, job)
-            if ok:
-                out[c] = value
-            elif failure is None:
+            out.append(value if ok else None)
+            if not ok and failure is None:
                 failure = value
         if failure is not None:
             raise failure
@@ -169,12 +221,6 @@ class RolloutPool:
             proc.stdout.close()
         self._procs = []
 
-    def __enter__(self) -> RolloutPool:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
-
     def __del__(self) -> None:
-        if self._procs:
+        if getattr(self, "_procs", None):  # (none when __init__ refused its workers)
             self.close()

@@ -27,13 +27,14 @@ import importlib.util
 import logging
 import os
 import random
-from collections.abc import Sequence
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 import numpy as np
 
 from evolve.own_modules import ROOT
-from evolve.rollout.pool import PolicyFactory, balanced_chunks, chunk_job
-from evolve.rollout.robust import EpisodeNoise
+from evolve.rollout.pool import BasePool
+from tsim.errors import SgrError
 
 INSTALL = 'pip install "sgr[ray]"'
 ACTOR_RESTARTS = 3  # a chunk whose actor dies is re-run on another actor this many times
@@ -43,7 +44,7 @@ REPLACE_TIMEOUT_S = 60.0  # a replacement actor that has not started by then is 
 def require_ray(what: str) -> None:
     """ValueError (one line for `sgr: error:`) when Ray is not installed; does not import it."""
     if importlib.util.find_spec("ray") is None:
-        raise ValueError(f"{what} needs Ray: {INSTALL}")
+        raise SgrError(f"{what} needs Ray: {INSTALL}")
 
 
 def connect(what: str, address: str | None = None, start: str | None = None):
@@ -62,8 +63,8 @@ def connect(what: str, address: str | None = None, start: str | None = None):
             ray.init(address=address or start, logging_level=logging.WARNING, log_to_driver=False)
         except ConnectionError as exc:  # e.g. no cluster at that address
             where = f"at {address}" if address else "here"
-            raise ValueError(f"{what}: cannot join a Ray cluster {where}: "
-                             f"{' '.join(str(exc).split())}") from None
+            raise SgrError(f"{what}: cannot join a Ray cluster {where}: "
+                           f"{' '.join(str(exc).split())}") from None
         finally:
             os.chdir(here)
     return ray
@@ -82,51 +83,53 @@ class _RolloutActor:
         return run_chunk(*job)
 
 
-class RayRolloutPool:
+class RayRolloutPool(BasePool):
     """Episode returns of (body, policy item) pairs, split over Ray actors (`workers: ray`): one per
-    CPU of the cluster (or `actors`), started on first use. Same interface as `RolloutPool`."""
+    CPU of the cluster (or `actors`), started on first use. `run` is `BasePool.run`; Python's
+    `random` state is left as it was."""
 
     def __init__(self, actors: int | None = None):
         require_ray("workers: ray")
         self.n_actors = actors
         self._actors: list = []
+        self._live: list[int] = []  # the actors a run's chunks go to (set by _width)
         self._started_ray = False
 
-    def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
-        """As `RolloutPool.run`, over the actors; Python's `random` state is left as it was
-        (neat-python evolves with it). An actor's exception is raised here; RuntimeError when an
-        actor died more than ACTOR_RESTARTS times."""
-        if len(bodies) != len(items):
-            raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
-        if len(bodies) == 0:
-            return np.zeros(0)
-        # Ray draws from Python's `random` (e.g. when it starts), which neat-python evolves with: the
-        # caller's random state is left as it was, as local workers leave it
+    @contextmanager
+    def _session(self) -> Iterator[None]:
+        """Ray draws from Python's `random` (e.g. when it starts), which neat-python evolves with: the
+        caller's random state is left as it was, as local workers leave it."""
         state = random.getstate()
         try:
-            return self._run(task, bodies, items, factory, episode_steps, noise)
+            yield
         finally:
             random.setstate(state)
 
-    def _run(self, task, bodies, items, factory, episode_steps, noise) -> np.ndarray:
+    def _width(self) -> int:
+        """The live actors (started, and dead ones replaced where there is room); RuntimeError when
+        none is left."""
         ray = self._start()
         self._replace_dead(ray)
-        live = [i for i, a in enumerate(self._actors) if a is not None]
-        if not live:
+        self._live = [i for i, a in enumerate(self._actors) if a is not None]
+        if not self._live:
             raise RuntimeError("no Ray rollout actor is left and the cluster has no free CPU for a new "
                                "one; set workers: 1 or N to run on this machine")
-        chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], len(live))
-        jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
+        return len(self._live)
+
+    def _run_jobs(self, jobs: list[tuple]) -> list[np.ndarray]:
+        """Each job on one live actor; an actor's exception is raised here; a job whose actor died is
+        run again on another one, RuntimeError when an actor died more than ACTOR_RESTARTS times."""
+        import ray
+
         pending = {self._actors[i].run.remote(job): (k, i)
-                   for k, (i, job) in enumerate(zip(live, jobs, strict=False))}
+                   for k, (i, job) in enumerate(zip(self._live, jobs, strict=False))}
         tries = [0] * len(jobs)
-        out = np.zeros(len(bodies))
+        out: list = [None] * len(jobs)
         while pending:
             ready, _ = ray.wait(list(pending), num_returns=1)
             k, i = pending.pop(ready[0])
             try:
-                out[chunks[k]] = ray.get(ready[0])
+                out[k] = ray.get(ready[0])
             except ray.exceptions.RayTaskError as exc:  # raised in an actor: raise it here as it was
                 raise exc.cause from None
             except ray.exceptions.RayActorError as exc:  # the process or its node died: run it elsewhere
@@ -144,8 +147,9 @@ class RayRolloutPool:
 
     def _new_actor(self, ray):
         env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
-        if os.environ.get("SGR_ARCH"):  # actors simulate where this process would
-            env["SGR_ARCH"] = os.environ["SGR_ARCH"]
+        for key in ("SGR_ARCH", "SGR_PRECISION"):  # actors simulate where and as this process would
+            if os.environ.get(key):
+                env[key] = os.environ[key]
         # the environment is set before the actor's process starts: Taichi reads it at its start
         cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=0, max_task_retries=0,
                                                 runtime_env={"env_vars": env})
@@ -201,12 +205,6 @@ class RayRolloutPool:
         if self._started_ray:
             ray.shutdown()
             self._started_ray = False
-
-    def __enter__(self) -> RayRolloutPool:
-        return self
-
-    def __exit__(self, *exc) -> None:
-        self.close()
 
     def __del__(self) -> None:
         if self._actors:

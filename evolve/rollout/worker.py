@@ -12,6 +12,7 @@ import signal
 import struct
 import sys
 import sysconfig
+import traceback
 from collections.abc import Sequence
 from pathlib import Path
 from typing import BinaryIO
@@ -23,6 +24,7 @@ from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import EpisodeNoise
 from tasks.registry import register
 from tasks.specs import BUILTIN, TASKS
+from tsim.errors import SgrError
 
 
 def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
@@ -125,7 +127,10 @@ def main() -> None:
         else:
             try:
                 reply = (True, run_chunk(*job))
-            except Exception as exc:  # sent back and raised in the parent
+            except Exception as exc:  # sent back and raised in the parent, with where it was raised here
+                if not isinstance(exc, SgrError):  # (a traceback does not pickle; a note does)
+                    exc.add_note(f"raised in rollout worker process {os.getpid()}:\n"
+                                 + "".join(traceback.format_tb(exc.__traceback__)).rstrip())
                 reply = (False, exc)
         try:
             write_frame(replies, reply)

@@ -27,7 +27,9 @@ from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
 from tasks.env import obs_dim
 from tasks.specs import TASKS
+from tsim import runtime
 from tsim.body import build_body, check_robot
+from tsim.errors import SgrError
 
 KEYS = ("task", "episode_steps", "body", "controller")
 
@@ -49,7 +51,7 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     method (`Problem.champion` gives the body and controller)."""
     champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
              "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
-             "genome": genome_json(genome)}
+             "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
     method_keys = problem.champion(phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
@@ -81,22 +83,22 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     try:
         champ = RunDir(run_dir).champion()
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise ValueError(f"{f}: not valid JSON ({exc})") from None
+        raise SgrError(f"{f}: not valid JSON ({exc})") from None
     if not isinstance(champ, dict):
-        raise ValueError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
+        raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
     missing = [k for k in KEYS if k not in champ]
     if missing:
-        raise ValueError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
+        raise SgrError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
     if champ["task"] not in TASKS:
-        raise ValueError(f"{f}: key 'task': unknown task {champ['task']!r}")
+        raise SgrError(f"{f}: key 'task': unknown task {champ['task']!r}")
     steps = champ["episode_steps"]
     positive = isinstance(steps, int) and not isinstance(steps, bool) and steps > 0
     if not (positive or steps in (None, "evogym")):
-        raise ValueError(f"{f}: key 'episode_steps' must be a positive int, 'evogym' or null, got {steps!r}")
+        raise SgrError(f"{f}: key 'episode_steps' must be a positive int, 'evogym' or null, got {steps!r}")
     try:
         body = check_robot(champ["body"])
     except ValueError as exc:
-        raise ValueError(f"{f}: key 'body': {exc}") from None
+        raise SgrError(f"{f}: key 'body': {exc}") from None
     c = champ["controller"]
     b = build_body(body)
     try:
@@ -104,11 +106,17 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
         ctrl = GraphController.from_json(c) if graph else DenseController.from_json(c)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
-        raise ValueError(f"{f}: key 'controller': not a controller of this body and task "
-                         f"({type(exc).__name__}: {exc})") from None
+        raise SgrError(f"{f}: key 'controller': not a controller of this body and task "
+                       f"({type(exc).__name__}: {exc})") from None
     if np.shape(actions) != (len(b.actuator_flat),):
-        raise ValueError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
-                         f"{len(b.actuator_flat)} actuators")
+        raise SgrError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
+                       f"{len(b.actuator_flat)} actuators")
+    # its fitness is reproducible in the precision it was scored in (records without the key: f64)
+    try:
+        runtime.use_precision(champ.get("precision") or "f64")
+    except ValueError as exc:
+        raise SgrError(f"{f}: key 'precision': scored in {champ.get('precision') or 'f64'}, to be "
+                       f"replayed in it: {exc} (start a new process)") from None
     return champ, body, ctrl
 
 
@@ -219,9 +227,9 @@ def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
 def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
     """The perturbations of replays 0 (none) to n - 1."""
     if kind not in NOISE_KINDS:
-        raise ValueError(f"noise kind must be one of {', '.join(NOISE_KINDS)}, got {kind!r}")
+        raise SgrError(f"noise kind must be one of {', '.join(NOISE_KINDS)}, got {kind!r}")
     if not (eps >= 0 and offset >= 0):
-        raise ValueError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
+        raise SgrError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
     tags = [f"replay/{kind}/{eps!r}/{offset!r}/{i}" for i in range(n)]
     return EpisodeNoise(Perturbation(kind, eps, offset), episode_keys(seed, tags, 0), np.arange(n) > 0)
 
@@ -229,8 +237,7 @@ def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> Ep
 def episode_steps(task: str, steps: int | str | None) -> int:
     """The episode length a record stands for: runs record theirs; older ones wrote null (the
     paper's length for the task) or "evogym" (evogym's)."""
-    spec = TASKS[task]
-    return spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym" else int(steps)
+    return TASKS[task].episode_length(steps if steps is None or steps == "evogym" else int(steps))
 
 
 @dataclass(frozen=True)

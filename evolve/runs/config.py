@@ -2,9 +2,13 @@
 
 The schema is the common keys below plus the method's own (`Problem.config_keys`). Paths inside a
 config (neat_config, ...) are relative to the YAML file; left out, they are the method's packaged
-defaults in configs/neat/. `load_config` returns a plain dict with every key present (defaults
-filled, `episode_steps` resolved to the number of steps a run uses), which is what a run
-directory stores.
+defaults in configs/neat/. `load_config` returns a `RunConfig`: frozen and typed, every key
+present (defaults filled from the schema, the one place they live), checked once, `episode_steps`
+resolved to the number of steps a run uses and `robust`/`final_selection` parsed once into their
+dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
+run directory stores (config.yaml); it also records the arch and precision the run was created
+with. `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
+null) included.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
@@ -13,14 +17,17 @@ directory stores.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 from evolve.methods import METHODS
+from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
+from evolve.runs.run_config import COMMON, RunConfig
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
+from tsim import runtime
+from tsim.errors import SgrError
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
@@ -33,50 +40,34 @@ def configs_dir() -> Path:
     return Path(__file__).resolve().parents[1] / "configs"
 
 
-# key: (type or tuple of types, default); the method's own keys come from its Problem class
-COMMON: dict[str, tuple[Any, Any]] = {
-    "method": (str, None),
-    "task": (str, None),
-    "generations": (int, 250),
-    "pop_size": (int, 128),
-    "seed": (int, 0),
-    "robot_shape": (list, [5, 5]),
-    "episode_steps": ((int, str, type(None)), None),
-    "neat_config": ((str, type(None)), None),
-    "checkpoint_every": (int, 5),
-    "render_champion": (bool, True),
-    "workers": ((int, str), "auto"),
-    "imports": (list, []),
-    "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
-    # evolve/runs/final_selection.py; null: the champion is the best-ever genome
-    "final_selection": ((dict, type(None)), None),
-}
-
-
 def _type_name(t) -> str:
     ts = t if isinstance(t, tuple) else (t,)
     return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
 
-def check_config(raw: dict, source: str = "config") -> dict:
-    """Fill defaults and validate; raises ValueError naming the offending key."""
+def check_config(raw: dict, source: str = "config") -> RunConfig:
+    """Fill defaults and validate, once; raises SgrError naming the offending key. Keys `arch` and
+    `precision` (a run folder's config.yaml used as a config) are replaced by this run's."""
     if not isinstance(raw, dict):
-        raise ValueError(f"{source}: a config must be a mapping of keys to values")
+        raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
     if method not in METHODS:
-        raise ValueError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
-                         f"{closest(method, METHODS)}")
+        raise SgrError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
+                       f"{closest(method, METHODS)}")
     problem = METHODS[method]
     schema = {**COMMON, **problem.config_keys}
+    raw = {k: v for k, v in raw.items() if k != "arch"}  # recorded, not chosen
+    # the simulator's real type, f64 (evogym's bits) or f32; null: $SGR_PRECISION, else f64
+    asked_precision = raw.pop("precision", None)
     for key in raw:
         if key not in schema:
-            raise ValueError(f"{source}: unknown key {key!r} for method {method!r}; "
-                             f"known keys: {', '.join(sorted(schema))}")
+            raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
+                           f"known keys: {', '.join(sorted(schema))}")
     cfg = {}
     for key, (typ, default) in schema.items():
         if key not in raw:
             if key == "task":
-                raise ValueError(f"{source}: missing required key {key!r}")
+                raise SgrError(f"{source}: missing required key {key!r}")
             cfg[key] = default
             continue
         val = raw[key]
@@ -85,69 +76,77 @@ def check_config(raw: dict, source: str = "config") -> dict:
         types = typ if isinstance(typ, tuple) else (typ,)
         ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
-            raise ValueError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
+            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
         cfg[key] = val
     imports = cfg["imports"]
     if not all(isinstance(m, str) for m in imports):
-        raise ValueError(f"{source}: key 'imports' must be a list of module names or .py files, "
-                         f"got {imports!r}")
+        raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
+                       f"got {imports!r}")
     for ref in imports:  # they register the user's tasks before the task is looked up
         try:
             import_tasks(ref)
         except ValueError as exc:
-            raise ValueError(f"{source}: key 'imports': {exc}") from None
+            raise SgrError(f"{source}: key 'imports': {exc}") from None
     if cfg["task"] not in TASKS:
-        raise ValueError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
+        raise SgrError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
     for key in ("generations", "pop_size", "checkpoint_every"):
         if cfg[key] < 1:
-            raise ValueError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
     shape = cfg["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
-        raise ValueError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
+        raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
     steps = cfg["episode_steps"]
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
-        raise ValueError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
-                         f"got {steps!r}")
-    spec = TASKS[cfg["task"]]  # the run records the episode length it uses, not a rule for it
-    cfg["episode_steps"] = (spec.paper_steps if steps is None else spec.evogym_steps if steps == "evogym"
-                            else steps)
-    w = cfg["workers"]
-    if isinstance(w, str) and w not in ("auto", "ray") or isinstance(w, int) and w < 1:
-        raise ValueError(f"{source}: key 'workers' must be a positive int, 'auto' or 'ray', got {w!r}")
-    robust = Robust.from_config(cfg["robust"], source)
+        raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
+                       f"got {steps!r}")
+    # the run records the episode length it uses, not a rule for it
+    cfg["episode_steps"] = TASKS[cfg["task"]].episode_length(steps)
+    if (why := workers_problem(cfg["workers"])) is not None:
+        raise SgrError(f"{source}: key 'workers' {why}")
+    try:  # robust.py raises ValueError naming the key: the user's to fix
+        robust = Robust.from_config(cfg["robust"], source)
+    except SgrError:
+        raise
+    except ValueError as exc:
+        raise SgrError(str(exc)) from None
     if robust is not None and robust.accumulate and problem.reevaluate_elites:
-        raise ValueError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "
-                         "(the best of a search run for each body) is not a score to average")
-    cfg["robust"] = None if robust is None else robust.to_json()
+        raise SgrError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "
+                       "(the best of a search run for each body) is not a score to average")
+    try:  # the run records the precision it simulates in; a resumed run keeps it
+        precision = runtime.requested_precision(asked_precision)
+    except ValueError as exc:
+        raise SgrError(f"{source}: key 'precision': {exc}") from None
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
-        raise ValueError(f"{source}: key 'final_selection' {not_for(method)}")
-    cfg["final_selection"] = None if selection is None else selection.to_json()
+        raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)
         if not Path(cfg[key]).is_file():
-            raise ValueError(f"{source}: key {key!r}: file not found: {cfg[key]}")
+            raise SgrError(f"{source}: key {key!r}: file not found: {cfg[key]}")
     problem.validate(cfg, source)
-    return cfg
+    from tsim.runtime import requested_arch
+
+    return RunConfig.build(cfg, problem.config_keys, arch=requested_arch(), precision=precision,
+                           robust=robust, selection=selection)
 
 
-def load_config(path: str | Path, overrides: dict | None = None) -> dict:
+def load_config(path: str | Path, overrides: dict | None = None) -> RunConfig:
     """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
     resolve relative paths and validate a YAML config."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
-        raise ValueError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
+        raise SgrError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
     return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent)
 
 
-def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> dict:
+def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> RunConfig:
     """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
     `base` (default: the current folder)."""
     if not isinstance(raw, dict):
-        raise ValueError(f"{source}: a config must be a mapping of keys to values, "
-                         f"got a {type(raw).__name__}")
+        raise SgrError(f"{source}: a config must be a mapping of keys to values, "
+                       f"got a {type(raw).__name__}")
     problem = METHODS.get(raw.get("method"))
     raw = dict(raw)
     for key in problem.default_files if problem else ():
@@ -180,8 +179,8 @@ def find_config(ref: str, what: str = "config") -> Path:
     if found is not None:
         return found
     if Path(ref).exists():
-        raise ValueError(f"{what} {ref} is not a file")
+        raise SgrError(f"{what} {ref} is not a file")
     names = [str(f.relative_to(configs_dir()).with_suffix("")) for f in sorted(configs_dir().glob("*/*.yaml"))
              if f.parent.name != "neat"]
-    raise ValueError(f"{what} {ref} does not exist, nor is it the name of a packaged config"
-                     f"{closest(ref.removesuffix('.yaml'), names) or ' (e.g. sgr/Climber-v2, quick, paper)'}")
+    raise SgrError(f"{what} {ref} does not exist, nor is it the name of a packaged config"
+                   f"{closest(ref.removesuffix('.yaml'), names) or ' (e.g. sgr/Climber-v2, quick, paper)'}")

@@ -19,20 +19,21 @@ from contextlib import contextmanager
 from pathlib import Path
 
 from evolve.methods import METHODS
-from evolve.rollout.pool import RolloutPool
-from evolve.rollout.robust import Robust
+from evolve.rollout.pool import BasePool, RolloutPool
 from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
-from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.config import RunConfig, config_from_dict, load_config
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.specs import BUILTIN
+from tsim import runtime
+from tsim.errors import SgrError
 
 
-def rollout_pool(workers: int | str) -> RolloutPool:
+def rollout_pool(workers: int | str) -> BasePool:
     """Local worker processes (a number, 'auto'), or the actors of a Ray cluster ('ray')."""
     if workers == "ray":
         from evolve.rollout.ray_cluster import RayRolloutPool
@@ -41,29 +42,37 @@ def rollout_pool(workers: int | str) -> RolloutPool:
 
 
 class Experiment:
-    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers.
+    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers. It
+    holds worker processes and the run's lock: use it in a `with` block (or call `close`).
 
-        exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5}, "runs/x")
-        exp.run_all(); exp.finish()
+        cfg = {"method": "sgr", "task": "Walker-v0", "generations": 5}
+        with Experiment.from_config(cfg, "runs/x") as exp:
+            exp.run_all(); exp.finish()
     """
 
-    def __init__(self, run: RunDir, cfg: dict, state: dict | None = None, quiet: bool = False,
+    def __init__(self, run: RunDir, cfg: RunConfig | dict, state: dict | None = None, quiet: bool = False,
                  workers: int | str | None = None):
-        """`workers` overrides the config's (a resumed run may use another machine's CPUs)."""
+        """`cfg`: the run's config (a run folder's config.yaml as read: `RunConfig.of`); `workers`
+        overrides the config's (a resumed run may use another machine's CPUs)."""
+        cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
+        # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
+        runtime.use_precision(cfg.get("precision"))
         self.neat_config = load_neat_config(run.path / "neat.ini")
-        self.pool = rollout_pool(cfg.get("workers", "auto") if workers is None else workers)
-        method = METHODS[cfg["method"]]
+        self.pool = rollout_pool(cfg.workers if workers is None else workers)
+        method = METHODS[cfg.method]
         self.problem = method(cfg, self.neat_config, self.pool)
         if state is not None:
             self.problem.restore(state.get("problem", {}))
-        self.selection = FinalSelection.from_config(cfg.get("final_selection"))
-        robust = Robust.from_config(cfg.get("robust")) or Robust(reevaluate=False)
+        self.selection = cfg.final_selection
+        robust = cfg.robust
+        # (body_distance_weight is a key of sgr and direct; nested has none: plain NEAT speciation)
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
-                                 seed=cfg["seed"], body_distance_weight=cfg.get("body_distance_weight", 0.0),
-                                 state=state, reevaluate=method.reevaluate_elites or robust.reevaluate,
-                                 accumulate=robust.accumulate, race=robust.race,
-                                 settle=robust.settle)
+                                 seed=cfg.seed, body_distance_weight=cfg.get("body_distance_weight", 0.0),
+                                 state=state, reevaluate=method.reevaluate_elites
+                                 or (robust is not None and robust.reevaluate),
+                                 accumulate=robust is not None and robust.accumulate,
+                                 race=robust.race if robust else 0, settle=robust.settle if robust else 0)
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
@@ -78,23 +87,19 @@ class Experiment:
         return cls._start(config_from_dict(config, "config"), out, quiet)
 
     @classmethod
-    def _start(cls, cfg: dict, out: str | Path, quiet: bool) -> Experiment:
+    def _start(cls, cfg: RunConfig, out: str | Path, quiet: bool) -> Experiment:
         ini = neat_ini_text(cfg["neat_config"], cfg, METHODS[cfg["method"]].neat_overrides(cfg))
         neat_config_from_text(ini, cfg["neat_config"])  # a bad INI must fail before the run exists
-        if cfg["workers"] == "ray":
+        if cfg.workers == "ray":
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")
         run = RunDir(out)
-        run.lock()
-        try:
+        with run.locked_unless_it_fails():
             run.create(cfg, ini)
             if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
                 run.save_task(spec_blob(cfg["task"]))
             exp = cls(run, cfg, quiet=quiet)
             run.save_checkpoint(0, exp.state())
-        except BaseException:
-            run.unlock()
-            raise
         return exp
 
     @classmethod
@@ -105,27 +110,23 @@ class Experiment:
         run = RunDir(out)
         cfg = run.config()
         run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
-        run.lock()
-        try:
+        with run.locked_unless_it_fails():
             state = load_checkpoint(run, cfg)
             if state is None:
-                raise ValueError(f"{out} has no checkpoint to resume from")
+                raise SgrError(f"{out} has no checkpoint to resume from")
             done = state["generation"]
             if generations is not None:
                 if generations < done:
-                    raise ValueError(f"{out} has already run {done} generations; --generations must be "
-                                     f">= {done}")
+                    raise SgrError(f"{out} has already run {done} generations; --generations must be "
+                                   f">= {done}")
                 if generations != cfg["generations"]:
                     cfg = {**cfg, "generations": generations}
                     run.update_config(cfg)
             if done >= cfg["generations"] and not run.end_files_pending():
-                raise ValueError(f"{out} is finished ({done} of {cfg['generations']} generations); "
-                                 "add --generations N to extend it")
+                raise SgrError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                               "add --generations N to extend it")
             run.truncate_rows(done)
             return cls(run, cfg, state=state, quiet=quiet, workers=workers)
-        except BaseException:
-            run.unlock()
-            raise
 
     def state(self) -> dict:
         """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own
@@ -193,9 +194,15 @@ class Experiment:
                 f"last checkpoint: make room, then {resume}")
 
     def close(self) -> None:
-        """Stop the rollout worker processes and let go of the run directory."""
+        """Stop the rollout worker processes and let go of the run directory (again: nothing)."""
         self.pool.close()
         self.run.unlock()
+
+    def __enter__(self) -> Experiment:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
     def finish(self) -> None:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
@@ -260,21 +267,15 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
     run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
     state = load_checkpoint(run, cfg)
     if state is None:
-        raise ValueError(f"{run_dir} has no checkpoint")
+        raise SgrError(f"{run_dir} has no checkpoint")
     if state["generation"] < cfg["generations"]:
-        raise ValueError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
-                         "generations): resume it first")
+        raise SgrError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
+                       "generations): resume it first")
     settings = FinalSelection.from_config({**(cfg.get("final_selection") or {}), **(overrides or {})},
                                           "sgr select-champion")
-    run.lock()
-    try:
+    with run.locked_unless_it_fails():
         exp = Experiment(run, cfg, state=state, quiet=True, workers=workers)
-    except BaseException:
-        run.unlock()
-        raise
-    try:
+    with exp:
         champ = select_champion(exp, settings)
-    finally:
-        exp.close()
     write_end_files(run, cfg)  # the new champion's GIF and plot: the run's files agree
     return champ

@@ -7,6 +7,7 @@ from pathlib import Path
 
 import yaml
 
+from tsim.errors import SgrError
 from tsim.files import atomic_write
 
 __all__ = ["atomic_write", "read_yaml", "yaml_problem"]
@@ -23,10 +24,10 @@ def read_yaml(path: Path, what: str = "file") -> object:
     """The parsed YAML file; ValueError naming the file when it is missing, not text or not YAML."""
     path = Path(path)
     if not path.is_file():
-        raise ValueError(f"{what} not found: {path}")
+        raise SgrError(f"{what} not found: {path}")
     try:
         return yaml.safe_load(path.read_text())
     except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a text file") from None
+        raise SgrError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:
-        raise ValueError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None
+        raise SgrError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None

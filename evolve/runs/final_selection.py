@@ -36,6 +36,7 @@ import numpy as np
 from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
 from evolve.runs.champion import best_ever_record, champion_record
 from evolve.runs.files import atomic_write
+from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"
 TAG = "final"
@@ -71,17 +72,17 @@ class FinalSelection:
         for key in ("candidates", "episodes"):
             v = getattr(sel, key)
             if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-                raise ValueError(f"{name}.{key}' must be an int >= 1, got {v!r}")
+                raise SgrError(f"{name}.{key}' must be an int >= 1, got {v!r}")
         try:
             Robust.from_config({"statistic": sel.statistic}, source)
         except ValueError:
-            raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, "
-                             f"got {sel.statistic!r}") from None
+            raise SgrError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, "
+                           f"got {sel.statistic!r}") from None
         h = sel.tolerance
         if isinstance(h, bool) or not isinstance(h, int | float) or not (0 <= h <= 1):
-            raise ValueError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
+            raise SgrError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
         if sel.rank not in RANKS:
-            raise ValueError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
+            raise SgrError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
         return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank)
 
 
@@ -113,7 +114,7 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
     holds &= np.isfinite(scores) & np.isfinite(nominal)
     pool = np.flatnonzero(holds) if holds.any() else np.flatnonzero(np.isfinite(scores))
     if len(pool) == 0:
-        raise ValueError("no candidate has a finite score")
+        raise SgrError("no candidate has a finite score")
     key = np.fmin(scores, nominal) if rank == "min" else scores  # fmin: a nan nominal leaves the score
     return int(pool[np.argmax(key[pool])]), holds
 
@@ -123,9 +124,9 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     champion-best-ever.json, and return the new champion record."""
     cfg, search, problem = exp.cfg, exp.search, exp.problem
     if type(problem).reevaluate_elites:
-        raise ValueError(f"final_selection {not_for(cfg['method'])}")
+        raise SgrError(f"final_selection {not_for(cfg['method'])}")
     if search.best is None:
-        raise ValueError(f"{exp.run.path} has no champion to choose from yet")
+        raise SgrError(f"{exp.run.path} has no champion to choose from yet")
     cands = candidates(search, settings.candidates)
     phenotypes = [search.decode(g) for _, g in cands]
     robust = settings.robust(cfg.get("robust"))

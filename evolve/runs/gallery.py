@@ -153,10 +153,5 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
 
 
 def _verdict_caption(row: dict) -> str:
-    """" · holds" or " · knife-edge" (evolve/runs/verdict.py) where the row has the rule's replays."""
-    from evolve.runs.report import _verdict, noise_column
-    from evolve.runs.verdict import EPS
-
-    if "nominal" not in row or noise_column(EPS, "mean") not in row:
-        return ""
-    return f" · {_verdict(row).label}"
+    """" · holds" or " · knife-edge" (evolve/runs/verdict.py), where the report judged the row."""
+    return f" · {row['verdict']}" if row.get("verdict") else ""

@@ -14,6 +14,7 @@ import pickle
 from pathlib import Path
 
 from evolve.runs.rundir import RunDir
+from tsim.errors import SgrError
 
 # modules renamed since checkpoints were first written: old checkpoints still load
 MOVED_MODULES = {"evolve.genome": "evolve.search.genome"}
@@ -29,7 +30,7 @@ def load_trusted_pickle(path: Path) -> dict:
     trusts."""
     state = _Unpickler(io.BytesIO(Path(path).read_bytes())).load()
     if not isinstance(state, dict) or "generation" not in state:
-        raise ValueError(f"{path}: not an sgr checkpoint")
+        raise SgrError(f"{path}: not an sgr checkpoint")
     return state
 
 
@@ -40,7 +41,7 @@ def run_dirs(path: Path) -> list[RunDir]:
         return [RunDir(path)]
     if (path / "sweep.yaml").is_file():
         return [RunDir(p) for p in sorted((path / "runs").iterdir()) if (p / "config.yaml").is_file()]
-    raise ValueError(f"{path} is neither a run directory (config.yaml) nor a sweep directory (sweep.yaml)")
+    raise SgrError(f"{path} is neither a run directory (config.yaml) nor a sweep directory (sweep.yaml)")
 
 
 def convert_run(run: RunDir) -> list[str]:
@@ -60,8 +61,8 @@ def convert_run(run: RunDir) -> list[str]:
             except ValueError:
                 raise
             except Exception as exc:
-                raise ValueError(f"{f}: cannot convert ({type(exc).__name__}: "
-                                 f"{' '.join(str(exc).split())[:200]})") from None
+                raise SgrError(f"{f}: cannot convert ({type(exc).__name__}: "
+                               f"{' '.join(str(exc).split())[:200]})") from None
             try:
                 path = run.save_checkpoint(state["generation"], exp.state())
             finally:

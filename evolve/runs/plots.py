@@ -27,6 +27,7 @@ from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
 from evolve.runs.files import atomic_write
+from tsim.errors import SgrError
 
 UNKNOWN = "unknown"
 _WRAPPED = re.compile(r"^\s*[A-Za-z_][\w.]*\((.*)\)\s*$")
@@ -50,13 +51,13 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     generations counted from 1, also in runs written when the file counted from 0."""
     f = Path(run_dir) / "generations.csv"
     if not f.is_file():
-        raise ValueError(f"{run_dir} has no generations.csv")
+        raise SgrError(f"{run_dir} has no generations.csv")
     try:
         text = f.read_text()
         # a line being written (no newline yet) is no row
         rows = list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))
     except (csv.Error, UnicodeDecodeError) as exc:
-        raise ValueError(f"{f}: not a readable CSV file ({exc})") from None
+        raise SgrError(f"{f}: not a readable CSV file ({exc})") from None
     if not rows:
         return {}
 
@@ -85,10 +86,10 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
         try:
             loaded = yaml.safe_load(f.read_text())
         except UnicodeDecodeError:
-            raise ValueError(f"{f}: not a text file") from None
+            raise SgrError(f"{f}: not a text file") from None
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
-            raise ValueError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
+            raise SgrError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
         cfg = loaded if isinstance(loaded, dict) else {}
     parent = run_dir.resolve().parent.name or UNKNOWN
     method = str(cfg.get("method") or parent)
@@ -153,7 +154,7 @@ def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = F
     its group's colour. Returns the PNG path."""
     curves = summarize_runs(run_dirs)
     if not curves:
-        raise ValueError("no run with generations to plot among " + ", ".join(map(str, run_dirs)))
+        raise SgrError("no run with generations to plot among " + ", ".join(map(str, run_dirs)))
     fig = Figure(figsize=(8, 4.5))
     ax = fig.add_subplot()
     if per_run:
@@ -203,7 +204,7 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
     champion.json) as a star; returns the PNG path."""
     cols = read_generations(run_dir)
     if "generation" not in cols:
-        raise ValueError(f"{run_dir}/generations.csv has no rows")
+        raise SgrError(f"{run_dir}/generations.csv has no rows")
     method, task = run_labels(run_dir)
     fig = Figure(figsize=(8, 4.5))
     ax = fig.add_subplot()

@@ -31,6 +31,7 @@ import yaml
 from evolve.runs import verdict as verdict_rule
 from evolve.runs.files import atomic_write
 from evolve.runs.plots import read_generations, run_labels, save_png
+from tsim.errors import SgrError
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -58,7 +59,7 @@ def episode_length(cfg: dict, task: str) -> int | None:
     if isinstance(steps, int):
         return steps
     spec = TASKS.get(task)
-    return None if spec is None else spec.evogym_steps if steps == "evogym" else spec.paper_steps
+    return None if spec is None else spec.episode_length(steps)
 
 
 def authors_not_comparable(task: str, episode_steps: list) -> str | None:
@@ -98,14 +99,14 @@ def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
         return [d for f in folder for d in run_dirs_under(f)]
     folder = Path(folder)
     if not folder.is_dir():
-        raise ValueError(f"not a folder: {folder}")
+        raise SgrError(f"not a folder: {folder}")
     if (folder / "config.yaml").is_file() and (folder / "generations.csv").is_file():
         return [folder]
     base = folder / "runs" if (folder / "runs").is_dir() else folder
     runs = sorted(d for d in base.iterdir()
                   if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())
     if not runs:
-        raise ValueError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
+        raise SgrError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
     return runs
 
 
@@ -158,6 +159,8 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         row["best_final"] = float(best[-1]) if len(best) else math.nan
         if robustness and (d / "champion.json").is_file():
             row.update(champion_robustness(d, replays, levels))
+            if verdict_rule.EPS in levels:  # the gallery's caption says it too
+                row["verdict"] = _verdict(row).label
         rows.append(row)
     return rows
 

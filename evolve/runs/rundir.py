@@ -26,12 +26,14 @@ import os
 import re
 import sys
 import zlib
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 import yaml
 
 from evolve.runs.files import atomic_write, read_yaml
+from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s"]
@@ -42,6 +44,14 @@ CHECKPOINT_VERSION = 1
 MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
 ENDING = ".writing-end-files"  # present while a run's end files are being written
 PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
+
+
+def checkpoint_generation(path: Path) -> int | None:
+    """The generation of an sgr checkpoint file's name (gen-00042.json.gz: 42; five digits or more,
+    so generations past 99,999 too); None for any other name (an older sgr's gen-00042.pkl, say).
+    The one place checkpoint names are parsed."""
+    m = CHECKPOINT.fullmatch(Path(path).name)
+    return int(m.group(1)) if m else None
 
 
 def _ends_a_line(path: Path) -> bool:
@@ -72,18 +82,18 @@ def read_checkpoint_file(path: Path) -> dict:
     try:
         text = inflate.decompress(Path(path).read_bytes(), MAX_CHECKPOINT_BYTES)
     except zlib.error as exc:
-        raise ValueError(f"not gzip ({exc})") from None
+        raise SgrError(f"not gzip ({exc})") from None
     if inflate.unconsumed_tail:  # a small file that would fill the memory
-        raise ValueError(f"over {MAX_CHECKPOINT_BYTES >> 20} MiB once uncompressed")
+        raise SgrError(f"over {MAX_CHECKPOINT_BYTES >> 20} MiB once uncompressed")
     if not inflate.eof:
         raise EOFError("cut short")
     data = json.loads(text)
     if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
-        raise ValueError("not an sgr checkpoint")
+        raise SgrError("not an sgr checkpoint")
     if data.get("version") != CHECKPOINT_VERSION:
-        raise ValueError(f"checkpoint version {data.get('version')!r}, this sgr reads {CHECKPOINT_VERSION}")
+        raise SgrError(f"checkpoint version {data.get('version')!r}, this sgr reads {CHECKPOINT_VERSION}")
     if not isinstance(data.get("generation"), int) or isinstance(data["generation"], bool):
-        raise ValueError("no generation")
+        raise SgrError("no generation")
     return data
 
 
@@ -98,7 +108,7 @@ def is_pickle(path: Path) -> bool:
         return False
 
 
-class PickledCheckpoints(ValueError):
+class PickledCheckpoints(SgrError):
     """A run whose only checkpoints are an older sgr's pickles: not loaded without trust."""
 
 
@@ -120,7 +130,7 @@ class RunDir:
         except BlockingIOError:
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
             os.close(fd)
-            raise ValueError(f"{self.path} is being run by another process (pid {holder})") from None
+            raise SgrError(f"{self.path} is being run by another process (pid {holder})") from None
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         self._lock_fd = fd
@@ -132,15 +142,26 @@ class RunDir:
             os.close(fd)  # releases the flock
             self._lock_fd = None
 
+    @contextmanager
+    def locked_unless_it_fails(self) -> Iterator[RunDir]:
+        """`lock`, and `unlock` again if the block raises: a run that cannot be started, resumed or
+        opened lets go of its directory; otherwise the lock stays held (until `unlock`)."""
+        self.lock()
+        try:
+            yield self
+        except BaseException:
+            self.unlock()
+            raise
+
     # ------------------------------------------------------------------ creation
     def create(self, cfg: dict, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
         """Write a new run's config.yaml, neat.ini, any `extra_files` and an empty generations.csv;
         ValueError when the directory already holds a run."""
         if (self.path / "generations.csv").exists():
-            raise ValueError(f"run directory {self.path} already holds a run; use --resume {self.path} "
-                             "or another --out")
+            raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
+                           "or another --out")
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
         atomic_write(self.path / "neat.ini", neat_ini.encode())
         for name, text in (extra_files or {}).items():
             atomic_write(self.path / name, text.encode())
@@ -150,10 +171,10 @@ class RunDir:
         """config.yaml as written (resolved); ValueError when missing, not YAML or not a run config."""
         f = self.path / "config.yaml"
         if not f.is_file():
-            raise ValueError(f"{self.path} is not a run directory (no config.yaml)")
+            raise SgrError(f"{self.path} is not a run directory (no config.yaml)")
         cfg = read_yaml(f)
         if not isinstance(cfg, dict) or "method" not in cfg:
-            raise ValueError(f"{f}: not a run config (no 'method' key)")
+            raise SgrError(f"{f}: not a run config (no 'method' key)")
         return cfg
 
     def save_task(self, blob: bytes) -> None:
@@ -185,7 +206,7 @@ class RunDir:
 
     def update_config(self, cfg: dict) -> None:
         """Replace config.yaml atomically (a resume that extends `generations` does)."""
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(cfg, sort_keys=False).encode())
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
@@ -258,7 +279,7 @@ class RunDir:
         (json.JSONDecodeError)."""
         f = self.path / "champion.json"
         if not f.is_file():
-            raise ValueError(f"{self.path} has no champion.json yet")
+            raise SgrError(f"{self.path} has no champion.json yet")
         return json.loads(f.read_text())
 
     def save_checkpoint(self, generation: int, data: dict) -> Path:
@@ -276,8 +297,13 @@ class RunDir:
         """sgr's checkpoint files (gen-XXXXX.json.gz), newest first."""
         if not self.ckpt_dir.is_dir():
             return []
-        found = [(int(m.group(1)), f) for f in self.ckpt_dir.iterdir() if (m := CHECKPOINT.fullmatch(f.name))]
+        found = [(g, f) for f in self.ckpt_dir.iterdir() if (g := checkpoint_generation(f)) is not None]
         return [f for _, f in sorted(found, reverse=True)]
+
+    def last_checkpoint_generation(self) -> int | None:
+        """Generations done at the newest checkpoint file, None without one."""
+        newest = self.checkpoints()[:1]
+        return checkpoint_generation(newest[0]) if newest else None
 
     def has_checkpoint(self) -> bool:
         """Whether the run has any checkpoint to resume from, an older sgr's pickled ones included
@@ -319,6 +345,6 @@ class RunDir:
                       f"resuming from {f.name}", file=sys.stderr)
             return state
         if ours:
-            raise ValueError(f"no usable checkpoint in {self.ckpt_dir}: "
-                             f"{', '.join(damaged + skipped)}")
+            raise SgrError(f"no usable checkpoint in {self.ckpt_dir}: "
+                           f"{', '.join(damaged + skipped)}")
         return None

@@ -38,6 +38,7 @@ from evolve.runs.files import atomic_write, read_yaml
 from evolve.runs.rundir import RunDir
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
+from tsim.errors import SgrError
 
 SWEEP_FILE = "sweep.yaml"
 KEYS = ("configs", "imports", "methods", "overrides", "seeds", "tasks")
@@ -58,7 +59,7 @@ class SweepRun:
 
 
 def _fail(source: str, msg: str) -> ValueError:
-    return ValueError(f"{source}: {msg}")
+    return SgrError(f"{source}: {msg}")
 
 
 def load_sweep(path: str | Path) -> dict:
@@ -170,7 +171,7 @@ class Sweep:
         sweep = load_sweep(sweep_file)
         out = Path(out)
         if (out / SWEEP_FILE).exists():
-            raise ValueError(f"{out} already holds a sweep; use sgr sweep --resume {out} or another --out")
+            raise SgrError(f"{out} already holds a sweep; use sgr sweep --resume {out} or another --out")
         (out / "runs").mkdir(parents=True, exist_ok=True)
         atomic_write(out / SWEEP_FILE, yaml.safe_dump(sweep, sort_keys=False).encode())
         return cls(out, sweep)
@@ -181,16 +182,16 @@ class Sweep:
         still exist)."""
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
-            raise ValueError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
+            raise SgrError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
         sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f))
         old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
                and not sweep.run_dir(r).checkpoints()]
         if old:  # refused before any run starts (each would fail, and be retried, alone)
             names = ", ".join(old[:3]) + (", ..." if len(old) > 3 else "")
-            raise ValueError(f"{len(old)} run(s) of {out} ({names}) "
-                             "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
-                             "which can run any code; if you trust this folder, convert them with: "
-                             f"sgr convert-checkpoints {out} --trust-pickle")
+            raise SgrError(f"{len(old)} run(s) of {out} ({names}) "
+                           "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
+                           "which can run any code; if you trust this folder, convert them with: "
+                           f"sgr convert-checkpoints {out} --trust-pickle")
         return sweep
 
     def run_dir(self, run: SweepRun) -> RunDir:
@@ -335,8 +336,8 @@ def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: f
         raise
     except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
         backend.stop()
-        raise ValueError(f"{exc}; every run keeps its last checkpoint; continue with: "
-                         f"sgr sweep --resume {sweep.path}{getattr(backend, 'resume_args', '')}") from None
+        raise SgrError(f"{exc}; every run keeps its last checkpoint; continue with: "
+                       f"sgr sweep --resume {sweep.path}{getattr(backend, 'resume_args', '')}") from None
     failed = [r for r, n in failures.items() if n > RETRIES]
     say(f"{total - len(sweep.pending())}/{total} runs done"
         + (f"; failed: {', '.join(r.name for r in failed)}" if failed else "")

@@ -13,6 +13,7 @@ from pathlib import Path
 import neat
 
 from evolve.search.genome import BodyAwareGenome, FlexibleReproduction
+from tsim.errors import SgrError
 
 SECTIONS = {"DefaultGenome": BodyAwareGenome.__name__,
             "DefaultReproduction": FlexibleReproduction.__name__}
@@ -39,14 +40,14 @@ def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
     cp = configparser.ConfigParser()
     try:
         if not cp.read(path):
-            raise ValueError(f"{path}: neat config file not found")
+            raise SgrError(f"{path}: neat config file not found")
     except configparser.Error as exc:
-        raise ValueError(f"{path}: not a valid INI file: {ini_problem(exc)}") from None
+        raise SgrError(f"{path}: not a valid INI file: {ini_problem(exc)}") from None
     except UnicodeDecodeError:
-        raise ValueError(f"{path}: not a valid INI file: not text") from None
+        raise SgrError(f"{path}: not a valid INI file: not text") from None
     for section in ("NEAT", *SECTIONS):
         if section not in cp:
-            raise ValueError(f"{path}: neat config lacks the [{section}] section")
+            raise SgrError(f"{path}: neat config lacks the [{section}] section")
     cp["NEAT"]["pop_size"] = str(cfg["pop_size"])
     # neat-python reads each section under its class's name
     for default, ours in SECTIONS.items():
@@ -67,7 +68,7 @@ def load_neat_config(ini_path: Path, source: str | Path | None = None) -> neat.C
                            neat.DefaultStagnation, str(ini_path))
     except Exception as exc:  # neat-python raises RuntimeError/KeyError for bad INI keys
         what = " ".join(str(exc).split())  # one line
-        raise ValueError(f"{source or ini_path}: bad neat-python config: {what}") from None
+        raise SgrError(f"{source or ini_path}: bad neat-python config: {what}") from None
 
 
 def neat_config_from_text(ini: str, source: str | Path | None = None) -> neat.Config:

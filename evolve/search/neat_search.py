@@ -5,6 +5,12 @@ decode every genome once (cached by key), drop invalid genomes before selection 
 removes them), skip re-simulating elites (their fitness is known and the simulation is
 deterministic), and snapshot the whole state (including Python's `random`, which neat-python
 uses) so a resumed run continues exactly.
+
+neat-python draws from the global `random`. A search given a seed keeps its own state of it and
+swaps it in around everything it does (`_own_random`), so two searches in one process (a notebook,
+a parameter loop) do not draw from each other's stream: each gives the generations it gives alone.
+A search without a seed (the nested baseline's inner populations) draws from whatever state is in
+place, which inside its owner's `step` is the owner's.
 """
 
 from __future__ import annotations
@@ -15,7 +21,8 @@ import math
 import random
 import statistics
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
 from typing import Any
 
 import numpy as np
@@ -30,14 +37,15 @@ Evaluate = Callable[..., tuple[np.ndarray, int]]
 
 class NeatSearch:
     """One NEAT population over a method's decode/evaluate: `step` per generation, or `ask`/`tell`
-    when the caller simulates. It draws from the global `random` (seeding it when `seed` is given);
-    `state` checkpoints it exactly."""
+    when the caller simulates. With a `seed` it keeps its own state of Python's `random` (swapped in
+    around its work, the caller's left as it was); `state` checkpoints it exactly."""
     def __init__(self, neat_config, decode: Decode, evaluate: Evaluate | None, *, seed: int | None,
                  body_distance_weight: float = 0.0, state: dict | None = None,
                  reevaluate: bool = False, accumulate: bool = False, race: int = 0, settle: int = 0):
-        """`seed` None leaves Python's `random` as it is (populations nested in another search);
-        `reevaluate` simulates elites again instead of reusing their fitness (when evaluation has
-        side effects, e.g. the nested baseline evolves a body's controllers, or is noisy).
+        """`seed` None: no random state of its own, the global `random` is drawn from as it is
+        (populations nested in another search, inside its `step`); `reevaluate` simulates elites
+        again instead of reusing their fitness (when evaluation has side effects, e.g. the nested
+        baseline evolves a body's controllers, or is noisy).
         `accumulate` (with `reevaluate`): a genome's fitness is the mean of every score it has had,
         so a survivor's fitness averages over the generations it survives, and a lucky score is
         diluted instead of kept. `race` (with `accumulate`, in `step`): the `race` genomes with the
@@ -62,27 +70,62 @@ class NeatSearch:
         gc.body_cache = {}
         self.reporters = ReporterSet()
         self.phenotypes: dict[int, Any] = {}
+        self._owns_random = seed is not None
+        self._random_state: tuple | None = None  # the own random state while outside _own_random
+        self._inside = False
         if state is None:
-            if seed is not None:
-                random.seed(seed)
-            self.stagnation = neat_config.stagnation_type(neat_config.stagnation_config, self.reporters)
-            self.reproduction = neat_config.reproduction_type(neat_config.reproduction_config,
-                                                              self.reporters, self.stagnation)
-            self.population = self.reproduction.create_new(neat_config.genome_type, gc,
-                                                           neat_config.pop_size)
-            self.reproduction.ancestors.clear()
-            self.species = neat_config.species_set_type(neat_config.species_set_config, self.reporters)
-            self.generation = 0
-            self.best: dict | None = None
-            self.pending_build_s = self._decode_all()
-            self.species.speciate(neat_config, self.population, self.generation)
+            with self._own_random(seed):
+                self._create(neat_config, gc)
         else:
-            self._restore(state)
+            with self._own_random(state["random"] if self._owns_random else None):
+                self._restore(state)
+
+    def _create(self, neat_config, gc) -> None:
+        self.stagnation = neat_config.stagnation_type(neat_config.stagnation_config, self.reporters)
+        self.reproduction = neat_config.reproduction_type(neat_config.reproduction_config,
+                                                          self.reporters, self.stagnation)
+        self.population = self.reproduction.create_new(neat_config.genome_type, gc,
+                                                       neat_config.pop_size)
+        self.reproduction.ancestors.clear()
+        self.species = neat_config.species_set_type(neat_config.species_set_config, self.reporters)
+        self.generation = 0
+        self.best: dict | None = None
+        self.pending_build_s = self._decode_all()
+        self.species.speciate(neat_config, self.population, self.generation)
+
+    def _saved_random(self) -> tuple | None:
+        """The own random state as it stands outside `_own_random` (None: the global one is it)."""
+        return self._random_state if self._owns_random and not self._inside else None
+
+    @contextmanager
+    def _own_random(self, start: int | tuple | None = None) -> Iterator[None]:
+        """While inside, Python's `random` is this search's own state (seeded with an int `start`,
+        or set to a `getstate()` tuple; else the one saved when last outside), and the caller's is
+        restored after. Nothing is swapped for a search without a seed, nor when already inside."""
+        if not self._owns_random or self._inside:
+            yield
+            return
+        caller = random.getstate()
+        if isinstance(start, int):
+            random.seed(start)
+        else:
+            random.setstate(start if start is not None else self._random_state)
+        self._inside = True
+        try:
+            yield
+        finally:
+            self._inside = False
+            self._random_state = random.getstate()
+            random.setstate(caller)
 
     # ------------------------------------------------------------------ one generation
     def step(self) -> dict:
         """Evaluate the current generation, then breed and speciate the next. Returns the row of
         generations.csv for the evaluated generation."""
+        with self._own_random():  # evaluate too: a nested method's inner searches draw from it
+            return self._step()
+
+    def _step(self) -> dict:
         t0 = time.perf_counter()
         todo = self.ask()
         t1 = time.perf_counter()
@@ -133,6 +176,10 @@ class NeatSearch:
 
     def ask(self) -> list[tuple[int, Any]]:
         """(key, phenotype) of the genomes of this generation that need a fitness."""
+        with self._own_random():
+            return self._ask()
+
+    def _ask(self) -> list[tuple[int, Any]]:
         self._build_s = self.pending_build_s + self._decode_all()
         self._todo = [k for k, g in self.population.items() if self.phenotypes[k].valid
                       and (g.fitness is None or self.reevaluate and not self._settled(k))]
@@ -140,6 +187,10 @@ class NeatSearch:
 
     def tell(self, fitness: Sequence[float], episodes: int | None = None) -> dict:
         """Fitness for the genomes `ask` returned; breeds the next generation."""
+        with self._own_random():
+            return self._tell(fitness, episodes)
+
+    def _tell(self, fitness: Sequence[float], episodes: int | None) -> dict:
         for k, f in zip(self._todo, fitness, strict=True):
             self.population[k].fitness = (float(f) if self.scores is None
                                           else self._add_score(k, float(f), f"{self.generation}/{k}"))
@@ -236,7 +287,8 @@ class NeatSearch:
         best = None if self.best is None else {k: v for k, v in self.best.items() if k != "phenotype"}
         state = {"format": STATE_FORMAT, "generation": self.generation, "population": self.population,
                  "species": species, "reproduction": repro, "node_indexer": node_key,
-                 "random": random.getstate(), "best": best, "pending_build_s": self.pending_build_s}
+                 "random": own if (own := self._saved_random()) is not None else random.getstate(),
+                 "best": best, "pending_build_s": self.pending_build_s}
         if self.scores is not None:
             state["scores"] = {k: (total, list(tags)) for k, (total, tags) in self.scores.items()}
         return state
@@ -256,7 +308,8 @@ class NeatSearch:
         gc.innovation_tracker = self.reproduction.innovation_tracker
         nxt = state.get("node_indexer")
         gc.node_indexer = None if nxt is None else itertools.count(nxt)
-        random.setstate(state["random"])
+        if not self._owns_random:  # (an owned state is set by _own_random)
+            random.setstate(state["random"])
         if self.scores is not None:
             if state.get("scores") is None:
                 raise ValueError("the checkpoint holds no score records, which this run's accumulated "

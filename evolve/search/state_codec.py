@@ -23,6 +23,7 @@ from operator import attrgetter
 import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, NEAT_AGGREGATIONS
+from tsim.errors import SgrError
 
 GENOME_ATTRS = {"key", "nodes", "connections", "fitness"}
 NODE_ATTRS = ("bias", "response", "activation", "aggregation", "time_constant")
@@ -35,7 +36,7 @@ MUTATION_TYPES = ("add_connection", "add_node_in", "add_node_out", "initial_conn
 MT_STATE_WORDS = 625  # Python's Mersenne Twister state: 624 words and the position
 
 
-class StateError(ValueError):
+class StateError(SgrError):
     """Checkpoint data that does not have the expected form (a damaged or foreign file)."""
 
 

@@ -20,9 +20,8 @@ import numpy as np
 from sgr.evogym.utils import VOXEL_TYPES
 from sgr.evogym.world import EvoWorld
 from tasks.orientation import orientation
-from tsim import kernels as K
 from tsim.body import Body, build_body
-from tsim.sim import BatchSim
+from tsim.sim import NONFINITE, RUNNING, UNSTABLE, BatchSim
 from tsim.world import WorldObject as _Placed
 from tsim.world import make_world
 
@@ -91,8 +90,7 @@ class EvoSim:
         except ValueError as exc:
             raise ValueError(f"cannot simulate {lead!r}: {exc}") from None
         if not robots:  # evogym's instability rule counts only robots' self-collisions
-            self._bs._counts0[:, K.N_SURF_ROBOT] = 0
-            self._bs.counts[:, K.N_SURF_ROBOT] = 0
+            self._bs.ignore_robot_self_collisions()
         self._robots = {n: parts[n].body for n in robots}
         # action columns of each robot in BatchSim.actions: the lead's first, then the others'
         self._act_cols, col = {}, 0
@@ -113,8 +111,8 @@ class EvoSim:
         # where each object's points sit: simulated ones in BatchSim's state, terrain after them
         offsets = {lead: 0}
         for k, o in enumerate(self._bs.free_objects):
-            offsets[o.name] = self._bs._obj_offsets[k][0]
-        self._n_sim = int(self._bs.counts[0, K.N_PTS])
+            offsets[o.name] = int(self._bs.object_offsets(k)[0])
+        self._n_sim = int(self._bs.n_points[0])
         terrain = [parts[n] for n in names if n not in offsets]
         self._terrain_pos = (np.concatenate([t.pos0.T for t in terrain]) if terrain
                              else np.zeros((0, 2)))
@@ -148,7 +146,7 @@ class EvoSim:
         s[:, 2:4] = snap[:, 2:4]
         s[:, 4:6] = snap[:, 0:2]
         s[:, 6:8] = snap[:, 2:4]
-        self._bs.counts[0, K.STATUS] = K.RUNNING
+        self._bs.set_world_status(0, RUNNING)
         self._time = time
         del self._history[time + 1:]
 
@@ -183,7 +181,7 @@ class EvoSim:
             return True
         if self._extra_unstable():
             self.revert(self._time)  # evogym keeps the last snapshot
-            self._bs.counts[0, K.STATUS] = K.UNSTABLE
+            self._bs.set_world_status(0, UNSTABLE)
             return True
         self._time += 1
         self._history.append(self._snapshot())
@@ -192,7 +190,7 @@ class EvoSim:
     def _stopped(self) -> bool:
         """The world is frozen by the instability rule or a non-finite state (`BatchSim.unstable`
         for the one world, read as a scalar: this runs twice per step)."""
-        return int(self._bs.counts[0, K.STATUS]) in (K.UNSTABLE, K.NONFINITE)
+        return self._bs.world_status(0) in (UNSTABLE, NONFINITE)
 
     def _extra_unstable(self) -> bool:
         """evogym's rule for the robots after the first, at the end of the step: more ordered

@@ -42,7 +42,7 @@ def test_traverser_v0_rgb_array_frames_show_its_blocks():
     env.reset(seed=0)
     frame = env.render()
     r = env.unwrapped._renderer
-    blocks = [name for name in r._objects if name.startswith("block_")]
+    blocks = [o.name for o in r.world.free_objects if o.name.startswith("block_")]
     sim = env.unwrapped._env.sim
     assert frame.shape == (320, 640, 3)
     assert sum(in_view(r, sim.object_pos(0, b)) for b in blocks) >= 9

@@ -71,7 +71,7 @@ def translate(env: BatchEnv, name: str, dx: float, dy: float) -> None:
         pts = env._obj_index[name][1][0]
     env.sim.state[0, pts, 0:2] += d
     if env.t == 0:
-        env.sim._pos0[0, pts] += d
+        env.sim.initial_positions[0, pts] += d
 
 
 def revert_now(env: BatchEnv) -> None:

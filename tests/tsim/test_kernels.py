@@ -17,8 +17,7 @@ def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0,
     sim = BatchSim(task_world(task), bodies, task_spec(task).origin)
     for w in range(len(bodies)):  # objects thrown down at `drop` units/s
         sim.state[w, sim.n_robot_points[w]:sim.counts[w, K.N_PTS], 3] = -drop
-    sim._serial = serial
-    sim.capacity_tier += extra_tiers
+    sim.choose_kernel(serial=serial, extra_capacity_tiers=extra_tiers)
     if sweep is not None:
         sim.sweep_mode = sweep
     if pair_list is not None:
@@ -42,7 +41,7 @@ def test_parallel_serial_and_bigger_capacity_kernels_agree_bit_for_bit(task):
     assert ref.capacity_tier == 0  # 5x5 robots (and Thrower's box) fit the smallest tier
     assert _same(_run(task, bodies, 60, serial=True), ref)
     assert _same(_run(task, bodies, 60, serial=False, extra_tiers=1), ref)
-    moved = ref.state[:, :, 0:2] - ref._pos0
+    moved = ref.state[:, :, 0:2] - ref.initial_positions
     assert np.abs(moved).max() > 0.05  # the robots did move (and touched ground or the box)
 
 
@@ -69,7 +68,7 @@ def test_sweep_and_prune_finds_the_plain_loops_pairs_in_its_order(task):
     assert auto.sweep_mode == K.SWEEP_AUTO
     assert _same(auto, off)
     assert _run("Walker-v0", bodies, 1, serial=True).sweep_mode == K.SWEEP_OFF
-    moved = off.state[:, :, 0:2] - off._pos0
+    moved = off.state[:, :, 0:2] - off.initial_positions
     assert np.abs(moved).max() > 0.05
 
 
@@ -97,5 +96,5 @@ def test_pair_lists_test_the_pairs_that_act_in_the_plain_loops_order(task, size,
         assert _same(listed, off)
     else:  # ...large bodies and long worlds the one with them
         assert auto.pair_list == K.LIST_AUTO
-    moved = off.state[:, :, 0:2] - off._pos0
+    moved = off.state[:, :, 0:2] - off.initial_positions
     assert np.abs(moved).max() > 0.05

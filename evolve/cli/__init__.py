@@ -1,0 +1,83 @@
+"""`sgr` command line: the dispatcher. Each of evolve's commands is a module of this package with
+`register(subparsers)` (its options) and `run(args)`: evolve (evolve_cmd), sweep, report,
+select-champion, render, plot and convert-checkpoints; the task and simulator commands (demo,
+validate, bench) come from tasks/cli.py. Options shared by commands are built once in common.py.
+The dispatcher lives in evolve, the only layer that may import all three."""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import time
+import traceback
+
+from evolve.cli import convert_checkpoints, evolve_cmd, plot, render, report, select_champion, sweep
+from evolve.cli.common import ClosedStdoutTolerant, add_trust_imports, parse_body, workers_arg
+from tasks.cli import register_task_commands
+from tsim.errors import SgrError
+
+__all__ = ["build_parser", "main", "parse_body", "workers_arg"]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The `sgr` parser with every command."""
+    p = argparse.ArgumentParser(prog="sgr", description="Batched evogym-faithful soft-robot toolkit")
+    p.add_argument("--debug", action="store_true", help="show the traceback of every error")
+    sub = p.add_subparsers(dest="cmd", required=True)
+    e = evolve_cmd.register(sub)
+    sw = sweep.register(sub)
+    rp = report.register(sub)
+    sc = select_champion.register(sub)
+    r = render.register(sub)
+    plot.register(sub)
+    convert_checkpoints.register(sub)
+    for parser in (e, sw, rp, r, sc):
+        add_trust_imports(parser)
+    register_task_commands(sub)
+    for parser in sub.choices.values():  # `sgr evolve ... --debug` as well as `sgr --debug evolve ...`
+        parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
+                            help="show the traceback of every error")
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    """The `sgr` command; returns the exit code. Bad input (SgrError, tsim/errors.py) is printed as
+    one line, sgr: error: ..., on stderr with exit code 2 (argparse's own errors exit 2 as well).
+    Another ValueError (bad input from code that does not say SgrError yet, or a bug) is that line
+    plus the path of a file holding its full traceback; any other exception keeps its traceback
+    (exit 1). `--debug` lets every exception through with its traceback."""
+    args = build_parser().parse_args(argv)
+    if getattr(args, "trust_imports", False):
+        from tasks.registry import trust_imports
+
+        trust_imports()
+    stdout, sys.stdout = sys.stdout, ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
+    try:
+        return args.fn(args)
+    except SgrError as exc:
+        if args.debug:
+            raise
+        print(f"sgr: error: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:
+        if args.debug:
+            raise
+        print(f"sgr: error: {exc} (full traceback: {_write_traceback(exc)})", file=sys.stderr)
+        return 2
+    finally:
+        sys.stdout = stdout
+
+
+def _write_traceback(exc: BaseException) -> str:
+    """Write `exc`'s traceback (with its notes and causes) to a new file in the temporary folder;
+    returns its path."""
+    fd, path = tempfile.mkstemp(prefix=f"sgr-error-{time.strftime('%Y%m%d-%H%M%S')}-", suffix=".txt")
+    with os.fdopen(fd, "w") as f:
+        f.write("".join(traceback.format_exception(exc)))
+    return path
+
+
+if __name__ == "__main__":
+    sys.exit(main())

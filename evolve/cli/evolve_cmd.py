@@ -1,0 +1,122 @@
+"""`sgr evolve`: start a run (a config file, a packaged config, or a method on a task) or resume one."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from evolve.cli.common import add_workers, output_path, positive, resume_dir
+from tasks.cli import PRECISIONS
+from tsim.errors import SgrError
+
+
+def register(sub) -> argparse.ArgumentParser:
+    """Add `evolve` to the dispatcher's subparsers."""
+    e = sub.add_parser("evolve", help="run an evolution experiment (default: a short SGR Walker-v0 run)")
+    e.add_argument("--config", help="YAML experiment config: a file, or a packaged config's name such as "
+                                    "sgr/Climber-v2 or direct/Walker-v0 (default: quick, a short SGR "
+                                    "Walker-v0 run)")
+    e.add_argument("--task", help="the packaged config of this task (with --method; default method sgr)")
+    e.add_argument("--method", help="with --task: sgr, direct or nested")
+    e.add_argument("--generations", type=positive(int))
+    e.add_argument("--pop", type=positive(int))
+    e.add_argument("--seed", type=int)
+    e.add_argument("--out", help="run directory (default runs/<method>-<config>-seed<S>-<time>)")
+    add_workers(e, None, "rollout processes: a number, 'auto' (all CPUs) or 'ray' (the actors of a Ray "
+                         "cluster); default: the config's")
+    e.add_argument("--resume", metavar="DIR",
+                   help="continue a run from its last checkpoint (with --generations N: extend it to N)")
+    e.add_argument("--precision", choices=PRECISIONS,
+                   help="the simulator's real type: f64 (evogym's bits) or f32; default: the config's, "
+                        "else $SGR_PRECISION, else f64")
+    e.add_argument("--quiet", action="store_true")
+    e.set_defaults(fn=run)
+    return e
+
+
+def evolve_config(args: argparse.Namespace) -> Path:
+    """The config a new run starts from: --config (a file, or a packaged config's name), the
+    packaged config of --method on --task, or the default quick run."""
+    from evolve.methods import METHODS
+    from evolve.runs.config import configs_dir, find_config
+    from tasks.specs import TASKS, unknown_name, unknown_task
+
+    if args.config and (args.task or args.method):
+        raise SgrError("give --config, or --task (with --method), not both")
+    if args.config:
+        return find_config(args.config)
+    if args.method and not args.task:
+        raise SgrError("--method goes with --task (e.g. sgr evolve --task Climber-v2 --method direct)")
+    if not args.task:
+        return configs_dir() / "sgr" / "quick.yaml"
+    method = args.method or "sgr"
+    if method not in METHODS:
+        raise SgrError(unknown_name("method", method, METHODS))
+    path = configs_dir() / method / f"{args.task}.yaml"
+    if path.is_file():
+        return path
+    if args.task not in TASKS:
+        raise SgrError(f"{unknown_task(args.task)} (a task of your own: --config FILE with "
+                       "task: and imports:, docs/TASKS.md)")
+    shipped = sorted(f.stem for f in (configs_dir() / method).glob("*.yaml"))
+    raise SgrError(f"no packaged config for {method} on {args.task} (there are: {', '.join(shipped)}); "
+                   "write one and give --config FILE")
+
+
+def run(args: argparse.Namespace) -> int:
+    """`sgr evolve`."""
+    from evolve.runs.config import load_config
+    from evolve.runs.experiment import Experiment
+    from tsim import runtime
+
+    runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
+    runtime.requested_precision()  # and so does a misspelt SGR_PRECISION
+    if args.resume:
+        if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
+                or args.precision):
+            raise SgrError("--resume continues a run with its own config; only --generations "
+                           "(to extend it), --workers, --trust-imports and --quiet go with it")
+        exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
+                                generations=args.generations)
+        print(f"resuming {args.resume} after generation {exp.search.generation}")
+    else:
+        config = evolve_config(args)
+        flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
+                 "workers": args.workers, "precision": args.precision}
+        overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
+        cfg = load_config(config, overrides)
+        stamp = time.strftime("%Y%m%d-%H%M%S")
+        name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
+        out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
+        output_path(out, folder=True)
+        exp = Experiment.create(config, out, overrides, quiet=args.quiet)
+        print(f"run directory: {out}")
+    return run_experiment(exp)
+
+
+def run_experiment(exp) -> int:
+    """Run `exp` to its end; a stop (Ctrl-C, a dead worker, a full disk) says how to resume."""
+    from evolve.rollout.pool import WorkerDied
+
+    try:
+        with exp:
+            exp.run_all()
+            exp.finish()
+    except KeyboardInterrupt:
+        done, want = exp.search.generation, exp.cfg["generations"]
+        ckpt = exp.run.last_checkpoint_generation()
+        where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
+                 f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
+                 f"generation {ckpt}")
+        print(f"\nsgr: {where}; continue with: sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        return 130
+    except WorkerDied as exc:
+        print(f"sgr: error: {exc}; the run stopped during generation {exp.search.generation + 1} and "
+              f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
+        return 1
+    except OSError as exc:  # e.g. a full disk: every file is still whole (a cut CSV row is dropped)
+        print(f"sgr: error: {exp.write_failed(exc)}", file=sys.stderr)
+        return 1
+    return 0

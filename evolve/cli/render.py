@@ -1,0 +1,67 @@
+"""`sgr render`: a GIF of a run's champion (exact, or a perturbed replay), or of any body with an
+open-loop gait."""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from evolve.cli.common import add_noise, nonnegative, output_path, parse_body, positive
+from tsim.errors import SgrError
+
+
+def register(sub) -> argparse.ArgumentParser:
+    """Add `render` to the dispatcher's subparsers."""
+    r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
+    r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
+    r.add_argument("--task")
+    r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
+    r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
+    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif, with --replay I "
+                                 "RUN_DIR/champion-replayI.gif; with --body robot.gif)")
+    r.add_argument("--width", type=positive(int), default=640)
+    r.add_argument("--height", type=positive(int), default=320)
+    r.add_argument("--fps", type=positive(float), default=30.0)
+    r.add_argument("--replay", type=nonnegative(int), default=0, metavar="I",
+                   help="the champion's perturbed replay I (as sgr report replays it; default 0: the "
+                        "exact episode)")
+    add_noise(r, several=False, default=1e-3, help="with --replay: action noise scale (default 1e-3)")
+    r.add_argument("--noise-kind", choices=("uniform", "gaussian"), default="uniform",
+                   help="with --replay: uniform(+-EPS) or gaussian(0, EPS) (default uniform)")
+    r.add_argument("--offset", type=nonnegative(float), default=0.0,
+                   help="with --replay: start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
+    r.set_defaults(fn=run)
+    return r
+
+
+def run(args: argparse.Namespace) -> int:
+    """`sgr render`."""
+    from evolve.runs.champion import champion_gif, replay_line
+    from tasks.bench import sinusoid
+    from tasks.render_episode import render_episode
+    from tsim.body import check_robot
+    from tsim.render import write_gif
+
+    if args.out:
+        output_path(args.out)
+    if args.run_dir:
+        if args.task or args.body:
+            raise SgrError("give either RUN_DIR or --task with --body, not both")
+        out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
+                           replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
+        line = replay_line(args.run_dir, args.replay, args.noise, args.noise_kind, args.offset)
+        print(f"wrote {out}: {line}")
+        return 0
+    else:
+        if not (args.task and args.body):
+            raise SgrError("sgr render needs RUN_DIR, or --task and --body")
+        if args.replay:
+            raise SgrError("--replay renders a perturbed episode of a run's champion: give RUN_DIR")
+        body = check_robot(parse_body(args.body))
+        n_act = int(np.count_nonzero((body == 3) | (body == 4)))
+        frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
+                                args.width, args.height, indexed=True)
+        out = write_gif(frames, args.out or "robot.gif", fps=args.fps)
+    print(f"wrote {out}")
+    return 0

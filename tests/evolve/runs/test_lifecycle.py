@@ -1,0 +1,53 @@
+"""A run's resources and files: checkpoints are found by one name pattern (generations past 99,999
+included, an older sgr's pickles never), and an Experiment used in a `with` block lets go of its
+run directory however the block ends."""
+
+import pytest
+
+from evolve.runs.experiment import Experiment
+from evolve.runs.rundir import RunDir, checkpoint_generation
+
+
+def test_checkpoint_names_are_parsed_by_one_pattern():
+    assert checkpoint_generation("gen-00042.json.gz") == 42
+    assert checkpoint_generation("gen-123456.json.gz") == 123456  # six digits: generation 123,456
+    for other in ("gen-00042.pkl", "gen-0042.json.gz", "gen-00042.json.gz.tmp", "notes-00042.json.gz",
+                  ".gen-00042.json.gz"):
+        assert checkpoint_generation(other) is None, other
+
+
+def test_the_newest_checkpoint_is_the_highest_generation_and_pickles_do_not_count(tmp_path):
+    run = RunDir(tmp_path / "r")
+    assert run.last_checkpoint_generation() is None
+    run.ckpt_dir.mkdir(parents=True)
+    (run.ckpt_dir / "gen-99999.pkl").write_bytes(b"\x80")  # an older sgr's, never a checkpoint of ours
+    assert run.last_checkpoint_generation() is None
+    for g in (99998, 100001):
+        (run.ckpt_dir / f"gen-{g:05d}.json.gz").write_bytes(b"")
+    assert run.last_checkpoint_generation() == 100001  # f.name[4:9] would have read 10000
+    assert [f.name for f in run.checkpoints()] == ["gen-100001.json.gz", "gen-99998.json.gz"]
+
+
+def tiny(repo_root) -> dict:
+    return {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 2,
+            "render_champion": False, "workers": 1, "neat_config": str(repo_root / "configs/neat/sgr.ini")}
+
+
+def test_an_experiment_in_a_with_block_lets_go_of_its_run_however_the_block_ends(tmp_path, repo_root):
+    with pytest.raises(RuntimeError, match="in the block"):
+        with Experiment.from_config(tiny(repo_root), tmp_path / "a", quiet=True):
+            with pytest.raises(ValueError, match="being run by another process"):
+                RunDir(tmp_path / "a").lock()  # held while inside
+            raise RuntimeError("in the block")
+    RunDir(tmp_path / "a").lock()  # let go of
+    with Experiment.from_config(tiny(repo_root), tmp_path / "b", quiet=True) as exp:
+        exp.run_all()
+    RunDir(tmp_path / "b").lock()
+
+
+def test_a_run_that_cannot_be_resumed_lets_go_of_its_directory(tmp_path, repo_root):
+    with Experiment.from_config(tiny(repo_root), tmp_path / "r", quiet=True) as exp:
+        exp.run_all()
+    with pytest.raises(ValueError, match="is finished"):
+        Experiment.resume(tmp_path / "r")
+    RunDir(tmp_path / "r").lock()

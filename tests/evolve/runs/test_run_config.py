@@ -1,0 +1,91 @@
+"""The run-config object: frozen and typed, checked and parsed once (a run never parses `robust`
+again), the `workers` rule written once, the run folder recording arch and precision, and every
+existing run folder (docs' sweeps, tests' data) read back."""
+
+import dataclasses
+from pathlib import Path
+
+import pytest
+import yaml
+
+from evolve.cli import main
+from evolve.rollout.pool import RolloutPool
+from evolve.rollout.robust import Robust
+from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.experiment import Experiment
+from evolve.runs.run_config import RunConfig
+from evolve.runs.rundir import RunDir
+
+ROOT = Path(__file__).resolve().parents[3]
+
+
+def tiny(repo_root, **changes) -> dict:
+    return {"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 6, "episode_steps": 5,
+            "render_champion": False, "workers": 1, "neat_config": str(repo_root / "configs/neat/sgr.ini"),
+            **changes}
+
+
+def test_a_config_is_frozen_typed_and_reads_as_its_yaml(repo_root):
+    cfg = config_from_dict(tiny(repo_root, robust={"episodes": 2}, episode_steps=None))
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        cfg.generations = 3
+    assert isinstance(cfg.robust, Robust) and cfg.robust.episodes == 2
+    assert cfg.robot_shape == (5, 5) and cfg["robot_shape"] == [5, 5]
+    assert cfg.episode_steps == 500 == cfg["episode_steps"]  # Walker-v0's paper length, resolved once
+    assert cfg["robust"] == Robust(episodes=2).to_json() and cfg["cppn_outputs"] == 1
+    assert dict(cfg)["arch"] == "cpu" and list(cfg)[:2] == ["method", "task"]
+
+
+def test_robust_is_parsed_once_not_at_every_evaluation(tmp_path, repo_root, monkeypatch):
+    calls = []
+    parse = Robust.from_config.__func__
+    monkeypatch.setattr(Robust, "from_config", classmethod(lambda cls, *a, **k: calls.append(a) or
+                                                           parse(cls, *a, **k)))
+    cfg = config_from_dict(tiny(repo_root, robust={"episodes": 2}))
+    assert len(calls) == 1
+    with Experiment.from_config(dict(cfg), tmp_path / "r", quiet=True) as exp:
+        exp.run_all()
+    assert len(RunDir(tmp_path / "r").rows()) == 2
+    assert len(calls) == 2  # from_config(dict) checked the config once more; the 2 generations: never
+
+
+@pytest.mark.parametrize("value", [0, -1, "many"])
+def test_the_workers_rule_is_the_same_in_the_config_the_flag_and_the_pool(tmp_path, repo_root, value, capsys):
+    with pytest.raises(ValueError, match="key 'workers' must be a positive int, 'auto' or 'ray'"):
+        config_from_dict(tiny(repo_root, workers=value))
+    with pytest.raises(ValueError, match="workers must be a positive int"):
+        RolloutPool(value)
+    with pytest.raises(SystemExit):
+        main(["evolve", "--workers", str(value)])
+    assert "argument --workers: must be a positive int, 'auto' or 'ray'" in capsys.readouterr().err
+
+
+def test_the_run_folder_records_arch_and_precision(tmp_path, repo_root, monkeypatch):
+    monkeypatch.delenv("SGR_ARCH", raising=False)
+    monkeypatch.setenv("SGR_PRECISION", "f32")
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(tiny(repo_root, arch="cuda")))
+    cfg = load_config(tmp_path / "c.yaml")  # a run's config.yaml used as a config: its arch replaced
+    assert (cfg.arch, cfg.precision) == ("cpu", "f32")  # precision left out: $SGR_PRECISION's
+    (tmp_path / "d.yaml").write_text(yaml.safe_dump(tiny(repo_root, arch="cuda", precision="f64")))
+    assert load_config(tmp_path / "d.yaml").precision == "f64"  # a config's own precision is chosen
+    monkeypatch.setenv("SGR_PRECISION", "f16")
+    with pytest.raises(ValueError, match="SGR_PRECISION=f16: unknown precision; use one of f64, f32"):
+        load_config(tmp_path / "c.yaml")
+
+
+def stored_configs() -> list[Path]:
+    found = sorted(p for d in ("docs/paper/runs", "docs/robust/runs", "tests/data")
+                   for p in (ROOT / d).rglob("config.yaml"))
+    assert len(found) > 50
+    return found
+
+
+def test_every_existing_run_folder_reads_back(repo_root):
+    for path in stored_configs():
+        raw = yaml.safe_load(path.read_text())
+        cfg = RunConfig.of(raw)
+        assert isinstance(cfg.episode_steps, int) and cfg.episode_steps > 0, path
+        assert cfg.arch == raw.get("arch") and cfg.precision == raw.get("precision", "f64"), path
+        assert cfg.robust == Robust.from_config(raw.get("robust")), path
+        for key, value in raw.items():  # every key as written (episode_steps: resolved)
+            assert cfg[key] == value or key == "episode_steps" and value in (None, "evogym"), (path, key)

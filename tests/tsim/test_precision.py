@@ -1,0 +1,107 @@
+"""Single precision: one kernel source in f32 or f64, chosen once per process (`tsim.runtime`).
+
+f32 runs in subprocesses (this process runs in f64, evogym's bits). What is checked: an f32
+process steps in float32 from the kernels to the tasks' observations and rewards, follows evogym's
+recorded Walker-v0 COMs at the start of an episode (which needs evogym's placement kept: a robot a
+few f64 ulps above the ground must not start in contact), and names what is wrong in one line.
+"""
+
+import json
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tsim import runtime
+from tsim.sim import to_real
+
+F32_PROBE = """
+import json, sys
+import numpy as np
+from tsim import runtime
+from tasks.env import BatchEnv
+out = {"precision": runtime.precision(), "com_err": {}}
+for task in sys.argv[2:]:
+    z = np.load(f"{sys.argv[1]}/returns_{task}.npz")
+    n_act, B = z["n_act"], len(z["n_act"])
+    env = BatchEnv(task, list(z["body"]), episode_steps=100)
+    obs = env.observe()
+    err = []
+    for t in range(3):
+        obs, rew, *_ = env.step([z["actions"][i, t, :n_act[i]] for i in range(B)])
+        err.append(float(np.linalg.norm(env.sim.robot_com() - z["com"][:, t + 1], axis=1).max()))
+    out["com_err"][task] = err
+    out.update({"state": str(env.sim.state.dtype), "obs": str(obs.dtype), "reward": str(rew.dtype)})
+print(json.dumps(out))
+"""
+
+
+def _clean_env(**extra: str) -> dict:
+    base = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
+    return {**base, "SGR_THREADS": "1", **extra}
+
+
+def test_f32_steps_in_float32_and_follows_evogym_at_the_start(data_dir):
+    """In an f32 process the state, observations and rewards are float32, and the first 3 steps of
+    evogym's 24 recorded robots of Walker-v0 and HeightMaximizer-v0 stay within 1e-6 of evogym's
+    COMs (f32 rounds at ~3e-8 here). Starting the robots in contact with the ground, as plain
+    rounding did (Walker-v0: robot 0.10000000000000003 over ground 0.1) or rounding the robot but
+    not the terrain (HeightMaximizer-v0: both at 0.09999999999999998), gave 3e-4 after one step."""
+    out = subprocess.run([sys.executable, "-c", F32_PROBE, str(data_dir / "evogym32"), "Walker-v0",
+                          "HeightMaximizer-v0"],
+                         env=_clean_env(SGR_PRECISION="f32"), capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["precision"] == "f32"
+    assert (r["state"], r["obs"], r["reward"]) == ("float32", "float32", "float32")
+    for task, err in r["com_err"].items():
+        assert max(err) < 1e-6, (task, err)
+
+
+def test_to_real_keeps_each_coordinate_on_its_f64_side_of_the_grid():
+    """evogym's placements lie a few f64 ulps off grid lines; float32 would put them on the line."""
+    x = np.array([0.10000000000000003, 0.30000000000000004, 0.2, 0.19999999999999998, 0.123])
+    r = to_real(x, np.float32)
+    assert r.dtype == np.float32
+    grid = np.float32(np.array([0.1, 0.3, 0.2, 0.2]))
+    assert r[0] > grid[0] and r[1] == grid[1] and r[2] == grid[2] and r[3] < grid[3]
+    assert r[4] == np.float32(0.123)  # away from grid lines: plain rounding
+    assert to_real(x, np.float64) is x
+
+
+def test_unknown_precision_names_the_variable_and_the_choices(monkeypatch):
+    monkeypatch.setenv("SGR_PRECISION", "f16")
+    with pytest.raises(ValueError, match=r"^SGR_PRECISION=f16: unknown precision; use one of f64, f32$"):
+        runtime.requested_precision()
+    with pytest.raises(ValueError, match="unknown precision 'half'"):
+        runtime.requested_precision("half")
+
+
+def test_precision_cannot_switch_once_taichi_runs(monkeypatch):
+    monkeypatch.delenv("SGR_PRECISION", raising=False)
+    runtime.init()  # this test process runs in f64
+    assert runtime.precision() == "f64"
+    with pytest.raises(ValueError, match="already runs in f64; cannot switch to f32"):
+        runtime.use_precision("f32")
+    with pytest.raises(ValueError, match="already runs in f64; cannot switch to f32"):
+        runtime.init(precision="f32")
+    assert runtime.init() == runtime.requested_arch()  # None keeps the running precision
+
+
+def test_metal_in_f64_is_refused_in_one_line():
+    """Metal has no 64-bit floats: the refusal says so and what to use (checked once Taichi found
+    the arch usable, so where there is no Metal the missing device is what is reported)."""
+    with pytest.raises(ValueError) as exc:
+        runtime.check_real_type("metal", "f64", arch_from_env=True)
+    assert str(exc.value) == ("SGR_ARCH=metal with precision f64: metal has no 64-bit floats; use "
+                              "SGR_PRECISION=f32 (or SGR_ARCH=cpu for f64)")
+    runtime.check_real_type("metal", "f32")
+    runtime.check_real_type("vulkan", "f64")  # whether the device has them is Taichi's to say
+
+
+def test_cli_choices_are_the_runtime_precisions():
+    from tasks.cli import PRECISIONS
+
+    assert PRECISIONS == runtime.PRECISIONS

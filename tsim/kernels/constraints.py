@@ -1,0 +1,66 @@
+"""Constraints after each substep's integration: evogym's edge-length bands (every edge into
++-25 %, rigid voxels' sides into +-3 %), projected on the positions."""
+
+from tsim import constants as C
+from tsim.kernels.integrate import hold_fixed
+from tsim.kernels.layout import N_RIGID, V_PTS
+from tsim.kernels.springs import add_to_ends
+from tsim.runtime import ti
+
+_HI = 1.0 + C.EDGE_BAND
+_LO = 1.0 - C.EDGE_BAND
+_HI_R = 1.0 + C.EDGE_BAND_RIGID
+_LO_R = 1.0 - C.EDGE_BAND_RIGID
+
+
+@ti.func
+def constraints(b, n_edges, counts: ti.template(), vox_i: ti.template(), lists: ti.template(),
+                s: ti.template()):
+    """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
+    this substep is still pos_last), applied in evogym's order (`add_to_ends`); pass 2: rigid
+    voxels into +-3 % (evogym's rigid pass ignores the fixed flag)."""
+    for e in range(n_edges):
+        a = s.ea[e]
+        q = s.eb[e]
+        dx = s.pos[2 * a] - s.pos[2 * q]
+        dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
+        dist = ti.sqrt(dx * dx + dy * dy)
+        rest = s.erest[e]
+        stress = dist / rest
+        cx = 0.0
+        cy = 0.0
+        if stress > _HI:
+            m = (dist - rest * _HI) / (dist * 2)
+            cx += dx * m
+            cy += dy * m
+        if stress < _LO:
+            m = (dist - rest * _LO) / (dist * 2)
+            cx += dx * m
+            cy += dy * m
+        s.ccx[e] = cx * 0.8
+        s.ccy[e] = cy * 0.8
+    add_to_ends(n_edges, s.pos, s.ea, s.eb, s.ccx, s.ccy, True)
+    hold_fixed(b, counts, lists, s)
+    for i in range(counts[b, N_RIGID]):
+        v = lists[b, i, 1]
+        for k in ti.static(range(4)):
+            a = vox_i[b, v, V_PTS + k]
+            q = vox_i[b, v, V_PTS + (k + 1) % 4]
+            dx = s.pos[2 * a] - s.pos[2 * q]
+            dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
+            dist = ti.sqrt(dx * dx + dy * dy)
+            stress = dist / C.MAIN_REST
+            ox = 0.0
+            oy = 0.0
+            if stress >= _HI_R:
+                m = (dist - C.MAIN_REST * _HI_R) / (dist * 2)
+                ox += dx * m
+                oy += dy * m
+            if stress <= _LO_R:
+                m = (dist - C.MAIN_REST * _LO_R) / (dist * 2)
+                ox += dx * m
+                oy += dy * m
+            s.pos[2 * a] -= ox * 0.5
+            s.pos[2 * a + 1] -= oy * 0.5
+            s.pos[2 * q] += ox * 0.5
+            s.pos[2 * q + 1] += oy * 0.5

@@ -1,0 +1,92 @@
+"""The kernels' array layout, status codes, capacity tiers and the tolerances of the real type.
+
+All arrays are Taichi ndarrays or numpy arrays, so the kernels compile once per process for any
+batch; `counts`, `state` and `actions` change between launches, the others are static. "real" is
+the process's floating-point type (f64 by default, f32 on request; `tsim.runtime.precision`):
+- `counts[b, :]`   int: see the COUNT_* column names below.
+- `state[b, p, :]` real: pos(0:2) vel(2:4) pos_last(4:6) vel_true(6:8) of dynamic point p
+  (robot points first, then free objects such as Thrower's package).
+- `edge_i[b, e, :]` int: a, b, driver0, driver1 (actuator indices or -1).
+- `edge_f[b, e, :]` real: rest length, k, goal at rest, current rest length at rest (the kernel
+  derives each step's goals from the actions and keeps the current rest lengths in local arrays).
+- `vox_i[b, v, :]` int: corner points (TL, TR, BR, BL), open sides (top, right, bottom, left),
+  material, object id, row, col; `lists[b, i, 0]` surface voxels (robot first),
+  `lists[b, i, 1]` rigid voxels, `lists[b, i, 2]` fixed points (corners of a simulated object's
+  material-5 voxels: evogym discards their RK4 increment and their edge-constraint moves).
+- terrain (shared by the batch, static): `ter_f[t, :]` corners TL, TR, BR, BL as x, y pairs then
+  the AABB; `ter_i[t, :]` open sides; `ter_grid[gx, gy]` the surface voxel in that cell or -1.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+from tsim import constants as C
+from tsim import runtime
+from tsim.runtime import ti
+
+# counts columns
+N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS, N_FIXED = range(9)
+N_COUNTS = 9
+# STATUS values: a world is simulated only while its status is RUNNING
+RUNNING, UNSTABLE, NONFINITE, INACTIVE = 0, 1, 2, 3
+
+# vox_i columns
+V_PTS, V_OPEN, V_TYPE, V_OBJ, V_ROW, V_COL = 0, 4, 8, 9, 10, 11
+N_VOX_I = 12
+
+# edge_f columns
+E_REST, E_K, E_GOAL, E_LEQ = range(4)
+N_EDGE_F = 4
+NS = 8  # state columns
+
+# Real arrays take the process's real type (their dtype is left to the argument: one kernel
+# source for f64 and f32); integer arrays are i32
+REAL_1 = ti.types.ndarray(ndim=1)
+REAL_2 = ti.types.ndarray(ndim=2)
+I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
+I32_2 = ti.types.ndarray(dtype=ti.i32, ndim=2)
+I32_3 = ti.types.ndarray(dtype=ti.i32, ndim=3)
+
+GPU_BLOCK = 64  # worlds per thread block on a GPU (each world is one thread)
+
+# ------------------------------------------------------------------------------------------------
+# The per-point state of a world lives in local arrays (LLVM allocas) for the whole env step
+# (`scratch.Scratch`). Stores to ndarrays force LLVM to reload every ndarray's data pointer and
+# shape after each store (they might alias), which made the spring loop ~3x slower than with local
+# accumulators. Hot loops store only to locals; ndarrays are addressed through flat 1-D views with
+# compile-time strides. The local arrays have a static capacity (points, edges, surface voxels):
+# a batch uses the smallest tier `capacity(k)` that holds its largest world; each tier is its own
+# compiled kernel, and results do not depend on the tier (tests/tsim/test_kernels.py).
+# ------------------------------------------------------------------------------------------------
+PC, EC, SC = 64, 160, 32  # tier 0: points, edges, surface voxels (a 5x5 robot and Thrower's box)
+
+
+def capacity(k: int) -> tuple[int, int, int]:
+    """Local-array capacity (points, edges, surface voxels) of tier k: tier 0 doubled k times."""
+    return PC << k, EC << k, SC << k
+
+
+class Tolerances(NamedTuple):
+    """Margins that must lie far above the real type's rounding at world coordinates (and that
+    f64 sets to the values evogym's parity was established with). Read at compile time."""
+
+    box_margin: float  # a corner this far outside a voxel's box skips the point-in-voxel test
+    skin_slack: float  # above the rounding of `box + SKIN` at coordinates below ref_max
+    ref_max: float  # no pair list in worlds with a coordinate beyond this
+    sort_slack: float  # widens the sweep's candidate range beyond rounding
+    grid_slack: float  # widens the terrain grid range (in cells) beyond rounding
+
+
+TOLERANCES = {
+    "f64": Tolerances(box_margin=C.BOX_MARGIN, skin_slack=1e-9, ref_max=1e6, sort_slack=1e-6,
+                      grid_slack=1e-6),
+    # f32 rounds at ~6e-8 relative: ~6e-5 at coordinate 1,000, where its lists stop
+    "f32": Tolerances(box_margin=1e-5, skin_slack=1e-3, ref_max=1e3, sort_slack=1e-3,
+                      grid_slack=1e-3),
+}
+
+
+def tol() -> Tolerances:
+    """The tolerances of the process's real type (called inside kernels under `ti.static`)."""
+    return TOLERANCES[runtime.precision()]

@@ -1,0 +1,58 @@
+"""One world's scratch: the local arrays an env step works in, passed to every stage as one value.
+
+A `Scratch` is made inside the step kernel (`step.step_world`) from local Taichi vectors and handed
+to the stages' functions as a compile-time argument (`ti.template()`); Taichi inlines them, so the
+code is the same as with the arrays passed one by one. Points are interleaved x, y (index 2p + d).
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+
+class Scratch(NamedTuple):
+    """Local arrays of one world (capacity pc points, ec edges, sc surface voxels)."""
+
+    # points (2 pc): the substep's state, RK4 stages and forces
+    pos: object  # position
+    vel: object  # velocity
+    pl: object  # pos_last: position at the start of the substep
+    vt: object  # vel_true: (pos - pos_last) / dt of the last substep, contacts' damping reads it
+    xs: object  # an RK4 stage's position
+    vs: object  # an RK4 stage's velocity
+    frc: object  # an RK4 stage's spring forces
+    fcol: object  # contact forces, frozen across the RK4 stages
+    adx: object  # the weighted sum of the stages' position increments
+    adv: object  # the same for velocity
+    # springs (ec), contiguous: their ends, stiffness, goal and rest lengths; per-edge outputs
+    leq: object  # current rest length (set at RK4 stage 0)
+    ea: object
+    eb: object
+    ek: object
+    egoal: object
+    erest: object
+    ccx: object  # per-edge vectors (spring forces, constraint corrections) before their scatter
+    ccy: object
+    # surface voxels (sc): boxes (x0, x1, y0, y1), corners and open sides, object, row, col
+    box: object
+    sv: object
+    sm: object
+    # sweep and prune (`broadphase`): order along the axis, rank in it, candidates, the decision
+    order: object
+    rank: object
+    cand: object
+    sweep: object  # [-1 undecided / 0 plain loop / 1 sweep, axis]
+    # the pair list (`broadphase.SKIN`): partners, their starts, the boxes when listed, valid
+    nbr: object
+    nstart: object
+    refbox: object
+    plist: object
+
+
+class Terrain(NamedTuple):
+    """The batch's terrain ndarrays (see `layout`) and the highest top of a terrain voxel."""
+
+    f: object
+    i: object
+    grid: object
+    top: object
