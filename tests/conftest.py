@@ -51,6 +51,10 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_resume.py": ("test_sigkilled_run_resumes_in_a_new_process_to_the_same_run",
                                              "test_no_usable_checkpoint_is_one_error_line"),
         "tests/evolve/runs/test_sweep.py": ("test_a_killed_sweep_resumes_to_the_same_runs",),
+        "tests/evolve/runs/test_script_task.py": ALL,
+        "tests/evolve/test_cli_precision.py": ALL,
+        "tests/evolve/test_working_folder.py": (
+            "test_every_readme_command_runs_beside_a_tasks_py_an_evolve_py_and_a_tsim_py",),
         "tests/evolve/test_cli_errors.py": ("test_config_that_is_a_list", "test_unknown_arch",
                                             "test_unavailable_arch_in_this_process",
                                             "test_unavailable_arch_in_rollout_workers",
@@ -61,6 +65,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/test_first_hour.py": ("test_evolve_a_task_then_use_the_champion_as_the_readme_says",
                                      "test_the_tasks_walkthrough_evolves_a_task_of_ones_own_with_two_workers"),
         "tests/test_packaging.py": ("test_a_plain_install_runs_sgr_evolve_from_another_folder",),
+        "tests/test_readme.py": ALL,
         "tests/tsim/test_runtime.py": ALL,
     },
     "ray": {
@@ -90,6 +95,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/tasks/test_env_rules.py": ("test_mixed_batch_equals_one_env_per_body",),
         "tests/tasks/test_evogym32.py": ("test_reset_observation_and_returns_match_evogym",
                                          "test_every_robot_return_and_com_within_evogyms_own_spread"),
+        "tests/tasks/test_validation_precision.py": ALL,
         "tests/tasks/test_validation_returns.py": ALL,
         "tests/tasks/test_validation_traces.py": ALL,
         "tests/tsim/test_kernels.py": ALL,
