@@ -2,7 +2,7 @@
 
 Every design is one run of the same config (task, population, seed) but for its `robust` key; all
 run in this one process and are stepped in turn, one generation each, so that they share the
-machine's load alike (each keeps its own Python `random` state, which neat-python draws from).
+machine's load alike (each search keeps its own Python `random` state: NeatSearch swaps it in).
 Prints, per design, the median seconds per generation and its ratio to the nominal design, the
 episodes per generation, and at the end (`--select`) the champion chosen by final selection and
 its return under uniform(+-1e-3) action noise over `--replays` episodes as a share of its
@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import random
 import statistics
 import tempfile
 import time
@@ -55,24 +54,21 @@ def main() -> None:
     out = Path(args.out or tempfile.mkdtemp(prefix="robust-cost-"))
     names = args.designs.split(",")
     workers = int(args.workers) if args.workers.isdigit() else args.workers
-    exps, states, times = {}, {}, {n: [] for n in names}
+    exps, times = {}, {n: [] for n in names}
     for n in names:
         cfg = {"method": args.method, "task": args.task, "pop_size": args.pop, "seed": args.seed,
                "generations": args.generations, "render_champion": False, "workers": workers,
                "robust": DESIGNS[n]}
         exps[n] = Experiment.from_config(cfg, out / n, quiet=True)
-        states[n] = random.getstate()
     print(f"{args.method} {args.task} pop {args.pop}, {args.generations} generations, workers {workers}; "
           f"runs in {out}", flush=True)
     for g in range(args.generations):
         line = []
         for n in names:
             exp = exps[n]
-            random.setstate(states[n])
             t0 = time.perf_counter()
             row = exp.search.step()
             times[n].append(time.perf_counter() - t0)
-            states[n] = random.getstate()
             exp.run.append_row({**row, "generation": row["generation"] + 1})
             line.append(f"{n} {times[n][-1]:5.2f} s {row['episodes']:>4} ep best {row['best']:6.3f}")
         print(f"gen {g + 1:>3}  " + "  |  ".join(line), flush=True)
@@ -89,7 +85,6 @@ def main() -> None:
     if args.select:
         for n in names:
             exp = exps[n]
-            random.setstate(states[n])
             champ = select_champion(exp, FinalSelection())
             exp.run.save_checkpoint(exp.search.generation, exp.state())
             total = replay_champion(exp.run.path, args.replays, 1e-3)

@@ -221,7 +221,7 @@ def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
           eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
     """The verdict (evolve/runs/verdict.py) on a run folder's champion.json: its robot replayed
     from the JSON alone, `replays` times under uniform(+-eps) and once without noise."""
-    return verdict_rule.from_returns(replay_champion(run_dir, replays, eps), eps)
+    return load_champion(run_dir).verdict(replays, eps)
 
 
 def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
