@@ -25,7 +25,7 @@ from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
 from evolve.runs.run_config import COMMON, RunConfig, run_precision
 from tasks.registry import import_tasks
-from tasks.specs import TASKS, closest, unknown_task
+from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
 from tsim.errors import SgrError
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
@@ -92,6 +92,8 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     shape = cfg["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
         raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
+    if (why := body_fit_problem(cfg["task"], (shape[0], shape[1]))) is not None:
+        raise SgrError(f"{source}: key 'robot_shape' {list(shape)}: {why}")
     steps = cfg["episode_steps"]
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
