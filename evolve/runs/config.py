@@ -111,6 +111,10 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
         raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
+    if cfg["start_from"] is not None:
+        from evolve.runs.continuation import check_start_from
+
+        cfg["start_from"] = check_start_from(cfg, source)
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)
@@ -144,6 +148,9 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     for key in problem.default_files if problem else ():
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():
             raw[key] = str(((base or Path.cwd()) / raw[key]).resolve())
+    start = raw.get("start_from")
+    if isinstance(start, dict) and isinstance(start.get("run"), str) and not Path(start["run"]).is_absolute():
+        raw["start_from"] = {**start, "run": str(((base or Path.cwd()) / start["run"]).resolve())}
     if isinstance(raw.get("imports"), list):  # .py files relative to the config, like neat_config
         raw["imports"] = [str(((base or Path.cwd()) / m).resolve())
                           if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m

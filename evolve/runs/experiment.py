@@ -23,6 +23,7 @@ from evolve.rollout.pool import BasePool, RolloutPool
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
+from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
@@ -89,8 +90,11 @@ class Experiment:
         run = RunDir(out)
         with run.locked_unless_it_fails():
             run.create(cfg, ini)
-            exp = cls(run, cfg, quiet=quiet)
-            run.save_checkpoint(0, exp.state())
+            state = None
+            if cfg.start_from is not None:  # another run's population (evolve/runs/continuation.py)
+                state = continued_state(cfg.start_from, load_neat_config(run.path / "neat.ini"))
+            exp = cls(run, cfg, state=state, quiet=quiet)
+            run.save_checkpoint(exp.search.generation, exp.state())
         return exp
 
     @classmethod
