@@ -55,3 +55,17 @@ def test_a_body_too_big_for_the_world_is_one_line_naming_the_key(tmp_path, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "key 'robot_shape' [10, 10]" in err and "[6, 6]" in err, err
     assert not (tmp_path / "r").exists()
+
+
+def test_a_10x10_run_starts_from_any_folder(tmp_path, monkeypatch):
+    import json
+
+    import yaml
+
+    monkeypatch.chdir(tmp_path)
+    out = tmp_path / "r"
+    assert main(["evolve", "--task", "Walker-v0", "--shape", "10x10", "--generations", "1", "--pop", "4",
+                 "--workers", "1", "--quiet", "--out", str(out)]) == 0
+    assert yaml.safe_load((out / "config.yaml").read_text())["robot_shape"] == [10, 10]
+    body = json.loads((out / "champion.json").read_text())["body"]
+    assert len(body) == 10 and all(len(row) == 10 for row in body)
