@@ -130,6 +130,12 @@ def _world_of_task(name: str) -> World | None:
 add_world_finder(_world_of_task)  # Renderer("Walker-v0", body) draws the task's world
 
 
+def forget_worlds() -> None:
+    """Drop the worlds (and the room they leave a body) built so far: a task was (re)registered."""
+    task_world.cache_clear()
+    _occupied.cache_clear()
+
+
 @cache
 def _occupied(name: str) -> np.ndarray:
     """(grid_w + margin, grid_h + margin) bool: the cells an object of the task's world fills at the
