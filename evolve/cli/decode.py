@@ -26,6 +26,13 @@ def run(args: argparse.Namespace) -> int:
 
     shape = parse_shape(args.shape)
     if args.out:
+        from pathlib import Path
+
+        from tsim.errors import SgrError
+
+        if args.out.endswith(".json") and Path(args.out).name != "champion.json":
+            raise SgrError(f"--out {args.out}: give a folder, or a path ending in champion.json (the name "
+                           "load_champion and sgr render read)")
         output_path(args.out, folder=not args.out.endswith(".json"))
     out = write_decoded(resume_dir(args.run_dir), shape, args.out)
     champ = RunDir(out).champion()

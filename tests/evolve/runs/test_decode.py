@@ -59,6 +59,7 @@ def test_sgr_decode_command_writes_a_champion_folder_beside_the_run(sgr_run, cap
 @pytest.mark.parametrize("argv, message", [
     (["--shape", "ten"], "--shape 'ten'"),
     (["--shape", "10x10", "--out", "{run}"], "a run folder"),
+    (["--shape", "10x10", "--out", "{run}.json"], "ending in champion.json"),
 ])
 def test_decode_bad_input_is_one_line(sgr_run, capsys, argv, message):
     argv = [a.format(run=sgr_run) for a in argv]
