@@ -24,7 +24,7 @@ from pathlib import Path
 import gymnasium as gym
 
 from tasks.spec import TaskSpec
-from tasks.specs import BUILTIN, TASKS, task_world
+from tasks.specs import BUILTIN, TASKS, forget_worlds
 from tsim.errors import SgrError
 
 _SGR = ("tasks", "tsim", "evolve")
@@ -47,7 +47,7 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
         raise SgrError(f"task {spec.name!r} is registered already; register(spec, replace=True) "
                        "replaces it")
     TASKS[spec.name] = spec
-    task_world.cache_clear()
+    forget_worlds()
     env_id = f"sgr/{spec.name}"
     if env_id in gym.registry:
         del gym.registry[env_id]

@@ -8,6 +8,8 @@ from functools import cache
 from importlib import resources
 from pathlib import Path
 
+import numpy as np
+
 from tasks.spec import TaskSpec
 from tasks.suite import (
     balancer,
@@ -126,3 +128,63 @@ def _world_of_task(name: str) -> World | None:
 
 
 add_world_finder(_world_of_task)  # Renderer("Walker-v0", body) draws the task's world
+
+
+def forget_worlds() -> None:
+    """Drop the worlds (and the room they leave a body) built so far: a task was (re)registered."""
+    task_world.cache_clear()
+    _occupied.cache_clear()
+
+
+@cache
+def _occupied(name: str) -> np.ndarray:
+    """(grid_w + margin, grid_h + margin) bool: the cells an object of the task's world fills at the
+    start (terrain, free objects, objects added in code at their first cell)."""
+    world = task_world(name)
+    spec = TASKS[name]
+    occ = np.zeros((max(world.grid_w, spec.origin[0]) + MAX_SIDE + 1,
+                    max(world.grid_h, spec.origin[1]) + MAX_SIDE + 1), dtype=bool)
+    for o in world.objects:
+        m = o.body.matrix
+        rows, cols = np.nonzero(m)
+        occ[o.cell[0] + cols, o.cell[1] + m.shape[0] - 1 - rows] = True
+    return occ
+
+
+MAX_SIDE = 64  # the largest body side `body_fit_problem` looks for room up to
+
+
+def body_fits(name: str, shape: tuple[int, int]) -> bool:
+    """Whether a body of `shape` (rows, cols), placed with its bottom-left cell at the task's origin,
+    fills no cell that an object of the world fills at the start. Above and right of the world's grid
+    is open space (evogym grows its grid for the robot; nothing there collides), so only the objects
+    bound a body."""
+    rows, cols = shape
+    if rows > MAX_SIDE or cols > MAX_SIDE:
+        return False
+    x0, y0 = TASKS[name].origin
+    return not _occupied(name)[x0:x0 + cols, y0:y0 + rows].any()
+
+
+def largest_square_body(name: str) -> int:
+    """The side of the largest square body that fits the task's world (`body_fits`); 0: none."""
+    return max((s for s in range(1, MAX_SIDE + 1) if body_fits(name, (s, s))), default=0)
+
+
+def body_fit_problem(name: str, shape: tuple[int, int]) -> str | None:
+    """None when a body of `shape` fits the task's world (`body_fits`), else one line saying which
+    object is in the way and the largest bodies that do fit."""
+    if body_fits(name, shape):
+        return None
+    rows, cols = shape
+    if rows > MAX_SIDE or cols > MAX_SIDE:
+        return f"sgr places bodies of up to {MAX_SIDE}x{MAX_SIDE}, not {rows}x{cols}"
+    side = largest_square_body(name)
+    most_rows = max((r for r in range(1, MAX_SIDE + 1) if body_fits(name, (r, cols))), default=0)
+    most_cols = max((c for c in range(1, MAX_SIDE + 1) if body_fits(name, (rows, c))), default=0)
+    x0, y0 = TASKS[name].origin
+    also = [f"with {cols} columns: [{most_rows}, {cols}]"] if most_rows and most_rows != side else []
+    also += [f"with {rows} rows: [{rows}, {most_cols}]"] if most_cols and most_cols != side else []
+    more = f" ({'; '.join(also)})" if also else ""
+    return (f"a {rows}x{cols} body placed at cell ({x0}, {y0}) of {name}'s world overlaps its terrain or "
+            f"objects; the largest square that fits is [{side}, {side}]{more}")

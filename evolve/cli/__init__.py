@@ -1,6 +1,6 @@
 """`sgr` command line: the dispatcher. Each of evolve's commands is a module of this package with
 `register(subparsers)` (its options) and `run(args)`: evolve (evolve_cmd), sweep, report,
-select-champion, render, plot and convert-checkpoints; the task and simulator commands (demo,
+select-champion, render, plot, convert-checkpoints and decode; the task and simulator commands (demo,
 validate, bench) come from tasks/cli.py. Options shared by commands are built once in common.py.
 The dispatcher lives in evolve, the only layer that may import all three."""
 
@@ -13,7 +13,7 @@ import tempfile
 import time
 import traceback
 
-from evolve.cli import convert_checkpoints, evolve_cmd, plot, render, report, select_champion, sweep
+from evolve.cli import convert_checkpoints, decode, evolve_cmd, plot, render, report, select_champion, sweep
 from evolve.cli.common import ClosedStdoutTolerant, add_trust_imports, parse_body, workers_arg
 from tasks.cli import register_task_commands
 from tsim.errors import SgrError
@@ -33,7 +33,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = render.register(sub)
     plot.register(sub)
     convert_checkpoints.register(sub)
-    for parser in (e, sw, rp, r, sc):
+    dc = decode.register(sub)
+    for parser in (e, sw, rp, r, sc, dc):
         add_trust_imports(parser)
     register_task_commands(sub)
     for parser in sub.choices.values():  # `sgr evolve ... --debug` as well as `sgr --debug evolve ...`

@@ -13,7 +13,7 @@ from tasks.cli import nonnegative, output_path, parse_body, positive
 from tsim.errors import SgrError
 
 __all__ = ["add_noise", "add_trust_imports", "add_workers", "nonnegative", "noise_level", "output_path",
-           "parse_body", "positive", "resume_dir", "workers_arg", "ClosedStdoutTolerant"]
+           "parse_body", "parse_shape", "positive", "resume_dir", "workers_arg", "ClosedStdoutTolerant"]
 
 
 def workers_arg(text: str) -> int | str:
@@ -27,6 +27,15 @@ def workers_arg(text: str) -> int | str:
     if workers_problem(value) is not None:
         raise argparse.ArgumentTypeError(workers_problem(text))
     return value
+
+
+def parse_shape(text: str, option: str = "--shape") -> tuple[int, int]:
+    """A body grid's shape written RxC (rows x columns, e.g. 10x10); SgrError (one line, no usage
+    text) otherwise."""
+    rows, sep, cols = str(text).strip().lower().partition("x")
+    if sep and rows.isdigit() and cols.isdigit() and int(rows) > 0 and int(cols) > 0:
+        return int(rows), int(cols)
+    raise SgrError(f"{option} {text!r}: give the body's rows x columns as RxC, e.g. 10x10")
 
 
 def add_workers(parser: argparse.ArgumentParser, default: int | None, help: str) -> None:

@@ -7,7 +7,7 @@ import sys
 import time
 from pathlib import Path
 
-from evolve.cli.common import add_workers, output_path, positive, resume_dir
+from evolve.cli.common import add_workers, output_path, parse_shape, positive, resume_dir
 from tasks.cli import PRECISIONS
 from tsim.errors import SgrError
 
@@ -20,6 +20,13 @@ def register(sub) -> argparse.ArgumentParser:
                                     "Walker-v0 run)")
     e.add_argument("--task", help="the packaged config of this task (with --method; default method sgr)")
     e.add_argument("--method", help="with --task: sgr, direct or nested")
+    e.add_argument("--shape", metavar="RxC",
+                   help="the body grid, rows x columns (e.g. 10x10): with --task the packaged "
+                        "<task>-RxC config when there is one, else the task's config at this size")
+    e.add_argument("--from", dest="start_from", metavar="RUN",
+                   help="a new run that starts from RUN's population (its newest checkpoint), with "
+                        "RUN's config (sgr; with --shape: at another size; --generations counts from "
+                        "RUN's start, default twice RUN's generations so far)")
     e.add_argument("--generations", type=positive(int))
     e.add_argument("--pop", type=positive(int))
     e.add_argument("--seed", type=int)
@@ -36,9 +43,10 @@ def register(sub) -> argparse.ArgumentParser:
     return e
 
 
-def evolve_config(args: argparse.Namespace) -> Path:
+def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None) -> Path:
     """The config a new run starts from: --config (a file, or a packaged config's name), the
-    packaged config of --method on --task, or the default quick run."""
+    packaged config of --method on --task (at `shape`: its <task>-RxC config when one ships, else
+    its config, whose robot_shape the caller overrides), or the default quick run."""
     from evolve.methods import METHODS
     from evolve.runs.config import configs_dir, find_config
     from tasks.specs import TASKS, unknown_name, unknown_task
@@ -54,6 +62,9 @@ def evolve_config(args: argparse.Namespace) -> Path:
     method = args.method or "sgr"
     if method not in METHODS:
         raise SgrError(unknown_name("method", method, METHODS))
+    sized = configs_dir() / method / f"{args.task}-{shape[0]}x{shape[1]}.yaml" if shape else None
+    if sized is not None and sized.is_file():
+        return sized
     path = configs_dir() / method / f"{args.task}.yaml"
     if path.is_file():
         return path
@@ -73,27 +84,57 @@ def run(args: argparse.Namespace) -> int:
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
     runtime.requested_precision()  # and so does a misspelt SGR_PRECISION
+    shape = parse_shape(args.shape) if args.shape is not None else None
     if args.resume:
         if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
-                or args.precision):
+                or args.precision or args.shape is not None or args.start_from):
             raise SgrError("--resume continues a run with its own config; only --generations "
                            "(to extend it), --workers, --trust-imports and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
     else:
-        config = evolve_config(args)
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                 "workers": args.workers, "precision": args.precision}
+                 "workers": args.workers, "precision": args.precision,
+                 "robot_shape": list(shape) if shape else None}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
+        if args.start_from:
+            config, name = continuation(args, overrides)
+        else:
+            config, name = evolve_config(args, shape), None
         cfg = load_config(config, overrides)
+        if name is None:
+            name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
+            if shape and not config.stem.endswith(f"-{shape[0]}x{shape[1]}"):
+                name += f"-{shape[0]}x{shape[1]}"
         stamp = time.strftime("%Y%m%d-%H%M%S")
-        name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
         out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
         output_path(out, folder=True)
         exp = Experiment.create(config, out, overrides, quiet=args.quiet)
         print(f"run directory: {out}")
     return run_experiment(exp)
+
+
+def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
+    """`--from RUN`: the config (RUN's config.yaml) and the default folder name of a run that starts
+    from RUN's newest checkpoint; `overrides` gains start_from and, when not given, generations
+    (twice RUN's generations so far)."""
+    from evolve.runs.rundir import RunDir
+
+    if args.config or args.task or args.method:
+        raise SgrError("--from starts from another run's config and population; --config, --task and "
+                       "--method do not go with it")
+    src = RunDir(resume_dir(args.start_from))
+    src.config()  # a run folder, or one line saying it is not
+    done = src.last_checkpoint_generation()
+    if done is None:
+        raise SgrError(f"--from {args.start_from}: the run has no checkpoint to start from")
+    overrides["start_from"] = {"run": str(src.path.resolve())}
+    if overrides.get("generations") is None:
+        overrides["generations"] = 2 * max(done, 1)
+    shape = overrides.get("robot_shape")
+    size = f"-{shape[0]}x{shape[1]}" if shape else ""
+    return src.path / "config.yaml", f"{src.path.name}-from{done}{size}"
 
 
 def run_experiment(exp) -> int:

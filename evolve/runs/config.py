@@ -25,7 +25,7 @@ from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
 from evolve.runs.run_config import COMMON, RunConfig
 from tasks.registry import import_tasks
-from tasks.specs import TASKS, closest, unknown_task
+from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
 from tsim import runtime
 from tsim.errors import SgrError
 
@@ -95,6 +95,8 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     shape = cfg["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
         raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
+    if (why := body_fit_problem(cfg["task"], (shape[0], shape[1]))) is not None:
+        raise SgrError(f"{source}: key 'robot_shape' {list(shape)}: {why}")
     steps = cfg["episode_steps"]
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
@@ -119,6 +121,10 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     selection = FinalSelection.from_config(cfg["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
         raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
+    if cfg["start_from"] is not None:
+        from evolve.runs.continuation import check_start_from
+
+        cfg["start_from"] = check_start_from(cfg, source)
     for key, name in problem.default_files.items():
         if cfg[key] is None:
             cfg[key] = str(configs_dir() / "neat" / name)
@@ -152,6 +158,9 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     for key in problem.default_files if problem else ():
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():
             raw[key] = str(((base or Path.cwd()) / raw[key]).resolve())
+    start = raw.get("start_from")
+    if isinstance(start, dict) and isinstance(start.get("run"), str) and not Path(start["run"]).is_absolute():
+        raw["start_from"] = {**start, "run": str(((base or Path.cwd()) / start["run"]).resolve())}
     if isinstance(raw.get("imports"), list):  # .py files relative to the config, like neat_config
         raw["imports"] = [str(((base or Path.cwd()) / m).resolve())
                           if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m

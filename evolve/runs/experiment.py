@@ -24,6 +24,7 @@ from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
+from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
@@ -98,8 +99,11 @@ class Experiment:
             run.create(cfg, ini)
             if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
                 run.save_task(spec_blob(cfg["task"]))
-            exp = cls(run, cfg, quiet=quiet)
-            run.save_checkpoint(0, exp.state())
+            state = None
+            if cfg.start_from is not None:  # another run's population (evolve/runs/continuation.py)
+                state = continued_state(cfg.start_from, load_neat_config(run.path / "neat.ini"))
+            exp = cls(run, cfg, state=state, quiet=quiet)
+            run.save_checkpoint(exp.search.generation, exp.state())
         return exp
 
     @classmethod

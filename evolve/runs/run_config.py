@@ -31,6 +31,9 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
     # evolve/runs/final_selection.py; null: the champion is the best-ever genome
     "final_selection": ((dict, type(None)), None),
+    # evolve/runs/continuation.py; null: a fresh population. {run: PATH, generation: G}: the population
+    # of that run's checkpoint after generation G, evolved on at this config's robot_shape (sgr)
+    "start_from": ((dict, type(None)), None),
 }
 
 
@@ -56,6 +59,7 @@ class RunConfig(Mapping[str, Any]):
     imports: tuple[str, ...]
     robust: Robust | None
     final_selection: FinalSelection | None
+    start_from: Mapping[str, Any] | None
     method_keys: Mapping[str, Any] = field(default_factory=dict)
     arch: str | None = None
     precision: str = "f64"

@@ -1,0 +1,123 @@
+"""A run's champion genome decoded at another body size (`sgr decode`).
+
+SGR's genome is a CPPN, a function of the substrate's coordinates: queried on a 10x10 grid it draws
+a 10x10 body and the controller of that body, with no further evolution. The result is written as a
+champion folder (a folder holding champion.json, the file `load_champion`, `sgr render` and the
+replays read from any run), so a decoded champion is used like any other. Decoded at the run's own
+size it is the run's champion again, bit for bit: the genome is rebuilt from champion.json's
+"genome" record in its stored order, and the record keeps the run's fitness and evaluation. At
+another size its fitness is scored here as the run's champion was (one exact episode, or the run's
+robust statistic over its perturbed episodes), so `rescore_champion` reproduces it.
+
+Direct NEAT's body is queried per cell coordinate, but its network's inputs hold the observation of
+a full body of its run's size (and, in the paper's layout, one output per cell): its controller has
+no meaning at another size, so it decodes at its own size only. Nested NEAT's champion controller is
+one genome of an inner population evolved for one body: it is refused.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import neat
+
+from evolve.methods import METHODS
+from evolve.runs.champion import champion_record, read_champion
+from evolve.runs.run_config import RunConfig
+from evolve.runs.rundir import RunDir
+from evolve.search.neat_ini import load_neat_config
+from tasks.registry import import_tasks
+from tasks.specs import body_fit_problem
+from tsim.errors import SgrError
+
+
+def genome_from_record(record: dict, genome_config) -> neat.DefaultGenome:
+    """champion.json's "genome" (`genome_json`) as a neat-python genome, genes in their stored
+    order (a compiled network's evaluation order follows it); SgrError when it is not one."""
+    try:
+        g = neat.DefaultGenome(int(record["key"]))
+        for n in record["nodes"]:
+            gene = genome_config.node_gene_type(int(n["key"]))
+            gene.bias, gene.response = float(n["bias"]), float(n["response"])
+            gene.activation, gene.aggregation = str(n["activation"]), str(n["aggregation"])
+            gene.time_constant = 1.0  # not recorded; feed-forward networks never read it
+            g.nodes[gene.key] = gene
+        for c in record["connections"]:
+            gene = genome_config.connection_gene_type((int(c["in"]), int(c["out"])), innovation=0)
+            gene.weight, gene.enabled = float(c["weight"]), bool(c["enabled"])
+            g.connections[gene.key] = gene
+    except (KeyError, TypeError, ValueError) as exc:
+        raise SgrError(f"champion.json: key 'genome': not a genome record "
+                       f"({type(exc).__name__}: {exc})") from None
+    return g
+
+
+def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
+    """The champion.json record of `run_dir`'s champion genome decoded at `shape` (rows, cols);
+    SgrError in one line when the method cannot be decoded there, the body does not fit the task's
+    world, or the genome draws no valid robot at that size."""
+    run = RunDir(run_dir)
+    cfg = RunConfig.of(_imported(run))
+    shape = (int(shape[0]), int(shape[1]))
+    own = shape == cfg.robot_shape
+    size = f"{shape[0]}x{shape[1]}"
+    if cfg.method == "nested":
+        raise SgrError(f"{run_dir}: a nested run's champion controller is one genome of an inner population "
+                       "evolved for its body alone; it has no meaning at another size (decode sgr runs)")
+    if cfg.method == "direct" and not own:
+        raise SgrError(f"{run_dir}: direct NEAT's network reads the observation of a full "
+                       f"{cfg.robot_shape[0]}x{cfg.robot_shape[1]} body (and, in its default layout, has "
+                       f"one output per cell): its controller decodes at that size only, not at {size}")
+    if (why := body_fit_problem(cfg.task, shape)) is not None:
+        raise SgrError(f"--shape {size}: {why}")
+    record, _, _ = read_champion(run.path)
+    if "genome" not in record:
+        raise SgrError(f"{run.path / 'champion.json'}: no 'genome' record to decode")
+    neat_config = load_neat_config(run.path / "neat.ini")
+    genome = genome_from_record(record["genome"], neat_config.genome_config)
+    problem = METHODS[cfg.method](cfg.replace(robot_shape=shape), neat_config)
+    try:
+        phenotype = problem.decode(genome)
+        if not phenotype.valid:
+            raise SgrError(f"at {size} the champion's genome draws no valid robot (not connected, or no "
+                           "actuator)")
+        origin = {"run": str(run.path.resolve()), "run_shape": list(cfg.robot_shape), "shape": list(shape)}
+        if own:  # the run's champion itself: its fitness and how it was scored stand
+            evaluation = {k: v for k, v in (record.get("evaluation") or {}).items()}
+            fitness = record["fitness"]
+        else:  # scored as the run scored its champion, under its own tag
+            evaluation = {"robust": (record.get("evaluation") or {}).get("robust"),
+                          "seed": (record.get("evaluation") or {}).get("seed", cfg.seed),
+                          "tag": f"decoded/{size}"}
+            problem.cfg = problem.cfg.replace(seed=evaluation["seed"])
+            with problem.scored_with(evaluation["robust"]):
+                fit, _ = problem.evaluate([phenotype], [evaluation["tag"]])
+            fitness = float(fit[0])
+        champ = champion_record(problem.cfg, problem, genome, phenotype, fitness, record.get("generation"),
+                                evaluation)
+    finally:
+        problem.pool.close()
+    champ["decoded"] = origin
+    return champ
+
+
+def _imported(run: RunDir) -> dict:
+    """The run's config.yaml, the modules registering its own task imported."""
+    cfg = run.config()
+    for ref in cfg.get("imports") or ():
+        import_tasks(ref, named_in=run.path / "config.yaml")
+    return cfg
+
+
+def write_decoded(run_dir: str | Path, shape: tuple[int, int], out: str | Path | None = None) -> Path:
+    """`decoded_champion` written as OUT/champion.json (default: the folder <run>-RxC beside the
+    run); returns the folder. A run folder (config.yaml) is never written into."""
+    out = Path(out) if out is not None else Path(f"{Path(run_dir).resolve()}-{shape[0]}x{shape[1]}")
+    if out.name == "champion.json":
+        out = out.parent
+    if (out / "config.yaml").exists():
+        raise SgrError(f"--out {out}: a run folder; give a new folder for the decoded champion")
+    champ = decoded_champion(run_dir, shape)
+    out.mkdir(parents=True, exist_ok=True)
+    RunDir(out).write_champion(champ)
+    return out

@@ -1,0 +1,97 @@
+"""`sgr decode`: an SGR champion genome decoded at its run's own size is the run's champion bit for
+bit (body, controller, and its fitness when replayed); at other sizes it draws valid robots
+(connected, with an actuator) that load and replay like any champion; direct NEAT decodes at its
+own size only, nested not at all, each refusal one line."""
+
+import json
+
+import numpy as np
+import pytest
+
+from evolve.cli import main
+from evolve.runs.champion import load_champion, rescore_champion
+from evolve.runs.decode import write_decoded
+from evolve.runs.experiment import Experiment
+from tsim.body import check_robot, has_actuator, is_connected
+
+TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20,
+        "workers": 1, "render_champion": False}
+
+
+@pytest.fixture(scope="module")
+def sgr_run(tmp_path_factory):
+    d = tmp_path_factory.mktemp("decode") / "sgr"
+    with Experiment.from_config({"method": "sgr", **TINY}, d, quiet=True) as exp:
+        exp.run_all()
+    return d
+
+
+def test_decoding_at_the_runs_own_size_gives_its_champion_bit_for_bit(sgr_run, tmp_path):
+    before = json.loads((sgr_run / "champion.json").read_text())
+    out = write_decoded(sgr_run, (5, 5), tmp_path / "same")
+    after = json.loads((out / "champion.json").read_text())
+    assert after["body"] == before["body"]
+    assert after["controller"] == before["controller"]  # every weight, as JSON floats: bit for bit
+    assert after["fitness"] == before["fitness"] and after["decoded"]["shape"] == [5, 5]
+    assert rescore_champion(out) == before["fitness"]  # replayed from the decoded file alone
+    champ = load_champion(out)
+    assert champ.rollout() == before["fitness"]  # and in gymnasium
+
+
+@pytest.mark.parametrize("shape", [(10, 10), (8, 8), (7, 12)])
+def test_other_sizes_give_valid_connected_bodies_with_actuators_that_replay(sgr_run, tmp_path, shape):
+    out = write_decoded(sgr_run, shape, tmp_path / "big")
+    champ = load_champion(out)
+    body = np.asarray(champ.body)
+    assert body.shape == shape
+    check_robot(body)
+    assert is_connected(body) and has_actuator(body)
+    assert rescore_champion(out) == champ.fitness  # scored as the run scored its champion
+
+
+def test_sgr_decode_command_writes_a_champion_folder_beside_the_run(sgr_run, capsys):
+    assert main(["decode", str(sgr_run), "--shape", "10x10"]) == 0
+    out = sgr_run.parent / "sgr-10x10"
+    assert load_champion(out).body.shape == (10, 10)
+    assert str(out) in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["--shape", "ten"], "--shape 'ten'"),
+    (["--shape", "10x10", "--out", "{run}"], "a run folder"),
+    (["--shape", "10x10", "--out", "{run}.json"], "ending in champion.json"),
+])
+def test_decode_bad_input_is_one_line(sgr_run, capsys, argv, message):
+    argv = [a.format(run=sgr_run) for a in argv]
+    assert main(["decode", str(sgr_run), *argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and message in err, err
+
+
+def test_a_body_too_big_for_the_world_is_one_line(sgr_run, tmp_path, capsys):
+    assert main(["decode", str(sgr_run), "--shape", "70x3", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "64x64" in err, err
+
+
+def test_direct_decodes_at_its_own_size_only(tmp_path, capsys):
+    d = tmp_path / "direct"
+    with Experiment.from_config({"method": "direct", **TINY}, d, quiet=True) as exp:
+        exp.run_all()
+    before = json.loads((d / "champion.json").read_text())
+    out = write_decoded(d, (5, 5), tmp_path / "same")
+    after = json.loads((out / "champion.json").read_text())
+    assert (after["body"], after["controller"]) == (before["body"], before["controller"])
+    assert rescore_champion(out) == before["fitness"]
+    assert main(["decode", str(d), "--shape", "10x10", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "decodes at that size only" in err, err
+
+
+def test_nested_is_refused_in_one_line(tmp_path, capsys):
+    d = tmp_path / "nested"
+    with Experiment.from_config({"method": "nested", **TINY}, d, quiet=True):
+        pass
+    assert main(["decode", str(d), "--shape", "5x5", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "nested" in err, err
