@@ -78,7 +78,8 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     """(method, task) of a run from its config.yaml; a missing method falls back to the name of the
     run directory's parent (runs are often stored as <experiment>/<seed>), a missing task to
     "unknown". Variants are their own method: "direct (per_cell)", "sgr robust" (robust
-    evaluation)."""
+    evaluation), "sgr 10x10" (a body size other than the paper's 5x5), "sgr 10x10 from g50" (a run
+    that started from another run's generation 50: `start_from`)."""
     run_dir = Path(run_dir)
     cfg: dict = {}
     f = run_dir / "config.yaml"
@@ -97,6 +98,12 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
         method = f"{method} ({cfg['layout']})"
     if cfg.get("robust"):  # scored by robust evaluation: another quantity, its own group
         method = f"{method} robust"
+    shape = cfg.get("robot_shape")
+    if isinstance(shape, list) and len(shape) == 2 and list(shape) != [5, 5]:  # the paper's size unsaid
+        method = f"{method} {shape[0]}x{shape[1]}"
+    start = cfg.get("start_from")
+    if isinstance(start, dict):  # grown from another run's population: its own group
+        method = f"{method} from g{start.get('generation', '?')}"
     return method, str(cfg.get("task") or UNKNOWN)
 
 

@@ -68,6 +68,18 @@ def test_labels_fall_back_without_config(tmp_path):
     assert set(summarize_runs([run])) == {("my-exp", "unknown")}
 
 
+def test_labels_keep_sizes_and_grown_runs_apart(tmp_path):
+    """A run at another body size, and one grown from another run's population, are their own
+    groups in reports and plots; the paper's 5x5 (stated or not) keeps the plain method name."""
+    labels = {}
+    for name, extra in {"plain": "", "five": "robot_shape: [5, 5]\n", "big": "robot_shape: [10, 10]\n",
+                        "grown": "robot_shape: [10, 10]\nstart_from: {run: /x, generation: 50}\n"}.items():
+        run = _run(tmp_path / name, [1.0])
+        (run / "config.yaml").write_text(f"method: sgr\ntask: Walker-v0\n{extra}")
+        labels[name] = run_labels(run)[0]
+    assert labels == {"plain": "sgr", "five": "sgr", "big": "sgr 10x10", "grown": "sgr 10x10 from g50"}
+
+
 def test_plot_runs_without_data_raises(tmp_path):
     """Runs with no generations rows cannot be plotted; say so instead of writing an empty PNG."""
     empty = tmp_path / "empty"

@@ -1,0 +1,109 @@
+"""The bigger-bodies study (issue 36): SGR above 5x5, against direct NEAT, and genomes that grow.
+
+Per task, at the largest body its world admits (Walker-v0 10x10; Thrower-v0 6 rows x 9 columns, its
+package sits on a 7th row; Climber-v2 10 rows x 5 columns, its channel is 5 cells wide), per seed,
+all with the packaged configs' honest evaluation (configs/sgr/<task>.yaml, configs/direct/...):
+
+- ``sgr-<task>-<RxC>-s<seed>``: SGR at the big size, 100 generations;
+- ``direct-<task>-<RxC>-s<seed>``: direct NEAT at the big size, 100 generations;
+- ``sgr-<task>-5x5-g50-s<seed>`` then ``sgr-<task>-5x5to<RxC>-s<seed>``: SGR at 5x5 for 50
+  generations, then the same population at the big size for 50 more (``sgr evolve --from``);
+- ``decoded-<task>-<RxC>-s<seed>``: the 5x5 champion of ``docs/robust-fast/runs/sgr-<task>-s<seed>``
+  (100 generations of the same evaluation) decoded at the big size, no further evolution
+  (``sgr decode``).
+
+Every run is an ordinary run folder under ``--out``; the script is idempotent: a finished run is
+skipped, an unfinished one resumed (``sgr evolve --resume``), so after a kill it goes on where it
+stood. Each finished run's records (config.yaml, neat.ini, generations.csv, champion.json,
+champion-best-ever.json) are copied to ``--records``, the decoded champions written there directly.
+Seeds go outermost, so a partial study has every arm of the first seeds.
+
+    python bench/big_study.py                                   # all of it: hours on 2 cores
+    python bench/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
+    sgr report docs/big                                         # then the report
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+SHAPES = {"Walker-v0": (10, 10), "Thrower-v0": (6, 9), "Climber-v2": (10, 5)}
+RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
+SGR = [sys.executable, "-m", "evolve.cli"]
+
+
+def finished(run: Path) -> bool:
+    """A run folder whose last checkpoint is its last generation and whose champion is written."""
+    from evolve.runs.rundir import RunDir
+
+    if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
+        return False
+    rd = RunDir(run)
+    return rd.last_checkpoint_generation() == int(rd.config()["generations"])
+
+
+def evolve(run: Path, args: list[str], workers: int) -> None:
+    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished."""
+    if finished(run):
+        return
+    cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
+    cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
+    print("+", " ".join(cmd[2:]), flush=True)
+    subprocess.run(cmd, check=True, cwd=ROOT)
+
+
+def keep(run: Path, records: Path) -> None:
+    """Copy a finished run's records into the committed folder."""
+    dest = records / run.name
+    dest.mkdir(parents=True, exist_ok=True)
+    for name in RECORDS:
+        if (run / name).is_file():
+            shutil.copy2(run / name, dest / name)
+
+
+def study(task: str, seed: int, out: Path, records: Path, workers: int) -> None:
+    rows, cols = SHAPES[task]
+    size = f"{rows}x{cols}"
+    common = ["--task", task, "--seed", str(seed)]
+    source = ROOT / "docs" / "robust-fast" / "runs" / f"sgr-{task}-s{seed}"
+    decoded = records / f"decoded-{task}-{size}-s{seed}"
+    if (source / "champion.json").is_file() and not (decoded / "champion.json").is_file():
+        print(f"+ decode {source.name} --shape {size}", flush=True)
+        subprocess.run(SGR + ["decode", str(source), "--shape", size, "--out", str(decoded)], check=False,
+                       cwd=ROOT)
+    for method in ("sgr", "direct"):
+        run = out / f"{method}-{task}-{size}-s{seed}"
+        evolve(run, common + ["--method", method, "--shape", size, "--generations", "100"], workers)
+        keep(run, records)
+    small = out / f"sgr-{task}-5x5-g50-s{seed}"
+    evolve(small, common + ["--generations", "50"], workers)
+    keep(small, records)
+    grown = out / f"sgr-{task}-5x5to{size}-s{seed}"
+    if finished(grown) or (grown / "config.yaml").is_file():
+        evolve(grown, [], workers)
+    else:
+        evolve(grown, ["--from", str(small), "--shape", size, "--generations", "100"], workers)
+    keep(grown, records)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", nargs="+", default=list(SHAPES), choices=list(SHAPES))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--out", type=Path, default=ROOT / "runs" / "big")
+    ap.add_argument("--records", type=Path, default=ROOT / "docs" / "big" / "runs")
+    ap.add_argument("--workers", type=int, default=2)
+    a = ap.parse_args()
+    a.out.mkdir(parents=True, exist_ok=True)
+    for seed in a.seeds:
+        for task in a.tasks:
+            study(task, seed, a.out.resolve(), a.records.resolve(), a.workers)
+
+
+if __name__ == "__main__":
+    main()
