@@ -1,6 +1,7 @@
 """Seconds per generation of an evolution method at full size (not run by CI).
 
     python bench/generation_bench.py --config configs/sgr/Walker-v0.yaml --generations 4
+    python bench/generation_bench.py --shape 10x10          # the same config at another body size
 
 Prints build / sim / neat / total seconds per generation (median over the generations after the
 first, which also pays the one-off Taichi compile) and simulated robot-steps per second.
@@ -14,7 +15,7 @@ import statistics
 import tempfile
 import time
 
-from evolve.cli.common import workers_arg
+from evolve.cli.common import parse_shape, workers_arg
 from evolve.runs.experiment import Experiment
 from tasks.specs import task_spec
 
@@ -26,10 +27,12 @@ def main() -> None:
     ap.add_argument("--pop", type=int)
     ap.add_argument("--workers", type=workers_arg,
                     help="rollout processes (default: the config's, auto = all CPUs)")
+    ap.add_argument("--shape", type=parse_shape, help="robot_shape RxC (default: the config's)")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
-        flags = {"generations": args.generations, "pop_size": args.pop, "workers": args.workers}
+        flags = {"generations": args.generations, "pop_size": args.pop, "workers": args.workers,
+                 "robot_shape": list(args.shape) if args.shape else None}
         exp = Experiment.create(args.config, f"{tmp}/run", {k: v for k, v in flags.items() if v is not None},
                                 quiet=True)
         rows = []
@@ -44,6 +47,7 @@ def main() -> None:
     med = {k: statistics.median(r[k] for r in timed) for k in ("build_s", "sim_s", "neat_s", "total_s")}
     robot_steps = sum(r["episodes"] for r in timed) * steps  # upper bound: early terminations stop sooner
     out = {"config": args.config, "method": cfg["method"], "task": cfg["task"], "pop": cfg["pop_size"],
+           "shape": list(cfg["robot_shape"]),
            "workers": exp.pool.workers,
            "steps": steps, "generations": args.generations, "first_generation_s": rows[0]["total_s"],
            **{f"median_{k}": v for k, v in med.items()},
@@ -51,7 +55,8 @@ def main() -> None:
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} x {steps} steps, "
+        print(f"{cfg['method']} {cfg['task']} {'x'.join(map(str, cfg['robot_shape']))} "
+              f"pop {cfg['pop_size']} x {steps} steps, "
               f"{exp.pool.workers} workers: median "
               f"{med['total_s']:.2f} s/generation (build {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
               f"neat {med['neat_s']:.2f}); first generation {rows[0]['total_s']:.1f} s; "
