@@ -36,6 +36,9 @@ ROBUST = {"episodes": 3, "action_noise": "uniform", "action_scale": 1e-2, "offse
 # the cheap design (#33): one fresh episode a generation, a survivor's scores averaged, the top raced
 FAST = {"episodes": 1, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0, "statistic": "mean",
         "reevaluate": True, "accumulate": True, "race": 4}
+# the packaged configs' design (settle8), settling after 2 scores so that short runs show it
+SETTLE = {"episodes": 1, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0, "statistic": "mean",
+          "reevaluate": True, "accumulate": True, "settle": 2}
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 NESTED = {"pop_size": 6, "inner_pop_size": 6, "inner_generations": 1}
 
@@ -83,7 +86,7 @@ def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescor
         assert int(r["episodes"]) % ROBUST["episodes"] == 0 and int(r["episodes"]) > 0
 
 
-@pytest.mark.parametrize("robust", [ROBUST, FAST], ids=["k3", "accumulate-race"])
+@pytest.mark.parametrize("robust", [ROBUST, FAST, SETTLE], ids=["k3", "accumulate-race", "accumulate-settle"])
 def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_same_run(tmp_path, robust):
     cfg = config("sgr", robust=robust, generations=8, pop_size=24, checkpoint_every=2)
     (tmp_path / "c.yaml").write_text(yaml.safe_dump({**cfg, "neat_config": None}))
@@ -140,6 +143,21 @@ def test_accumulated_runs_do_not_depend_on_the_worker_count_and_their_champion_r
     for r in one.rows():  # every valid genome once, plus the raced four
         assert int(r["episodes"]) == int(r["n_valid"]) + min(4, int(r["n_valid"]))
     assert any(t.endswith("/race") for t in tags)
+
+
+def test_settled_runs_do_not_depend_on_the_worker_count_and_spend_fewer_episodes(tmp_path):
+    """The packaged design (accumulate + settle): the same run on 1 or 2 workers, the champion's
+    fitness rescored bit for bit from champion.json, and genomes with `settle` scores not simulated
+    again (a later generation spends fewer episodes than it has valid genomes)."""
+    cfg = config("sgr", robust=SETTLE, generations=6)
+    one = run(tmp_path, "w1", cfg)
+    two = run(tmp_path, "w2", {**cfg, "workers": 2})
+    assert rows(one) == rows(two)
+    champ = one.champion()
+    assert champ == two.champion()
+    assert rescore_champion(one.path) == champ["fitness"]
+    assert len(champ["evaluation"]["tags"]) <= SETTLE["settle"]
+    assert any(int(r["episodes"]) < int(r["n_valid"]) for r in one.rows()[2:])
 
 
 def test_nested_neat_refuses_accumulated_fitness_in_one_line(tmp_path, capsys):
