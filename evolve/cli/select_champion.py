@@ -22,6 +22,8 @@ def register(sub) -> argparse.ArgumentParser:
     sc.add_argument("--rank", choices=("min", "score"),
                     help="among candidates that hold: the best min(score, nominal return), or the best "
                          "score (default min)")
+    sc.add_argument("--confirm", type=int, help="fresh perturbed episodes per candidate that judge the "
+                                                "hold again and give the champion's fitness (default 0: off)")
     add_workers(sc, 1, "rollout processes (default 1)")
     sc.set_defaults(fn=run)
     return sc
@@ -34,7 +36,7 @@ def run(args: argparse.Namespace) -> int:
 
     given = {k: v for k, v in (("candidates", args.candidates), ("episodes", args.episodes),
                                ("statistic", args.statistic), ("tolerance", args.tolerance),
-                               ("rank", args.rank)) if v is not None}
+                               ("rank", args.rank), ("confirm", args.confirm)) if v is not None}
     champ = select_finished_run(resume_dir(args.run_dir), given, args.workers)
     print(f"{args.run_dir}: {describe(champ)}")
     return 0

@@ -94,6 +94,39 @@ def test_choose_takes_the_candidate_that_holds_with_the_best_worse_of_score_and_
     assert choose(np.array([np.nan, 1.0]), np.array([0.5, 2.0]), 0.0)[0] == 1
 
 
+def test_with_a_confirmation_a_candidate_holds_only_when_fresh_episodes_agree():
+    """`confirm`: the hold is judged on episodes that did not choose. The candidate ranked first
+    (score 4.0 vs nominal 4.1) whose fresh episodes give 3.0 (73 %) no longer holds; the next
+    (3.9 vs 3.9, confirmed 3.8) is chosen."""
+    scores, nominal = np.array([4.0, 3.9, 5.0]), np.array([4.1, 3.9, 8.0])
+    assert choose(scores, nominal, 0.05)[0] == 0
+    i, holds = choose(scores, nominal, 0.05, confirmed=np.array([3.0, 3.8, 7.9]))
+    assert i == 1 and holds.tolist() == [False, True, False]
+
+
+def test_a_confirmed_choice_follows_its_rule_and_its_fitness_rescores_to_the_bit(runs, tmp_path):
+    """select-champion --confirm: every candidate gets fresh episodes, the champion holds on both
+    sets (or none does), and its fitness is its confirmation, which champion.json alone gives again."""
+    import shutil
+
+    copy = tmp_path / "confirmed"
+    shutil.copytree(runs[1].path, copy)
+    assert main(["select-champion", str(copy), "--confirm", "12"]) == 0
+    champ = RunDir(copy).champion()
+    sel = champ["selection"]
+    assert sel["confirm"] == 12
+    cands = sel["candidates"]
+    for c in cands:
+        floor = c["nominal"] - 0.1 * abs(c["nominal"])
+        assert c["holds"] == (c["score"] >= floor and c["confirmed"] >= floor)
+    pool = [c for c in cands if c["holds"]] or cands
+    best = max(pool, key=lambda c: min(c["score"], c["nominal"]))
+    assert champ["genome"]["key"] == best["key"] and champ["fitness"] == best["confirmed"]
+    assert sel["score"] == best["score"] and champ["fitness"] != best["score"]
+    assert champ["evaluation"]["tag"] == f"final-confirm/{best['key']}"
+    assert rescore_champion(copy) == champ["fitness"]
+
+
 def test_choosing_again_on_one_or_two_workers_changes_nothing(runs, tmp_path, capsys):
     import shutil
 
