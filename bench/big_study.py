@@ -20,6 +20,7 @@ Seeds go outermost, so a partial study has every arm of the first seeds.
 
     python bench/big_study.py                                   # all of it: hours on 2 cores
     python bench/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
+    python bench/big_study.py --pictures                        # docs/big/bodies.png from the records
     sgr report docs/big                                         # then the report
 """
 
@@ -91,6 +92,38 @@ def study(task: str, seed: int, out: Path, records: Path, workers: int) -> None:
     keep(grown, records)
 
 
+def pictures(records: Path, out: Path) -> Path:
+    """One picture of every champion body under `records` (runs and decoded champions), a row per
+    task, labelled with the folder's arm and its fitness."""
+    import json
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from evolve.runs.gallery import body_image
+
+    champs = sorted(d for d in records.iterdir() if (d / "champion.json").is_file())
+    tasks = sorted({json.loads((d / "champion.json").read_text())["task"] for d in champs})
+    per_task = {t: [d for d in champs if json.loads((d / "champion.json").read_text())["task"] == t]
+                for t in tasks}
+    cols = max(len(v) for v in per_task.values())
+    fig, axes = plt.subplots(len(tasks), cols, figsize=(1.6 * cols, 2.0 * len(tasks)), squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    for r, t in enumerate(tasks):
+        for c, d in enumerate(per_task[t]):
+            rec = json.loads((d / "champion.json").read_text())
+            axes[r][c].imshow(body_image(rec["body"], cell=8))
+            arm = d.name.replace(f"-{t}", "")
+            axes[r][c].set_title(f"{t}\n{arm}\n{rec['fitness']:.2f}", fontsize=6)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(SHAPES), choices=list(SHAPES))
@@ -98,7 +131,11 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "big")
     ap.add_argument("--records", type=Path, default=ROOT / "docs" / "big" / "runs")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--pictures", action="store_true", help="only draw RECORDS/../bodies.png")
     a = ap.parse_args()
+    if a.pictures:
+        print(pictures(a.records, a.records.parent / "bodies.png"))
+        return
     a.out.mkdir(parents=True, exist_ok=True)
     for seed in a.seeds:
         for task in a.tasks:
