@@ -160,3 +160,48 @@ def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     assert np.abs(pos64 - start).max() > 0.1  # it fell and moved
     err = np.abs(np.array(r["pos"]) - pos64).max()
     assert err < 1e-7, err
+
+
+REWRITE = """
+import json
+import numpy as np
+from tasks.specs import task_world
+from tsim.sampling import sample_robot
+from tsim.sim import BatchSim
+
+rng = np.random.default_rng(5)
+bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+acts = [np.full((3, 25), 0.6 + 0.1 * (t % 10)) for t in range(30)]
+
+
+def run(sim, steps):
+    for t in steps:
+        sim.set_actions([a[:b] for a, b in zip(acts[t], sim.n_actuators, strict=True)])
+        sim.step()
+
+
+a = BatchSim(task_world("Walker-v0"), bodies, (1, 1))
+run(a, range(10))
+saved = a.state[:, :, 0:8].copy()  # what evogym's revert restores: positions, velocities
+run(a, range(10, 20))
+a.state[:, :, 0:8] = saved
+b = BatchSim(task_world("Walker-v0"), bodies, (1, 1))
+b.state[:] = 0.0
+b.state[:, :, 0:8] = saved  # the same state with no low parts
+run(a, range(20, 30))
+run(b, range(20, 30))
+print(json.dumps({"cols": a.state.shape[2], "same": a.state.tobytes() == b.state.tobytes(),
+                  "moved": float(np.abs(a.state[:, :, 0:2] - saved[:, :, 0:2]).max())}))
+"""
+
+
+def test_f32_state_written_from_outside_drops_stale_low_parts():
+    """f32's low parts (state columns 8:14) hold only for the positions they were stored with: a
+    state whose positions are rewritten from outside (a reset, evogym's `revert`) steps exactly as
+    the same state with no low parts at all, not with the low parts of the positions it replaced."""
+    out = subprocess.run([sys.executable, "-c", REWRITE], env=_clean_env(SGR_PRECISION="f32"),
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["cols"] == 14 and r["moved"] > 1e-3
+    assert r["same"]
