@@ -159,7 +159,7 @@ class BatchSim:
         self.ter_f = ter_f
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
-        self.state = np.zeros((B, P, K.NS), dtype=real)
+        self.state = np.zeros((B, P, K.state_columns()), dtype=real)
         self.actions = np.ones((B, A), dtype=real)
         # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
         self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]

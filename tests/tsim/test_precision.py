@@ -105,3 +105,103 @@ def test_cli_choices_are_the_runtime_precisions():
     from tasks.cli import PRECISIONS
 
     assert PRECISIONS == runtime.PRECISIONS
+
+
+FALL = """
+import json, sys
+import numpy as np
+from tsim.body import build_body
+from tsim.sim import BatchSim
+from tsim.world import world_from_matrix
+
+
+def fall(pos0=None):
+    # a 3x3 robot acting while it falls freely at x, y ~ 20 (float32's ulp there: 1.9e-6)
+    m = np.zeros((260, 260), dtype=int)
+    m[-1, 0] = 5
+    body = build_body(np.array([[3, 3, 3], [2, 4, 2], [3, 1, 3]]))
+    sim = BatchSim(world_from_matrix(m), [body], (200, 200))
+    n = body.n_points
+    if pos0 is not None:
+        sim.state[0, :n, 0:2] = pos0
+        sim.state[0, :n, 4:6] = pos0
+    start = sim.state[0, :n, 0:2].astype(float)
+    act = np.array([1.5, 0.75, 1.25, 1.0, 1.375, 1.125])  # exact in float32
+    for t in range(20):
+        sim.set_actions([act if t % 2 else 2.25 - act])
+        sim.step()
+    pos = sim.state[0, :n, 0:2].astype(float)
+    if sim.state.shape[2] > 8:  # f32's pairs: the position is hi + lo
+        pos += sim.state[0, :n, 8:10].astype(float)
+    return str(sim.state.dtype), start, pos
+
+
+if __name__ == "__main__":
+    dtype, start, pos = fall()
+    print(json.dumps({"dtype": dtype, "start": start.tolist(), "pos": pos.tolist()}))
+"""
+
+
+def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
+    """Far from the origin a float32 coordinate cannot hold a substep's increment (v dt ~1e-6 to
+    1e-4 against an ulp of 1.9e-6 at 20) and its springs see lengths rounded at that ulp. f32 keeps
+    positions and velocities as pairs hi + lo (tsim/kernels/pairs.py): 20 steps of a robot acting
+    while falling at x, y ~ 20 stay within 1e-7 of f64 run from the same float32 start (measured
+    1.5e-8; plain float32 coordinates, before the pairs, were 1.8e-5 off)."""
+    out = subprocess.run([sys.executable, "-c", FALL], env=_clean_env(SGR_PRECISION="f32"),
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["dtype"] == "float32"
+    space: dict = {}
+    exec(FALL.replace('if __name__ == "__main__":', "if False:"), space)
+    dtype, start, pos64 = space["fall"](np.array(r["start"]))
+    assert dtype == "float64" and np.array_equal(start, r["start"])
+    assert np.abs(pos64 - start).max() > 0.1  # it fell and moved
+    err = np.abs(np.array(r["pos"]) - pos64).max()
+    assert err < 1e-7, err
+
+
+REWRITE = """
+import json
+import numpy as np
+from tasks.specs import task_world
+from tsim.sampling import sample_robot
+from tsim.sim import BatchSim
+
+rng = np.random.default_rng(5)
+bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+acts = [np.full((3, 25), 0.6 + 0.1 * (t % 10)) for t in range(30)]
+
+
+def run(sim, steps):
+    for t in steps:
+        sim.set_actions([a[:b] for a, b in zip(acts[t], sim.n_actuators, strict=True)])
+        sim.step()
+
+
+a = BatchSim(task_world("Walker-v0"), bodies, (1, 1))
+run(a, range(10))
+saved = a.state[:, :, 0:8].copy()  # what evogym's revert restores: positions, velocities
+run(a, range(10, 20))
+a.state[:, :, 0:8] = saved
+b = BatchSim(task_world("Walker-v0"), bodies, (1, 1))
+b.state[:] = 0.0
+b.state[:, :, 0:8] = saved  # the same state with no low parts
+run(a, range(20, 30))
+run(b, range(20, 30))
+print(json.dumps({"cols": a.state.shape[2], "same": a.state.tobytes() == b.state.tobytes(),
+                  "moved": float(np.abs(a.state[:, :, 0:2] - saved[:, :, 0:2]).max())}))
+"""
+
+
+def test_f32_state_written_from_outside_drops_stale_low_parts():
+    """f32's low parts (state columns 8:14) hold only for the positions they were stored with: a
+    state whose positions are rewritten from outside (a reset, evogym's `revert`) steps exactly as
+    the same state with no low parts at all, not with the low parts of the positions it replaced."""
+    out = subprocess.run([sys.executable, "-c", REWRITE], env=_clean_env(SGR_PRECISION="f32"),
+                         capture_output=True, text=True, timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["cols"] == 14 and r["moved"] > 1e-3
+    assert r["same"]

@@ -8,6 +8,7 @@ One physics stage per module, in the order a substep runs them (as brax lays out
 - `narrowphase`: evogym's voxel-voxel contact force between two quads;
 - `contacts`: a substep's boxes, pairs and contact forces (broad then narrow phase);
 - `springs`: spring forces and their scatter in evogym's order;
+- `pairs`: f32's positions and velocities as float32 pairs hi + lo;
 - `integrate`: RK4 and the fixed points;
 - `constraints`: the edge-length bands;
 - `step`: the kernels that run the substeps of every world.
@@ -52,6 +53,9 @@ from tsim.kernels.layout import (
                                      NS,
                                      PC,
                                      RUNNING,
+                                     S_LO_OF,
+                                     S_POS_LO,
+                                     S_VEL_LO,
                                      SC,
                                      STATUS,
                                      TOLERANCES,
@@ -64,6 +68,8 @@ from tsim.kernels.layout import (
                                      V_TYPE,
                                      Tolerances,
                                      capacity,
+                                     pairs,
+                                     state_columns,
                                      tol,
 )
 from tsim.kernels.step import step_kernel, step_kernel_serial
@@ -71,6 +77,8 @@ from tsim.kernels.step import step_kernel, step_kernel_serial
 __all__ = ["E_GOAL", "E_K", "E_LEQ", "E_REST", "EC", "GPU_BLOCK", "INACTIVE", "LIST_ALWAYS", "LIST_AUTO",
            "LIST_MIN", "LIST_OFF", "LIST_PER_VOXEL", "N_ACT", "N_COUNTS", "N_EDGE_F", "N_EDGES",
            "N_FIXED", "N_PTS", "N_RIGID", "N_SURF", "N_SURF_ROBOT", "N_VOX", "N_VOX_I", "NONFINITE",
-           "NS", "PC", "RUNNING", "SC", "SKIN", "STATUS", "SWEEP_ALWAYS", "SWEEP_AUTO", "SWEEP_MIN",
+           "NS", "PC", "RUNNING", "S_LO_OF", "S_POS_LO", "S_VEL_LO", "SC", "SKIN", "STATUS",
+           "SWEEP_ALWAYS", "SWEEP_AUTO", "SWEEP_MIN",
            "SWEEP_OFF", "SWEEP_RATIO", "TOLERANCES", "UNSTABLE", "V_COL", "V_OBJ", "V_OPEN", "V_PTS",
-           "V_ROW", "V_TYPE", "Tolerances", "capacity", "step_kernel", "step_kernel_serial", "tol"]
+           "V_ROW", "V_TYPE", "Tolerances", "capacity", "pairs", "state_columns", "step_kernel",
+           "step_kernel_serial", "tol"]

@@ -3,7 +3,7 @@
 
 from tsim import constants as C
 from tsim.kernels.integrate import hold_fixed
-from tsim.kernels.layout import N_RIGID, V_PTS
+from tsim.kernels.layout import N_RIGID, V_PTS, pairs
 from tsim.kernels.springs import add_to_ends
 from tsim.runtime import ti
 
@@ -18,12 +18,16 @@ def constraints(b, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
                 s: ti.template()):
     """Pass 1: Jacobi projection of every edge into +-25 % (fixed points stay: their position
     this substep is still pos_last), applied in evogym's order (`add_to_ends`); pass 2: rigid
-    voxels into +-3 % (evogym's rigid pass ignores the fixed flag)."""
+    voxels into +-3 % (evogym's rigid pass ignores the fixed flag). In f32 the positions are the
+    pairs s.pos + s.plo and the corrections go to the low parts (`pairs`)."""
     for e in range(n_edges):
         a = s.ea[e]
         q = s.eb[e]
         dx = s.pos[2 * a] - s.pos[2 * q]
         dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
+        if ti.static(pairs()):
+            dx += s.plo[2 * a] - s.plo[2 * q]
+            dy += s.plo[2 * a + 1] - s.plo[2 * q + 1]
         dist = ti.sqrt(dx * dx + dy * dy)
         rest = s.erest[e]
         stress = dist / rest
@@ -39,7 +43,10 @@ def constraints(b, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
             cy += dy * m
         s.ccx[e] = cx * 0.8
         s.ccy[e] = cy * 0.8
-    add_to_ends(n_edges, s.pos, s.ea, s.eb, s.ccx, s.ccy, True)
+    if ti.static(pairs()):
+        add_to_ends(n_edges, s.plo, s.ea, s.eb, s.ccx, s.ccy, True)
+    else:
+        add_to_ends(n_edges, s.pos, s.ea, s.eb, s.ccx, s.ccy, True)
     hold_fixed(b, counts, lists, s)
     for i in range(counts[b, N_RIGID]):
         v = lists[b, i, 1]
@@ -48,6 +55,9 @@ def constraints(b, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
             q = vox_i[b, v, V_PTS + (k + 1) % 4]
             dx = s.pos[2 * a] - s.pos[2 * q]
             dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
+            if ti.static(pairs()):
+                dx += s.plo[2 * a] - s.plo[2 * q]
+                dy += s.plo[2 * a + 1] - s.plo[2 * q + 1]
             dist = ti.sqrt(dx * dx + dy * dy)
             stress = dist / C.MAIN_REST
             ox = 0.0
@@ -60,7 +70,13 @@ def constraints(b, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
                 m = (dist - C.MAIN_REST * _LO_R) / (dist * 2)
                 ox += dx * m
                 oy += dy * m
-            s.pos[2 * a] -= ox * 0.5
-            s.pos[2 * a + 1] -= oy * 0.5
-            s.pos[2 * q] += ox * 0.5
-            s.pos[2 * q + 1] += oy * 0.5
+            if ti.static(pairs()):
+                s.plo[2 * a] -= ox * 0.5
+                s.plo[2 * a + 1] -= oy * 0.5
+                s.plo[2 * q] += ox * 0.5
+                s.plo[2 * q + 1] += oy * 0.5
+            else:
+                s.pos[2 * a] -= ox * 0.5
+                s.pos[2 * a + 1] -= oy * 0.5
+                s.pos[2 * q] += ox * 0.5
+                s.pos[2 * q + 1] += oy * 0.5

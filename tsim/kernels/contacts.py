@@ -96,6 +96,14 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
         fits = True
         for i in range(n_surf):
             loaded = False
+            # f32 (`L.pairs`): the quads are loaded relative to voxel i's first corner, from the
+            # positions' pairs, so that the contact tests see the pairs' differences, not
+            # coordinates rounded at ~5e-7 (the narrow phase uses only differences)
+            ox = 0.0
+            oy = 0.0
+            if ti.static(L.pairs()):
+                ox = s.pos[2 * s.sv[8 * i]]
+                oy = s.pos[2 * s.sv[8 * i] + 1]
             bx0 = s.box[4 * i]
             bx1 = s.box[4 * i + 1]
             by0 = s.box[4 * i + 2]
@@ -148,9 +156,9 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                                 count += 2
                         if robot_pair_acts(s.pos, s.sv, s.box, i, j):
                             if not loaded:
-                                load_quad(s.pos, s.vt, s.sv, qf, qi, 0, i)
+                                load_quad(s, qf, qi, 0, i, ox, oy)
                                 loaded = True
-                            load_quad(s.pos, s.vt, s.sv, qf, qi, 1, j)
+                            load_quad(s, qf, qi, 1, j, ox, oy)
                             for d in range(2):
                                 resolve(s.fcol, qf, qi, d, 1 - d, scale)
             # no terrain box reaches above ter.top, so no terrain test can pass for a box above it
@@ -169,11 +177,14 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                                 acts = terrain_pair_acts(s.pos, s.sv, s.box, ter.f, i, t)
                             if acts:
                                 if not loaded:
-                                    load_quad(s.pos, s.vt, s.sv, qf, qi, 0, i)
+                                    load_quad(s, qf, qi, 0, i, ox, oy)
                                     loaded = True
                                 for k in range(4):
                                     qf[4 + k, 0] = ter.f[t, 2 * k]
                                     qf[4 + k, 1] = ter.f[t, 2 * k + 1]
+                                    if ti.static(L.pairs()):
+                                        qf[4 + k, 0] = ter.f[t, 2 * k] - ox
+                                        qf[4 + k, 1] = ter.f[t, 2 * k + 1] - oy
                                     qf[4 + k, 2] = 0.0
                                     qf[4 + k, 3] = 0.0
                                     qi[4 + k, 0] = -1

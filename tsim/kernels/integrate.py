@@ -3,26 +3,44 @@ forces frozen across the stages), and the fixed points held where they were."""
 
 from tsim import constants as C
 from tsim import portable
-from tsim.kernels.layout import N_FIXED
+from tsim.kernels.layout import N_FIXED, pairs
+from tsim.kernels.pairs import renormalize
 from tsim.kernels.springs import spring_forces
 from tsim.runtime import ti
+
+
+@ti.func
+def stage_y(s: ti.template(), p):
+    """Point p's height at the RK4 stage state (in f32 its pair rounded: near the ground, where
+    it is read, float32 resolves it to ~1e-9 or better)."""
+    y = s.xs[2 * p + 1]
+    if ti.static(pairs()):
+        y = s.pos[2 * p + 1] + (s.plo[2 * p + 1] + s.xlo[2 * p + 1])
+    return y
 
 
 @ti.func
 def rk4(n_pts, n_edges, s: ti.template()):
     """Rest-length update, then classical RK4 on (s.pos, s.vel) with dt = 1e-4; x, y interleaved.
     The 4 stages are unrolled; stage 0 (stage state = substep state) also sets the current rest
-    lengths, and each stage's point loop prepares the next stage's state."""
+    lengths, and each stage's point loop prepares the next stage's state.
+
+    f32 (`pairs`): a stage's position is the substep's s.pos + s.plo plus the stage's offset
+    s.xlo (k h; s.xs is unused), its velocity s.vel + s.vlo + k h rounded; the substep's
+    increments add to the low parts (s.plo unnormalised until the constraints are done, s.vlo
+    renormalised here)."""
     for i in range(2 * n_pts):
         s.xs[i] = s.pos[i]
         s.vs[i] = s.vel[i]
+        if ti.static(pairs()):
+            s.xlo[i] = 0.0
     for stage in ti.static(range(4)):
         spring_forces(n_pts, n_edges, s, stage == 0)
         # the ground plane's force (a branch and a tanh call) keeps LLVM from vectorising the
         # point loop, so that loop has a second copy without it for stages with no point below
         below = 0
         for p in range(n_pts):
-            if s.xs[2 * p + 1] < 0:
+            if stage_y(s, p) < 0:
                 below += 1
         for ground in ti.static((False, True)):
             if (below > 0) == ground:
@@ -35,7 +53,7 @@ def rk4(n_pts, n_edges, s: ti.template()):
                     fx += s.fcol[2 * p]
                     fy += s.fcol[2 * p + 1]
                     if ti.static(ground):
-                        y = s.xs[2 * p + 1]
+                        y = stage_y(s, p)
                         if y < 0:
                             normal = y * (-C.GROUND_K)
                             fy += normal
@@ -57,11 +75,20 @@ def rk4(n_pts, n_edges, s: ti.template()):
                             s.adv[i] += kv
                         if ti.static(stage < 3):
                             h = 0.5 if ti.static(stage < 2) else 1.0
-                            s.xs[i] = s.pos[i] + kx * h
-                            s.vs[i] = s.vel[i] + kv * h
+                            if ti.static(pairs()):
+                                s.xlo[i] = kx * h
+                                s.vs[i] = s.vel[i] + (s.vlo[i] + kv * h)
+                            else:
+                                s.xs[i] = s.pos[i] + kx * h
+                                s.vs[i] = s.vel[i] + kv * h
     for i in range(2 * n_pts):
-        s.pos[i] += s.adx[i] / 6
-        s.vel[i] += s.adv[i] / 6
+        if ti.static(pairs()):
+            s.plo[i] += s.adx[i] / 6
+            s.vlo[i] += s.adv[i] / 6
+            renormalize(s.vel, s.vlo, i)
+        else:
+            s.pos[i] += s.adx[i] / 6
+            s.vel[i] += s.adv[i] / 6
 
 
 @ti.func
@@ -75,3 +102,6 @@ def hold_fixed(b, counts: ti.template(), lists: ti.template(), s: ti.template())
         for d in ti.static(range(2)):
             s.pos[2 * p + d] = s.pl[2 * p + d]
             s.vel[2 * p + d] = 0.0
+            if ti.static(pairs()):
+                s.plo[2 * p + d] = s.pllo[2 * p + d]
+                s.vlo[2 * p + d] = 0.0

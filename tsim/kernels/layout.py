@@ -5,7 +5,8 @@ batch; `counts`, `state` and `actions` change between launches, the others are s
 the process's floating-point type (f64 by default, f32 on request; `tsim.runtime.precision`):
 - `counts[b, :]`   int: see the COUNT_* column names below.
 - `state[b, p, :]` real: pos(0:2) vel(2:4) pos_last(4:6) vel_true(6:8) of dynamic point p
-  (robot points first, then free objects such as Thrower's package).
+  (robot points first, then free objects such as Thrower's package); in f32 also the low parts
+  of pos (8:10) and vel (10:12) and the pos (12:14) they belong to (`pairs`, `state_columns`).
 - `edge_i[b, e, :]` int: a, b, driver0, driver1 (actuator indices or -1).
 - `edge_f[b, e, :]` real: rest length, k, goal at rest, current rest length at rest (the kernel
   derives each step's goals from the actions and keeps the current rest lengths in local arrays).
@@ -38,7 +39,11 @@ N_VOX_I = 12
 # edge_f columns
 E_REST, E_K, E_GOAL, E_LEQ = range(4)
 N_EDGE_F = 4
-NS = 8  # state columns
+NS = 8  # state columns of every real type (pos, vel, pos_last, vel_true)
+# f32 only (`pairs`): each position and velocity is a pair hi + lo of float32 numbers, hi the
+# state's own column; the low parts follow the 8 columns, with the positions they belong to
+S_POS_LO, S_VEL_LO, S_LO_OF = 8, 10, 12
+NS_PAIRS = 14
 
 # Real arrays take the process's real type (their dtype is left to the argument: one kernel
 # source for f64 and f32); integer arrays are i32
@@ -85,6 +90,17 @@ TOLERANCES = {
     "f32": Tolerances(box_margin=1e-5, skin_slack=1e-3, ref_max=1e3, sort_slack=1e-3,
                       grid_slack=1e-3),
 }
+
+
+def pairs() -> bool:
+    """Whether the kernels keep positions and velocities as float32 pairs hi + lo (f32 only;
+    f64 compiles without them, so its bits are what they were). Read at compile time."""
+    return runtime.precision() == "f32"
+
+
+def state_columns() -> int:
+    """Columns of `state` in the process's real type: NS, and in f32 the pairs' low parts."""
+    return NS_PAIRS if pairs() else NS
 
 
 def tol() -> Tolerances:

@@ -108,16 +108,21 @@ def resolve(fcol: ti.template(), qf: ti.template(), qi: ti.template(), m, r, sca
 
 
 @ti.func
-def load_quad(pos: ti.template(), vt: ti.template(), sv: ti.template(), qf: ti.template(),
-               qi: ti.template(), q, i):
-    """Copy surface voxel list entry i (corners and open sides in sv) into scratch quad q."""
+def load_quad(s: ti.template(), qf: ti.template(), qi: ti.template(), q, i, ox, oy):
+    """Copy surface voxel list entry i (corners and open sides in s.sv) into scratch quad q; in
+    f32 (`L.pairs`) its corners relative to (ox, oy), from the positions' pairs (f64: absolute,
+    ox and oy unused)."""
     for k in range(4):
-        p = sv[8 * i + k]
+        p = s.sv[8 * i + k]
         qi[4 * q + k, 0] = p
-        qi[4 * q + k, 1] = sv[8 * i + 4 + k]
-        qf[4 * q + k, 0] = pos[2 * p]
-        qf[4 * q + k, 1] = pos[2 * p + 1]
-        qf[4 * q + k, 2] = vt[2 * p]
-        qf[4 * q + k, 3] = vt[2 * p + 1]
+        qi[4 * q + k, 1] = s.sv[8 * i + 4 + k]
+        if ti.static(L.pairs()):
+            qf[4 * q + k, 0] = (s.pos[2 * p] - ox) + s.plo[2 * p]
+            qf[4 * q + k, 1] = (s.pos[2 * p + 1] - oy) + s.plo[2 * p + 1]
+        else:
+            qf[4 * q + k, 0] = s.pos[2 * p]
+            qf[4 * q + k, 1] = s.pos[2 * p + 1]
+        qf[4 * q + k, 2] = s.vt[2 * p]
+        qf[4 * q + k, 3] = s.vt[2 * p + 1]
 
 

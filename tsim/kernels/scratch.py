@@ -24,6 +24,14 @@ class Scratch(NamedTuple):
     fcol: object  # contact forces, frozen across the RK4 stages
     adx: object  # the weighted sum of the stages' position increments
     adv: object  # the same for velocity
+    # f32 only (`pairs`; capacity 1 and unused in f64): the low parts of pos, vel and pl, an
+    # RK4 stage's offset from the substep's position, and per edge its stage-0 vector, length and
+    # stretch (4 ec; `springs.spring_forces`)
+    plo: object
+    vlo: object
+    pllo: object
+    xlo: object
+    e0: object
     # springs (ec), contiguous: their ends, stiffness, goal and rest lengths; per-edge outputs
     leq: object  # current rest length (set at RK4 stage 0)
     ea: object

@@ -1,6 +1,7 @@
 """Springs: their forces at an RK4 stage, and the scatter of per-edge vectors to the edges' ends."""
 
 from tsim import constants as C
+from tsim.kernels.layout import pairs
 from tsim.runtime import ti
 
 
@@ -36,18 +37,54 @@ def spring_forces(n_pts, n_edges, s: ti.template(), first: ti.template()):
 
     The forces are computed in a loop without stores to shared points, which LLVM vectorises
     (square roots and divisions 4 at a time), into s.ccx, s.ccy; then scattered in evogym's
-    order."""
+    order.
+
+    f32 (`pairs`): the same force, k (dist - leq) / dist with leq = d0 + (goal - d0) c (d0 the
+    length at stage 0), written as k ((dist - d0) + (d0 - goal) c) / dist, so that no length is
+    subtracted from a nearly equal one: float32 would round each at ~4e-9 (at 0.1), and times
+    k ~5e7 that is ~0.2 force units, against the ~0.03 a 1e-6 action change makes (k c 1e-7).
+    Stage 0 keeps its edge vector, length and stretch (d0 - goal) c in s.e0; a later stage's
+    edge vector is that plus the difference of its ends' stage offsets s.xlo, and dist - d0 =
+    (dist^2 - d0^2) / (dist + d0) is computed from those small differences."""
     for i in range(2 * n_pts):
         s.frc[i] = 0.0
     for e in range(n_edges):
         a = s.ea[e]
         q = s.eb[e]
-        dx = s.xs[2 * a] - s.xs[2 * q]
-        dy = s.xs[2 * a + 1] - s.xs[2 * q + 1]
-        dist = ti.sqrt(dx * dx + dy * dy)
-        if ti.static(first):
-            s.leq[e] = dist + (s.egoal[e] - dist) * C.REST_CONVERGENCE
-        mag = (dist - s.leq[e]) * s.ek[e] / dist
-        s.ccx[e] = dx * mag
-        s.ccy[e] = dy * mag
+        if ti.static(pairs()):
+            dx = 0.0
+            dy = 0.0
+            dist = 0.0
+            stretch = 0.0
+            if ti.static(first):
+                dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
+                dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
+                dist = ti.sqrt(dx * dx + dy * dy)
+                stretch = (dist - s.egoal[e]) * C.REST_CONVERGENCE
+                s.e0[4 * e] = dx
+                s.e0[4 * e + 1] = dy
+                s.e0[4 * e + 2] = dist
+                s.e0[4 * e + 3] = stretch
+            else:
+                dx0 = s.e0[4 * e]
+                dy0 = s.e0[4 * e + 1]
+                ddx = s.xlo[2 * a] - s.xlo[2 * q]
+                ddy = s.xlo[2 * a + 1] - s.xlo[2 * q + 1]
+                dx = dx0 + ddx
+                dy = dy0 + ddy
+                dist = ti.sqrt(dx * dx + dy * dy)
+                stretch = ((ddx * (dx0 + dx) + ddy * (dy0 + dy)) / (dist + s.e0[4 * e + 2])
+                           + s.e0[4 * e + 3])
+            mag = stretch * s.ek[e] / dist
+            s.ccx[e] = dx * mag
+            s.ccy[e] = dy * mag
+        else:
+            dx = s.xs[2 * a] - s.xs[2 * q]
+            dy = s.xs[2 * a + 1] - s.xs[2 * q + 1]
+            dist = ti.sqrt(dx * dx + dy * dy)
+            if ti.static(first):
+                s.leq[e] = dist + (s.egoal[e] - dist) * C.REST_CONVERGENCE
+            mag = (dist - s.leq[e]) * s.ek[e] / dist
+            s.ccx[e] = dx * mag
+            s.ccy[e] = dy * mag
     add_to_ends(n_edges, s.frc, s.ea, s.eb, s.ccx, s.ccy, False)

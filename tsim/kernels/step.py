@@ -25,10 +25,12 @@ from tsim.kernels.layout import (
     N_SURF,
     N_SURF_ROBOT,
     NONFINITE,
-    NS,
     REAL_1,
     REAL_2,
     RUNNING,
+    S_LO_OF,
+    S_POS_LO,
+    S_VEL_LO,
     STATUS,
     UNSTABLE,
     V_COL,
@@ -36,7 +38,10 @@ from tsim.kernels.layout import (
     V_OPEN,
     V_PTS,
     V_ROW,
+    pairs,
+    state_columns,
 )
+from tsim.kernels.pairs import renormalize
 from tsim.kernels.scratch import Scratch, Terrain
 from tsim.runtime import PROFILE_SKIP, ti
 
@@ -51,7 +56,8 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
     if counts[b, STATUS] == RUNNING:
         n_pts = counts[b, N_PTS]
         n_edges = counts[b, N_EDGES]
-        so = b * P * NS
+        ns = ti.static(state_columns())
+        so = b * P * ns
         eio = b * E * 4
         efo = b * E * N_EDGE_F
         # the scratch's arrays are made one by one (each assignment makes a local array), then
@@ -66,6 +72,12 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
         fcol = ti.Vector.zero(float, 2 * pc)
         adx = ti.Vector.zero(float, 2 * pc)
         adv = ti.Vector.zero(float, 2 * pc)
+        lc = ti.static(2 * pc if pairs() else 1)  # the low parts of f32's pairs (`pairs`)
+        plo = ti.Vector.zero(float, lc)
+        vlo = ti.Vector.zero(float, lc)
+        pllo = ti.Vector.zero(float, lc)
+        xlo = ti.Vector.zero(float, lc)
+        e0 = ti.Vector.zero(float, ti.static(4 * ec if pairs() else 1))
         leq = ti.Vector.zero(float, ec)
         ea = ti.Vector.zero(ti.i32, ec)
         eb = ti.Vector.zero(ti.i32, ec)
@@ -103,10 +115,10 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
             order[i] = i
         sweep = ti.Vector([-1, 0])
         s = ti.static(Scratch(pos=pos, vel=vel, pl=pl, vt=vt, xs=xs, vs=vs, frc=frc, fcol=fcol,
-                              adx=adx, adv=adv, leq=leq, ea=ea, eb=eb, ek=ek, egoal=egoal,
-                              erest=erest, ccx=ccx, ccy=ccy, box=box, sv=sv, sm=sm, order=order,
-                              rank=rank, cand=cand, sweep=sweep, nbr=nbr, nstart=nstart,
-                              refbox=refbox, plist=plist))
+                              adx=adx, adv=adv, plo=plo, vlo=vlo, pllo=pllo, xlo=xlo, e0=e0,
+                              leq=leq, ea=ea, eb=eb, ek=ek, egoal=egoal, erest=erest, ccx=ccx, ccy=ccy,
+                              box=box, sv=sv, sm=sm, order=order, rank=rank, cand=cand,
+                              sweep=sweep, nbr=nbr, nstart=nstart, refbox=refbox, plist=plist))
         for i in range(counts[b, N_SURF]):
             v = lists[b, i, 0]
             for k in ti.static(range(4)):
@@ -117,10 +129,18 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
             s.sm[4 * i + 2] = vox_i[b, v, V_COL]
         for p in range(n_pts):
             for d in ti.static(range(2)):
-                s.pos[2 * p + d] = state[so + NS * p + d]
-                s.vel[2 * p + d] = state[so + NS * p + 2 + d]
-                s.pl[2 * p + d] = state[so + NS * p + 4 + d]
-                s.vt[2 * p + d] = state[so + NS * p + 6 + d]
+                s.pos[2 * p + d] = state[so + ns * p + d]
+                s.vel[2 * p + d] = state[so + ns * p + 2 + d]
+                s.pl[2 * p + d] = state[so + ns * p + 4 + d]
+                s.vt[2 * p + d] = state[so + ns * p + 6 + d]
+                if ti.static(pairs()):
+                    # the low parts hold only for the positions they were stored with: a state
+                    # written from outside (reset, evogym's revert) starts with none
+                    if state[so + ns * p + S_LO_OF + d] == s.pos[2 * p + d]:
+                        s.plo[2 * p + d] = state[so + ns * p + S_POS_LO + d]
+                        s.vlo[2 * p + d] = state[so + ns * p + S_VEL_LO + d]
+                    if s.pl[2 * p + d] == s.pos[2 * p + d]:
+                        s.pllo[2 * p + d] = s.plo[2 * p + d]
         ter_top = ter_f[0, 11]  # the highest top of a terrain voxel's box
         for t in range(1, ter_f.shape[0]):
             ter_top = ti.max(ter_top, ter_f[t, 11])
@@ -139,7 +159,12 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
                     if ti.static("constraints" not in PROFILE_SKIP):
                         constraints(b, n_edges, counts, vox_i, lists, s)
                     for i in range(2 * n_pts):
-                        s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
+                        if ti.static(pairs()):
+                            renormalize(s.pos, s.plo, i)
+                            s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
+                            s.pllo[i] = s.plo[i]
+                        else:
+                            s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
                         s.pl[i] = s.pos[i]
                     if count > counts[b, N_SURF_ROBOT]:
                         status = UNSTABLE
@@ -150,16 +175,20 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
         if status == RUNNING:
             for p in range(n_pts):
                 for d in ti.static(range(2)):
-                    state[so + NS * p + d] = s.pos[2 * p + d]
-                    state[so + NS * p + 2 + d] = s.vel[2 * p + d]
-                    state[so + NS * p + 4 + d] = s.pl[2 * p + d]
-                    state[so + NS * p + 6 + d] = s.vt[2 * p + d]
+                    state[so + ns * p + d] = s.pos[2 * p + d]
+                    state[so + ns * p + 2 + d] = s.vel[2 * p + d]
+                    state[so + ns * p + 4 + d] = s.pl[2 * p + d]
+                    state[so + ns * p + 6 + d] = s.vt[2 * p + d]
+                    if ti.static(pairs()):
+                        state[so + ns * p + S_POS_LO + d] = s.plo[2 * p + d]
+                        state[so + ns * p + S_VEL_LO + d] = s.vlo[2 * p + d]
+                        state[so + ns * p + S_LO_OF + d] = s.pos[2 * p + d]
         else:
             # evogym keeps the last snapshot: the step never happened for observers
             for p in range(n_pts):
                 for d in ti.static(range(2)):
-                    state[so + NS * p + 4 + d] = state[so + NS * p + d]
-                    state[so + NS * p + 6 + d] = 0.0
+                    state[so + ns * p + 4 + d] = state[so + ns * p + d]
+                    state[so + ns * p + 6 + d] = 0.0
             counts[b, STATUS] = status
 
 

@@ -1,0 +1,27 @@
+"""f32 positions and velocities as unevaluated sums hi + lo of two float32 numbers (f32 only).
+
+Why: float32 rounds a coordinate at ~6e-8 relative, 4.8e-7 at x = 5. A substep adds v dt (~1e-5)
+to it and loses that rounding each time, and a spring of stiffness ~5e7 turns a length rounded at
+4.8e-7 into ~25 force units of noise, more than a 1e-6 action change makes (~5). So in f32 the
+state's column holds hi = the position rounded to float32 (what contacts, observations and the COM
+read) and a local `lo` holds the remainder, into which the RK4 increments and the constraints'
+corrections add; a spring's length comes from (hi_a - hi_b) + (lo_a - lo_b), where hi_a - hi_b is
+exact for nearby points (Sterbenz), so its rounding is that of the length, not of the coordinate.
+Velocities are kept the same way (their increments are small against them too). f64 compiles
+without any of it (`layout.pairs`), so its bits are evogym's as before. Needs IEEE arithmetic
+without reassociation, which `runtime.init` asks for (fast_math off).
+"""
+
+from tsim.runtime import ti
+
+
+@ti.func
+def renormalize(hi: ti.template(), lo: ti.template(), i):
+    """(hi[i], lo[i]) <- the same sum with hi[i] its float32 rounding, lo[i] the exact rest
+    (Knuth's two-sum: exact whichever part is larger)."""
+    a = hi[i]
+    b = lo[i]
+    s = a + b
+    bb = s - a
+    lo[i] = (a - (s - bb)) + (b - bb)
+    hi[i] = s
