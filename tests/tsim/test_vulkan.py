@@ -83,6 +83,42 @@ def test_tanh_formula_is_within_3_ulp_of_libm():
     assert np.mean(ulps == 0) > 0.7
 
 
+SENTINEL = """
+import json, numpy as np
+from tsim import runtime
+runtime.init()
+from tsim.spirv import laps
+ti = runtime.ti
+
+@ti.kernel
+def k(n: ti.i32, m: ti.i32, out: ti.types.ndarray(dtype=ti.i32, ndim=1)):
+    for b in range(1):
+        out[0] = laps(n)
+        out[1] = laps(m)  # as in step_kernel_sized: a runtime length (a constant one is unrolled)
+
+res = {}
+for n in (1000, 70000):
+    out = np.zeros(2, np.int32)
+    k(n, 31, out)
+    res[n] = out.tolist()
+print(json.dumps(res))
+"""
+
+
+@pytest.mark.vulkan
+def test_the_sentinel_sees_a_drivers_loop_budget_run_out(vulkan, tmp_path):
+    """tsim/spirv.py's sentinel after a long loop in the same shader: 31 laps where the loops ran
+    in full, fewer where the driver cut them. Mesa's lavapipe stops every loop once 65,535 laps
+    of them have run in one shader (a GPU's driver runs 70,000 in full)."""
+    script = tmp_path / "sentinel.py"  # a file: Taichi reads a kernel's source
+    script.write_text(SENTINEL)
+    r = run(f"import runpy; runpy.run_path({str(script)!r})", "vulkan")
+    assert r.returncode == 0, r.stderr[-2000:]
+    res = json.loads(r.stdout.strip().splitlines()[-1])
+    assert res["1000"] == [1000, 31]
+    assert res["70000"] in ([70000, 31], [65535, 1])
+
+
 @pytest.mark.vulkan
 def test_one_world_without_contacts_matches_the_cpu_within_1e_12(vulkan):
     """One world, contact forces left out (SGR_PROFILE_SKIP=contacts): springs, actuation,
