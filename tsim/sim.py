@@ -180,6 +180,7 @@ class BatchSim:
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
         self._launch: CachedLaunch | None = None  # see `step`
         self._spirv = runtime.backend() in runtime.SPIRV_ARCHS  # see tsim/spirv.py
+        self._spirv_launcher = spirv.Launcher(B)
         # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
         # that they stay on the device instead of crossing the bus at every launch. On the CPU the
         # numpy arrays themselves are passed (flattened once, so every step passes the same
@@ -282,11 +283,13 @@ class BatchSim:
                     self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self.state.shape[1],
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
+            if self._spirv:  # maybe several launches per step (see tsim/spirv.py)
+                self._spirv_launcher.step((*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds)),
+                                          self.counts, self.state)
+                self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
+                continue
             if self._serial:
                 kernel = K.step_kernel_serial
-            elif self._spirv:
-                kernel = spirv.step_kernel_sized
-                args = (*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds))
             else:
                 kernel = K.step_kernel
                 args = (*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
@@ -306,13 +309,20 @@ class BatchSim:
         sel = mask & (self.counts[:, K.STATUS] == K.RUNNING)
         self.counts[sel, K.STATUS] = K.INACTIVE
 
-    def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0) -> None:
+    def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0,
+                      spirv_launch: bool | None = None, substeps_per_launch: int | None = None) -> None:
         """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
         compare them; every variant gives the same bits): `serial` runs on the calling thread
         (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
-        arrays that many tiers bigger than needed."""
+        arrays that many tiers bigger than needed; `spirv_launch` takes (True) or leaves (False)
+        the SPIR-V backends' launch (tsim/spirv.py) on any backend, and `substeps_per_launch`
+        splits its env steps into launches of that many substeps."""
         if serial is not None:
             self._serial = bool(serial)
+        if spirv_launch is not None:
+            self._spirv = bool(spirv_launch)
+        if substeps_per_launch is not None:
+            self._spirv_launcher.chunk = int(substeps_per_launch)
         self.capacity_tier += int(extra_capacity_tiers)
         self._launch = None
 

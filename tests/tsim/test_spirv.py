@@ -1,0 +1,70 @@
+"""The SPIR-V backends' launch (tsim/spirv.py: an env step in several launches where the driver
+bounds a shader's loop iterations, as lavapipe does) gives the numbers of one launch of all
+substeps. Run here on the CPU backend, where both launches are plain Taichi kernels: bit for bit,
+including worlds that stop mid-step and the pair lists and sweeps rebuilt at every launch."""
+
+import numpy as np
+import pytest
+
+from tasks.specs import task_spec, task_world
+from tsim import kernels as K
+from tsim.sampling import sample_robot
+from tsim.sim import BatchSim
+from tsim.spirv import batch_tier
+
+
+def _run(task: str, bodies, steps: int, chunk: int | None, blow_up: int | None = None,
+         sweep: int | None = None, pair_list: int | None = None) -> BatchSim:
+    """chunk: substeps per launch of the SPIR-V launch, None: the CPU's kernel."""
+    sim = BatchSim(task_world(task), bodies, task_spec(task).origin)
+    sim.choose_kernel(serial=False, spirv_launch=chunk is not None, substeps_per_launch=chunk)
+    if sweep is not None:
+        sim.sweep_mode = sweep
+    if pair_list is not None:
+        sim.pair_list = pair_list
+    for t in range(steps):
+        phase = np.arange(sim.max_actuators)[None, :] * 0.7 + np.arange(len(bodies))[:, None]
+        sim.set_actions(1.1 + 0.45 * np.sin(t / 6.0 + phase))
+        if t == 3 and blow_up is not None:
+            sim.state[blow_up, 0, 1] = 1e4  # a point thrown far up: the world goes unstable
+        sim.step()
+    return sim
+
+
+@pytest.mark.parametrize("task, sweep, pair_list, chunk", [
+    ("Walker-v0", None, None, 1), ("Walker-v0", None, None, 7),
+    ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 1)])
+def test_launches_of_a_few_substeps_give_the_bits_of_one_launch_per_step(task, sweep, pair_list,
+                                                                         chunk):
+    rng = np.random.default_rng(11)
+    bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+    ref = _run(task, bodies, 20, None, sweep=sweep, pair_list=pair_list)
+    sub = _run(task, bodies, 20, chunk, sweep=sweep, pair_list=pair_list)
+    assert np.array_equal(sub.state, ref.state) and np.array_equal(sub.counts, ref.counts)
+    assert np.array_equal(sub.time, ref.time)
+    assert np.abs(ref.state[:, :, 0:2] - ref.initial_positions).max() > 0.05  # they moved
+
+
+@pytest.mark.parametrize("chunk", [1, 7])
+def test_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it(chunk):
+    """A world with a point thrown far up turns unstable in a later substep of its env step
+    (without `spirv.step`'s put-back the states differ); both launches leave it at the env step's
+    start, at rest (pos_last = pos, vel_true = 0), while the others go on."""
+    rng = np.random.default_rng(3)
+    bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+    ref = _run("Walker-v0", bodies, 8, None, blow_up=1)
+    sub = _run("Walker-v0", bodies, 8, chunk, blow_up=1)
+    assert ref.counts[1, K.STATUS] == K.UNSTABLE and ref.time.tolist() == [8, 3, 8]
+    assert np.array_equal(sub.counts, ref.counts) and np.array_equal(sub.time, ref.time)
+    assert np.array_equal(sub.state, ref.state)
+
+
+def test_with_no_loop_bound_a_step_is_one_launch():
+    """The CPU has no loop budget: the sentinel never fires, so a step stays one launch."""
+    rng = np.random.default_rng(11)
+    sim = _run("Walker-v0", [sample_robot((5, 5), rng) for _ in range(2)], 3, 30)
+    assert sim._spirv_launcher.chunk == 30 and not sim._spirv_launcher.overrun.any()
+
+
+def test_batch_tier_is_the_block_doubled_until_the_batch_fits():
+    assert [batch_tier(n) for n in (1, 64, 65, 200)] == [64, 64, 128, 256]
