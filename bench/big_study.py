@@ -20,7 +20,11 @@ Seeds go outermost, so a partial study has every arm of the first seeds.
 
     python bench/big_study.py                                   # all of it: hours on 2 cores
     python bench/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
+    python bench/big_study.py --decode-only                     # only the decoded champions (minutes)
     python bench/big_study.py --pictures                        # docs/big/bodies.png from the records
+
+The decoded champions (champion.json of a 10x10 body is ~1 MB) are kept out of git: decoding is
+exact, so --decode-only remakes them bit for bit from the committed 5x5 records.
     sgr report docs/big                                         # then the report
 """
 
@@ -67,7 +71,7 @@ def keep(run: Path, records: Path) -> None:
             shutil.copy2(run / name, dest / name)
 
 
-def study(task: str, seed: int, out: Path, records: Path, workers: int) -> None:
+def study(task: str, seed: int, out: Path, records: Path, workers: int, decode_only: bool = False) -> None:
     rows, cols = SHAPES[task]
     size = f"{rows}x{cols}"
     common = ["--task", task, "--seed", str(seed)]
@@ -77,6 +81,8 @@ def study(task: str, seed: int, out: Path, records: Path, workers: int) -> None:
         print(f"+ decode {source.name} --shape {size}", flush=True)
         subprocess.run(SGR + ["decode", str(source), "--shape", size, "--out", str(decoded)], check=False,
                        cwd=ROOT)
+    if decode_only:
+        return
     for method in ("sgr", "direct"):
         run = out / f"{method}-{task}-{size}-s{seed}"
         evolve(run, common + ["--method", method, "--shape", size, "--generations", "100"], workers)
@@ -132,6 +138,7 @@ def main() -> None:
     ap.add_argument("--records", type=Path, default=ROOT / "docs" / "big" / "runs")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--pictures", action="store_true", help="only draw RECORDS/../bodies.png")
+    ap.add_argument("--decode-only", action="store_true", help="only decode the 5x5 champions")
     a = ap.parse_args()
     if a.pictures:
         print(pictures(a.records, a.records.parent / "bodies.png"))
@@ -139,7 +146,7 @@ def main() -> None:
     a.out.mkdir(parents=True, exist_ok=True)
     for seed in a.seeds:
         for task in a.tasks:
-            study(task, seed, a.out.resolve(), a.records.resolve(), a.workers)
+            study(task, seed, a.out.resolve(), a.records.resolve(), a.workers, a.decode_only)
 
 
 if __name__ == "__main__":
