@@ -91,10 +91,7 @@ def study(task: str, seed: int, out: Path, records: Path, workers: int, decode_o
     evolve(small, common + ["--generations", "50"], workers)
     keep(small, records)
     grown = out / f"sgr-{task}-5x5to{size}-s{seed}"
-    if finished(grown) or (grown / "config.yaml").is_file():
-        evolve(grown, [], workers)
-    else:
-        evolve(grown, ["--from", str(small), "--shape", size, "--generations", "100"], workers)
+    evolve(grown, ["--from", str(small), "--shape", size, "--generations", "100"], workers)
     keep(grown, records)
 
 
@@ -110,17 +107,17 @@ def pictures(records: Path, out: Path) -> Path:
 
     from evolve.runs.gallery import body_image
 
-    champs = sorted(d for d in records.iterdir() if (d / "champion.json").is_file())
-    tasks = sorted({json.loads((d / "champion.json").read_text())["task"] for d in champs})
-    per_task = {t: [d for d in champs if json.loads((d / "champion.json").read_text())["task"] == t]
-                for t in tasks}
+    per_task: dict[str, list[tuple[Path, dict]]] = {}
+    for d in sorted(d for d in records.iterdir() if (d / "champion.json").is_file()):
+        rec = json.loads((d / "champion.json").read_text())
+        per_task.setdefault(rec["task"], []).append((d, rec))
+    tasks = sorted(per_task)
     cols = max(len(v) for v in per_task.values())
     fig, axes = plt.subplots(len(tasks), cols, figsize=(1.6 * cols, 2.0 * len(tasks)), squeeze=False)
     for ax in axes.flat:
         ax.axis("off")
     for r, t in enumerate(tasks):
-        for c, d in enumerate(per_task[t]):
-            rec = json.loads((d / "champion.json").read_text())
+        for c, (d, rec) in enumerate(per_task[t]):
             axes[r][c].imshow(body_image(rec["body"], cell=8))
             arm = d.name.replace(f"-{t}", "")
             axes[r][c].set_title(f"{t}\n{arm}\n{rec['fitness']:.2f}", fontsize=6)

@@ -22,8 +22,8 @@ again by N fresh perturbed episodes (tag "final-confirm/<g>"), a candidate holds
 score and this confirmation clear the tolerance, and the champion's `fitness` is its confirmation
 (evaluation tag "final-confirm/<g>", which `rescore_champion` reproduces). Why: the champion is the
 maximum over candidates of noisy scores, so its own score is biased upward (the winner's curse) and
-the hold test passes on luck. On the robust-fast sweep (docs/RESULTS.md) 2 of the first 7
-champions chosen without it kept under 90 % in 20 replays on other noise.
+the hold test passes on luck. On the robust-fast sweep (docs/RESULTS.md) 4 of the 12 champions
+chosen without it kept under 90 % in 20 replays on other noise; 1 of 12 with it.
 
 The candidates are read from the state after the last generation, which is the last checkpoint, so
 the choice made at a run's end and `sgr select-champion` on the finished run
@@ -154,22 +154,18 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     with problem.scored_with(None):
         nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
     confirmed = None
+    fit_robust, fit_tags, fit = robust, tags, scores  # the champion's fitness and how it is scored again
     if settings.confirm:
-        confirm_robust = settings.robust(cfg.get("robust"), settings.confirm)
-        confirm_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
-        with problem.scored_with(confirm_robust.to_json()):
-            confirmed = np.asarray(problem.evaluate(phenotypes, confirm_tags)[0], dtype=float)
+        fit_robust = settings.robust(cfg.get("robust"), settings.confirm)
+        fit_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
+        with problem.scored_with(fit_robust.to_json()):
+            fit = confirmed = np.asarray(problem.evaluate(phenotypes, fit_tags)[0], dtype=float)
     i, holds = choose(scores, nominal, settings.tolerance, settings.rank, confirmed)
     best = search.best
     best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]
-    if confirmed is None:
-        fitness = float(scores[i])
-        evaluation = {"robust": robust.to_json(), "seed": cfg["seed"], "tag": tags[i]}
-    else:
-        fitness = float(confirmed[i])
-        evaluation = {"robust": confirm_robust.to_json(), "seed": cfg["seed"], "tag": confirm_tags[i]}
-    champ = champion_record(cfg, problem, genome, phenotypes[i], fitness, search.generation, evaluation)
+    champ = champion_record(cfg, problem, genome, phenotypes[i], float(fit[i]), search.generation,
+                            {"robust": fit_robust.to_json(), "seed": cfg["seed"], "tag": fit_tags[i]})
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
              "score": float(s), "nominal": float(n), "holds": bool(h)}
             for (k, g), s, n, h in zip(cands, scores, nominal, holds, strict=True)]
