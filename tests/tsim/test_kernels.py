@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from tasks.specs import task_spec, task_world
+from tests.tsim.conftest import drive
 from tsim import kernels as K
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
@@ -22,11 +23,7 @@ def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0,
         sim.sweep_mode = sweep
     if pair_list is not None:
         sim.pair_list = pair_list
-    for t in range(steps):
-        phase = np.arange(sim.max_actuators)[None, :] * 0.7 + np.arange(len(bodies))[:, None]
-        sim.set_actions(1.1 + 0.45 * np.sin(t / 6.0 + phase))
-        sim.step()
-    return sim
+    return drive(sim, steps)
 
 
 def _same(a: BatchSim, b: BatchSim) -> bool:
