@@ -28,7 +28,7 @@ any split gives the same numbers as one launch (tests/tsim/test_spirv.py).
 import numpy as np
 
 from tsim.errors import SgrError
-from tsim.kernels.layout import GPU_BLOCK, I32_1, I32_2, I32_3, NS, REAL_1, REAL_2, RUNNING, STATUS
+from tsim.kernels.layout import GPU_BLOCK, I32_1, I32_2, I32_3, REAL_1, REAL_2, RUNNING, STATUS
 from tsim.kernels.step import step_world
 from tsim.runtime import ti
 
@@ -85,13 +85,13 @@ class Launcher:
 
     def step(self, args: tuple, counts: np.ndarray, state: np.ndarray) -> None:
         """One env step of `step_kernel_sized(*args, overrun)` (args[N_SUB_ARG] substeps).
-        `counts` and `state` ((B, P, NS)) are the arrays that args[0] and args[1] (its flat view)
-        are; they are written in place.
+        `counts` and `state` ((B, P, state columns)) are the arrays that args[0] and args[1] (its
+        flat view) are; they are written in place.
 
         A world whose status leaves RUNNING in some substep is left by its launch at that launch's
-        start; it is put back to the env step's start here, with pos_last = pos and vel_true = 0,
-        which is what one launch of all substeps leaves."""
-        assert state.shape[-1] == NS
+        start; it is put back to the env step's start here, every column (in f32 the pairs' low
+        parts too), then pos_last = pos and vel_true = 0, which is what one launch of all substeps
+        leaves."""
         n_sub = args[N_SUB_ARG]
         chunk = min(self.chunk or n_sub, n_sub)
         start_state = state.copy()
@@ -108,7 +108,7 @@ class Launcher:
         running = start_counts[:, STATUS] == RUNNING
         stopped = running & (counts[:, STATUS] != RUNNING)
         if stopped.any():
-            state[stopped, :, 0:4] = start_state[stopped, :, 0:4]
+            state[stopped] = start_state[stopped]
             state[stopped, :, 4:6] = start_state[stopped, :, 0:2]
             state[stopped, :, 6:8] = 0.0
 

@@ -3,6 +3,11 @@ bounds a shader's loop iterations, as lavapipe does) gives the numbers of one la
 substeps. Run here on the CPU backend, where both launches are plain Taichi kernels: bit for bit,
 including worlds that stop mid-step and the pair lists and sweeps rebuilt at every launch."""
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -57,6 +62,44 @@ def test_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it(chunk):
     assert ref.counts[1, K.STATUS] == K.UNSTABLE and ref.time.tolist() == [8, 3, 8]
     assert np.array_equal(sub.counts, ref.counts) and np.array_equal(sub.time, ref.time)
     assert np.array_equal(sub.state, ref.state)
+
+
+F32_STOP = """
+import numpy as np
+from tasks.specs import task_spec, task_world
+from tests.tsim.conftest import drive
+from tsim import kernels as K
+from tsim.sampling import sample_robot
+from tsim.sim import BatchSim
+
+def run(chunk):
+    rng = np.random.default_rng(3)
+    bodies = [sample_robot((5, 5), rng) for _ in range(3)]
+    sim = BatchSim(task_world("Walker-v0"), bodies, task_spec("Walker-v0").origin)
+    sim.choose_kernel(serial=False, spirv_launch=chunk is not None, substeps_per_launch=chunk)
+    def throw(s, t):
+        if t == 3:
+            s.state[1, 0, 1] = 1e4
+    return drive(sim, 8, throw)
+
+ref, sub = run(None), run(1)
+print(ref.state.dtype, ref.state.shape[-1], int(ref.counts[1, K.STATUS] == K.UNSTABLE),
+      int(np.array_equal(sub.state, ref.state)), int(np.array_equal(sub.counts, ref.counts)))
+"""
+
+
+def test_in_f32_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it_low_parts_too():
+    """f32's state has more columns (the pairs' low parts, tsim/kernels/pairs.py): the put-back
+    restores them too, so launches of one substep leave the unstable world bit for bit where one
+    launch does (run in f32 in a subprocess; this process is f64)."""
+    env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
+    out = subprocess.run([sys.executable, "-c", F32_STOP], env={**env, "SGR_PRECISION": "f32"},
+                         cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr[-2000:]
+    dtype, columns, unstable, same_state, same_counts = out.stdout.split()[-5:]
+    assert dtype == "float32" and int(columns) > 8 and unstable == "1"
+    assert same_state == "1" and same_counts == "1"
 
 
 def test_with_no_loop_bound_a_step_is_one_launch():
