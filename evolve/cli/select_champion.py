@@ -19,9 +19,10 @@ def register(sub) -> argparse.ArgumentParser:
     sc.add_argument("--statistic", help="mean, min, median or qNN (default mean)")
     sc.add_argument("--tolerance", type=float, help="a candidate holds if its score is at least its "
                                                     "nominal return less TOLERANCE x it (default 0.05)")
-    sc.add_argument("--rank", choices=("min", "score"),
-                    help="among candidates that hold: the best min(score, nominal return), or the best "
-                         "score (default min)")
+    sc.add_argument("--rank", choices=("min", "score", "pooled"),
+                    help="among candidates that hold: the best min(score, nominal return), the best "
+                         "score, or the best mean of score and confirmation by their episodes "
+                         "(default min)")
     sc.add_argument("--confirm", type=int, help="fresh perturbed episodes per candidate that judge the "
                                                 "hold again and give the champion's fitness (default 0: off)")
     add_workers(sc, 1, "rollout processes (default 1)")

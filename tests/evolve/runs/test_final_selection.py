@@ -104,6 +104,19 @@ def test_with_a_confirmation_a_candidate_holds_only_when_fresh_episodes_agree():
     assert i == 1 and holds.tolist() == [False, True, False]
 
 
+def test_pooled_rank_takes_the_best_mean_of_every_perturbed_episode_among_those_that_hold():
+    """`rank: pooled`: among candidates that hold on both samples, the best average of score and
+    confirmation weighted by their episode counts. The first is a knife-edge (its fresh episodes
+    give 4.0 against a nominal 5.0); the third holds with an unlucky exact episode."""
+    scores, nominal = np.array([5.0, 4.0, 4.6]), np.array([5.0, 4.0, 1.0])
+    confirmed = np.array([4.0, 4.4, 4.0])
+    i, holds = choose(scores, nominal, 0.05, "pooled", confirmed, (32, 32))
+    assert holds.tolist() == [False, True, True] and i == 2  # 4.3 against 4.2
+    assert choose(scores, nominal, 0.05, "pooled", confirmed, (8, 24))[0] == 1  # 4.3 against 4.15
+    assert choose(scores, nominal, 0.05, "min", confirmed)[0] == 1  # min(4.0, 4.0) against min(4.6, 1)
+    assert choose(scores, nominal, 0.05, "pooled")[0] == 0  # no confirmation: the score alone
+
+
 def test_a_confirmed_choice_follows_its_rule_and_its_fitness_rescores_to_the_bit(runs, tmp_path):
     """select-champion --confirm: every candidate gets fresh episodes, the champion holds on both
     sets (or none does), and its fitness is its confirmation, which champion.json alone gives again."""
@@ -188,7 +201,7 @@ def test_an_unfinished_run_or_a_nested_run_is_one_error_line(runs, tmp_path, cap
     ({"tolerance": 1.5}, "key 'final_selection.tolerance' must be a number in [0, 1]"),
     ({"statistic": "best"}, "key 'final_selection.statistic' must be one of mean"),
     ({"episode": 3}, "key 'final_selection': unknown key 'episode'"),
-    ({"rank": "max"}, "key 'final_selection.rank' must be one of min, score"),
+    ({"rank": "max"}, "key 'final_selection.rank' must be one of min, score, pooled"),
 ])
 def test_a_bad_final_selection_key_names_it(raw, message):
     with pytest.raises(ValueError, match=None) as exc:
