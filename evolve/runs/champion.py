@@ -18,6 +18,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evolve.methods import sgr_record
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
@@ -25,6 +26,7 @@ from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
 from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
+from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tasks.specs import TASKS
 from tsim import runtime
@@ -32,16 +34,6 @@ from tsim.body import build_body, check_robot
 from tsim.errors import SgrError
 
 KEYS = ("task", "episode_steps", "body", "controller")
-
-
-def genome_json(genome) -> dict:
-    """The champion's genome as plain JSON (every node and connection, disabled ones included): a
-    record for reading; resuming uses the checkpoints, not this."""
-    return {"key": genome.key,
-            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
-                       "aggregation": n.aggregation} for n in genome.nodes.values()],
-            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
-                            for c in genome.connections.values()]}
 
 
 def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, generation: int,
@@ -52,7 +44,7 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
              "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
              "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
-    method_keys = problem.champion(phenotype)
+    method_keys = problem.champion_of(genome, phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
     return champ
@@ -102,8 +94,11 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     c = champ["controller"]
     b = build_body(body)
     try:
-        graph = isinstance(c, dict) and c.get("format") == GRAPH_FORMAT
-        ctrl = GraphController.from_json(c) if graph else DenseController.from_json(c)
+        fmt = c.get("format") if isinstance(c, dict) else None
+        if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
+            ctrl = sgr_record.rebuild(champ)
+        else:
+            ctrl = GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise SgrError(f"{f}: key 'controller': not a controller of this body and task "
