@@ -20,6 +20,7 @@ import numpy as np
 
 from evolve.methods import sgr_record
 from evolve.nn.dense import DenseController
+from evolve.nn.graph import DERIVED_FORMAT as GRAPH_DERIVED
 from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
@@ -64,6 +65,20 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
                            best["generation"] + 1, evaluation)
 
 
+def controller_of(champ: dict) -> DenseController | GraphController:
+    """The controller of a champion record, whatever its format: in full (SGR's dense layers, the
+    baselines' graphs), or as a function of the record's genome (SGR's `sgr_record`, direct's
+    `GraphController.to_derived_json`), rebuilt and checked against its digest. KeyError,
+    TypeError or ValueError when it is none of these."""
+    c = champ["controller"]
+    fmt = c.get("format") if isinstance(c, dict) else None
+    if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
+        return sgr_record.rebuild(champ)
+    if fmt == GRAPH_DERIVED:  # direct's network, recorded as its genome: compiled again, checked
+        return GraphController.from_derived_json(c, champ["genome"])
+    return GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
+
+
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
     """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
     ValueError naming the file and the key when it is not a champion that runs (checked with one
@@ -91,14 +106,9 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
         body = check_robot(champ["body"])
     except ValueError as exc:
         raise SgrError(f"{f}: key 'body': {exc}") from None
-    c = champ["controller"]
     b = build_body(body)
     try:
-        fmt = c.get("format") if isinstance(c, dict) else None
-        if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
-            ctrl = sgr_record.rebuild(champ)
-        else:
-            ctrl = GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
+        ctrl = controller_of(champ)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise SgrError(f"{f}: key 'controller': not a controller of this body and task "
