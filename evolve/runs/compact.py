@@ -123,10 +123,21 @@ def champion_files(paths: list[str | Path]) -> list[Path]:
 def main(argv: list[str] | None = None) -> int:
     """`python -m evolve.runs.compact PATH...`: rewrite every champion file there; prints the bytes
     before and after."""
-    files = champion_files(argv if argv is not None else sys.argv[1:])
+    paths = argv if argv is not None else sys.argv[1:]
+    missing = [p for p in paths if not Path(p).exists()]
+    if not paths or missing:
+        what = "no such file or folder: " + ", ".join(missing) if missing else "name files or folders"
+        print(f"error: {what} (usage: python -m evolve.runs.compact PATH...)", file=sys.stderr)
+        return 2
+    files = champion_files(paths)
     before = after = 0
     for f in files:
-        b, a = compact_file(f)
+        try:
+            b, a = compact_file(f)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            print(f"error: {f}: not a readable JSON file ({exc}); the files before it are rewritten",
+                  file=sys.stderr)
+            return 2
         before, after = before + b, after + a
         print(f"{f}: {b} -> {a} bytes")
     print(f"{len(files)} champion files: {before} -> {after} bytes")
