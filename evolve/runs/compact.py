@@ -95,6 +95,8 @@ def compact_file(path: str | Path) -> tuple[int, int]:
     path = Path(path)
     text = path.read_text()
     record = json.loads(text)
+    if not isinstance(record, dict):  # not a champion record: left as it is
+        return len(text.encode()), len(text.encode())
     cfg_file = path.parent / "config.yaml"
     config = read_yaml(cfg_file) if cfg_file.is_file() else None
     new = record_json(compact_record(record, config if isinstance(config, dict) else None))
