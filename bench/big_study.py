@@ -23,8 +23,9 @@ Seeds go outermost, so a partial study has every arm of the first seeds.
     python bench/big_study.py --decode-only                     # only the decoded champions (minutes)
     python bench/big_study.py --pictures                        # docs/big/bodies.png from the records
 
-The decoded champions (champion.json of a 10x10 body is ~1 MB) are kept out of git: decoding is
-exact, so --decode-only remakes them bit for bit from the committed 5x5 records.
+The decoded champions are committed with the rest (champion.json of a 10x10 body is ~2.5 KB: the
+controller is recorded as its genome's decoding); decoding is exact, so --decode-only remakes them
+bit for bit from the committed 5x5 records.
     sgr report docs/big                                         # then the report
 """
 

@@ -110,6 +110,12 @@ class Problem:
         """The champion file's method-specific keys: at least `body` and `controller` (JSON)."""
         raise NotImplementedError
 
+    def champion_of(self, genome, phenotype: Phenotype) -> dict:
+        """`champion`'s keys for `genome`, decoded to `phenotype`: a method whose controller is a
+        function of the genome may record it as that (SGR: evolve/methods/sgr_record.py), since the
+        champion file holds the genome too."""
+        return self.champion(phenotype)
+
     def state(self) -> dict:
         """The method's own run state for checkpoints (beyond the NEAT population), as JSON data:
         numbers, strings, lists and dicts only (checkpoints are JSON, never pickles)."""

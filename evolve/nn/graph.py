@@ -2,18 +2,32 @@
 
 Nodes are listed in evaluation order with their incoming links; value = activation(bias +
 response * sum(w * value(src))) with neat-python's activation scalings (`NEAT_ACTIVATIONS`).
+
+Where the network is the genome the champion file records anyway (direct NEAT), the file may hold
+it as that genome's compiled form instead (DERIVED_FORMAT, `to_derived_json`): the pin counts,
+offsets and action cells, and a SHA-256 of the nodes, which reading compiles again and checks. At
+10x10 that is ~1 KB instead of ~80 KB.
 """
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import dataclass
 
 import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, to_action
 from evolve.nn.feedforward import compile_genome
+from evolve.search.genome_record import GenomeKeys, genome_from_record
 
 FORMAT = "sgr-graph-controller-1"
+DERIVED_FORMAT = "sgr-genome-graph-controller-1"
+
+
+def nodes_digest(nodes: list[dict]) -> str:
+    """SHA-256 of the nodes as compact JSON (`json.dumps(nodes, separators=(",", ":"))`)."""
+    return hashlib.sha256(json.dumps(nodes, separators=(",", ":")).encode()).hexdigest()
 
 
 @dataclass
@@ -90,6 +104,35 @@ class GraphController:
                        "output[output_offset + action_cells]; when "
                        "cell_inputs is given, actuator i is a query of its own with cell_inputs[i] "
                        "in inputs 0-1 and action 1.1 + 0.5 * output[output_offset]"}
+
+    def to_derived_json(self) -> dict:
+        """The controller as the compiled form of the champion file's genome (DERIVED_FORMAT): what
+        `to_json` holds but the nodes, which `from_derived_json` compiles again from the genome and
+        checks against `sha256`. neat-python's pins: inputs -1..-num_inputs, outputs 0..num_outputs-1."""
+        return {"format": DERIVED_FORMAT, "num_inputs": len(self.input_keys),
+                "num_outputs": len(self.output_keys), "input_size": self.input_size,
+                "input_offset": self.input_offset, "output_offset": self.output_offset,
+                "action_cells": self.action_cells.tolist(),
+                "cell_inputs": None if self.cell_inputs is None else self.cell_inputs.tolist(),
+                "sha256": nodes_digest(self.nodes),
+                "doc": f"The {FORMAT} network whose nodes are this file's 'genome' compiled (enabled links "
+                       "on a path from the inputs to an output, nodes by depth then key; "
+                       "evolve/nn/feedforward.py); sha256 is that of the nodes as compact JSON. "
+                       "evolve.load_champion compiles it again and checks the digest."}
+
+    @classmethod
+    def from_derived_json(cls, d: dict, genome: dict) -> GraphController:
+        """Inverse of `to_derived_json`, with the champion file's genome record; ValueError when the
+        genome no longer compiles to the recorded nodes."""
+        keys = GenomeKeys(int(d["num_inputs"]), int(d["num_outputs"]))
+        cells = d.get("cell_inputs")
+        ctrl = cls.from_genome(genome_from_record(genome, keys), keys, int(d["input_size"]),
+                               int(d["input_offset"]), int(d["output_offset"]),
+                               np.asarray(d["action_cells"], dtype=np.int64),
+                               None if cells is None else np.asarray(cells, dtype=np.float64))
+        if nodes_digest(ctrl.nodes) != d["sha256"]:
+            raise ValueError("compiling the genome no longer gives the recorded nodes (sha256 differs)")
+        return ctrl
 
     @classmethod
     def from_json(cls, d: dict) -> GraphController:

@@ -18,13 +18,16 @@ from pathlib import Path
 
 import numpy as np
 
+from evolve.methods import sgr_record
 from evolve.nn.dense import DenseController
+from evolve.nn.graph import DERIVED_FORMAT as GRAPH_DERIVED
 from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
 from evolve.runs import verdict as verdict_rule
 from evolve.runs.rundir import RunDir
+from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tasks.specs import TASKS
 from tsim import runtime
@@ -32,16 +35,6 @@ from tsim.body import build_body, check_robot
 from tsim.errors import SgrError
 
 KEYS = ("task", "episode_steps", "body", "controller")
-
-
-def genome_json(genome) -> dict:
-    """The champion's genome as plain JSON (every node and connection, disabled ones included): a
-    record for reading; resuming uses the checkpoints, not this."""
-    return {"key": genome.key,
-            "nodes": [{"key": n.key, "bias": n.bias, "response": n.response, "activation": n.activation,
-                       "aggregation": n.aggregation} for n in genome.nodes.values()],
-            "connections": [{"in": c.key[0], "out": c.key[1], "weight": c.weight, "enabled": c.enabled}
-                            for c in genome.connections.values()]}
 
 
 def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, generation: int,
@@ -52,7 +45,7 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
              "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
              "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
-    method_keys = problem.champion(phenotype)
+    method_keys = problem.champion_of(genome, phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
     return champ
@@ -70,6 +63,20 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
         evaluation["tag"] = f"{best['generation']}/{best['key']}"
     return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                            best["generation"] + 1, evaluation)
+
+
+def controller_of(champ: dict) -> DenseController | GraphController:
+    """The controller of a champion record, whatever its format: in full (SGR's dense layers, the
+    baselines' graphs), or as a function of the record's genome (SGR's `sgr_record`, direct's
+    `GraphController.to_derived_json`), rebuilt and checked against its digest. KeyError,
+    TypeError or ValueError when it is none of these."""
+    c = champ["controller"]
+    fmt = c.get("format") if isinstance(c, dict) else None
+    if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
+        return sgr_record.rebuild(champ)
+    if fmt == GRAPH_DERIVED:  # direct's network, recorded as its genome: compiled again, checked
+        return GraphController.from_derived_json(c, champ["genome"])
+    return GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
 
 
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
@@ -99,11 +106,9 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
         body = check_robot(champ["body"])
     except ValueError as exc:
         raise SgrError(f"{f}: key 'body': {exc}") from None
-    c = champ["controller"]
     b = build_body(body)
     try:
-        graph = isinstance(c, dict) and c.get("format") == GRAPH_FORMAT
-        ctrl = GraphController.from_json(c) if graph else DenseController.from_json(c)
+        ctrl = controller_of(champ)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
     except (KeyError, IndexError, TypeError, ValueError) as exc:
         raise SgrError(f"{f}: key 'controller': not a controller of this body and task "

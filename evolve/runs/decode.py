@@ -19,37 +19,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import neat
-
 from evolve.methods import METHODS
 from evolve.runs.champion import champion_record, read_champion
 from evolve.runs.run_config import RunConfig
 from evolve.runs.rundir import RunDir
+from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tasks.registry import import_tasks
 from tasks.specs import body_fit_problem
 from tsim.errors import SgrError
-
-
-def genome_from_record(record: dict, genome_config) -> neat.DefaultGenome:
-    """champion.json's "genome" (`genome_json`) as a neat-python genome, genes in their stored
-    order (a compiled network's evaluation order follows it); SgrError when it is not one."""
-    try:
-        g = neat.DefaultGenome(int(record["key"]))
-        for n in record["nodes"]:
-            gene = genome_config.node_gene_type(int(n["key"]))
-            gene.bias, gene.response = float(n["bias"]), float(n["response"])
-            gene.activation, gene.aggregation = str(n["activation"]), str(n["aggregation"])
-            gene.time_constant = 1.0  # not recorded; feed-forward networks never read it
-            g.nodes[gene.key] = gene
-        for c in record["connections"]:
-            gene = genome_config.connection_gene_type((int(c["in"]), int(c["out"])), innovation=0)
-            gene.weight, gene.enabled = float(c["weight"]), bool(c["enabled"])
-            g.connections[gene.key] = gene
-    except (KeyError, TypeError, ValueError) as exc:
-        raise SgrError(f"champion.json: key 'genome': not a genome record "
-                       f"({type(exc).__name__}: {exc})") from None
-    return g
 
 
 def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:

@@ -1,8 +1,9 @@
 """Reading and writing the files of runs and sweeps: whole-or-nothing writes with the user's
-permissions, and YAML whose errors fit on one line."""
+permissions, YAML whose errors fit on one line, and JSON records laid out for reading."""
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import yaml
@@ -10,7 +11,7 @@ import yaml
 from tsim.errors import SgrError
 from tsim.files import atomic_write
 
-__all__ = ["atomic_write", "read_yaml", "yaml_problem"]
+__all__ = ["atomic_write", "read_yaml", "record_json", "yaml_problem"]
 
 
 def yaml_problem(exc: yaml.YAMLError) -> str:
@@ -31,3 +32,22 @@ def read_yaml(path: Path, what: str = "file") -> object:
         raise SgrError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:
         raise SgrError(f"{path}: not valid YAML: {yaml_problem(exc)}") from None
+
+
+def record_json(obj: object, indent: int = 1) -> str:
+    """`obj` as JSON with its objects and lists of containers indented, and every list or object of
+    plain values on one line (a body row, a column of numbers, a gene): as readable as
+    `json.dumps(obj, indent=1)` at a third of its size for a champion. Parses to the same data."""
+    return _layout(obj, indent, 0)
+
+
+def _layout(obj: object, indent: int, depth: int) -> str:
+    if isinstance(obj, dict | list) and any(isinstance(v, dict | list) for v in
+                                            (obj.values() if isinstance(obj, dict) else obj)):
+        pad, inner = " " * (indent * depth), " " * (indent * (depth + 1))
+        if isinstance(obj, dict):
+            items = [f"{inner}{json.dumps(str(k))}: {_layout(v, indent, depth + 1)}" for k, v in obj.items()]
+            return "{\n" + ",\n".join(items) + "\n" + pad + "}"
+        items = [inner + _layout(v, indent, depth + 1) for v in obj]
+        return "[\n" + ",\n".join(items) + "\n" + pad + "]"
+    return json.dumps(obj)

@@ -40,7 +40,6 @@ nominal return); the best-ever record is kept as champion-best-ever.json.
 
 from __future__ import annotations
 
-import json
 import math
 from dataclasses import asdict, dataclass
 
@@ -48,7 +47,7 @@ import numpy as np
 
 from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
 from evolve.runs.champion import best_ever_record, champion_record
-from evolve.runs.files import atomic_write
+from evolve.runs.files import atomic_write, record_json
 from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"
@@ -191,7 +190,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
         "score": float(scores[i]),
         "best_ever": {"key": best["key"], "fitness": best["fitness"], "file": BEST_EVER_FILE},
         "candidates": rows}
-    atomic_write(exp.run.path / BEST_EVER_FILE, json.dumps(best_ever, indent=1).encode())
+    atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode())
     exp.run.write_champion(champ)
     return champ
 

@@ -32,7 +32,7 @@ from pathlib import Path
 
 import yaml
 
-from evolve.runs.files import atomic_write, read_yaml
+from evolve.runs.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
@@ -271,8 +271,8 @@ class RunDir:
 
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:
-        """Replace champion.json atomically."""
-        atomic_write(self.path / "champion.json", json.dumps(champion, indent=1).encode())
+        """Replace champion.json atomically (laid out by `record_json`)."""
+        atomic_write(self.path / "champion.json", record_json(champion).encode())
 
     def champion(self) -> dict:
         """champion.json as a dict; ValueError when there is none yet or it is not valid JSON

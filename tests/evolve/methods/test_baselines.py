@@ -60,7 +60,10 @@ def _run_and_replay(tmp_path, shipped_config, monkeypatch, method, task, **extra
         assert int(rows[0]["episodes"]) == int(rows[0]["n_valid"])
     champ, body, ctrl = read_champion(out)
     assert champ["method"] == method and champ["task"] == task
-    assert champ["controller"]["format"] == "sgr-graph-controller-1"
+    # direct's network is its genome, which the file holds: recorded as the genome's compiled form
+    # (issue 36); nested's controller is an inner population's genome: in full
+    derived = "sgr-genome-graph-controller-1"
+    assert champ["controller"]["format"] == (derived if method == "direct" else "sgr-graph-controller-1")
     # the JSON controller alone reproduces the champion's recorded fitness: the packaged configs
     # score under noise (honest by default), so over the same perturbed episodes
     assert champ["evaluation"]["robust"] is not None

@@ -1,0 +1,150 @@
+"""Champion files of an older sgr rewritten in today's compact layout, holding the very same robot.
+
+Older champion files hold SGR's controller as JSON numbers (~45 KB at 5x5, ~0.5 MB at 10x10),
+direct NEAT's network node by node, and the genome as an object per gene, one value per line. They
+load as they are (`evolve.runs.champion.controller_of` reads every format). This rewrites them as
+sgr now writes them, for a tree that must stay small (tests/test_tree_size.py): the controller as
+its genome's decoding (SGR, evolve/methods/sgr_record.py) or compiled form (direct,
+`GraphController.to_derived_json`) where that gives it back exactly, the genome by columns, lists
+of plain values on one line (`record_json`). Every other key is kept as it is, and a controller that
+would not come back exactly stays in full, so a rewritten file loads as the same robot, bit for bit,
+and replays to the same returns.
+
+    python -m evolve.runs.compact docs/paper/runs docs/robust   # every champion*.json below
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from evolve.methods import sgr_record
+from evolve.methods.sgr import SgrProblem
+from evolve.methods.sgr_decoder import DecoderSettings
+from evolve.nn.dense import DenseController
+from evolve.nn.graph import FORMAT as GRAPH_FORMAT
+from evolve.nn.graph import GraphController
+from evolve.runs.champion import controller_of
+from evolve.runs.files import atomic_write, read_yaml, record_json
+from evolve.search.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
+
+DENSE_FORMAT = "sgr-dense-controller-1"
+MALFORMED = (KeyError, TypeError, ValueError, IndexError)
+
+
+def decoder_settings(record: dict, config: dict | None) -> DecoderSettings:
+    """The SGR decoder settings a champion was decoded with: its run's config keys (the method's
+    defaults where absent) at the shape of its body."""
+    cfg = {k: default for k, (_, default) in SgrProblem.config_keys.items()} | dict(config or {})
+    body = np.asarray(record["body"])
+    return DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
+                           cppn_outputs=int(cfg["cppn_outputs"]), threshold=float(cfg["weight_threshold"]),
+                           max_weight=float(cfg["max_weight"]))
+
+
+def same_controller(a, b) -> bool:
+    """Whether two controllers compute the same, bit for bit: the same numbers in the same places."""
+    if isinstance(a, DenseController) and isinstance(b, DenseController):
+        return (sgr_record.digest(a) == sgr_record.digest(b) and a.activations == b.activations
+                and a.input_size == b.input_size and a.action_cells.tolist() == b.action_cells.tolist()
+                and [W.shape for W in a.weights] == [W.shape for W in b.weights])
+    if isinstance(a, GraphController) and isinstance(b, GraphController):
+        return a.to_json() == b.to_json()
+    return False
+
+
+def compact_record(record: dict, config: dict | None = None) -> dict:
+    """`record` in today's layout (module docstring); `config` is its run's config.yaml, when
+    there is one (SGR's decoder settings). Raises nothing for a record it cannot improve: it comes
+    back with what could not be rewritten exactly left as it was."""
+    out = dict(record)
+    genome = record.get("genome")
+    if isinstance(genome, dict):
+        try:
+            cols = as_columns(genome)
+            if (genes(cols["nodes"], NODE_COLUMNS) == genes(genome["nodes"], NODE_COLUMNS) and
+                    genes(cols["connections"], CONNECTION_COLUMNS) == genes(genome["connections"],
+                                                                            CONNECTION_COLUMNS)):
+                out["genome"] = cols
+        except MALFORMED:
+            pass
+    c = record.get("controller")
+    fmt = c.get("format") if isinstance(c, dict) else None
+    try:
+        before = controller_of(record)
+        if fmt == DENSE_FORMAT and record.get("method") == "sgr" and "genome" in record:
+            candidate = sgr_record.to_json(before, decoder_settings(record, config))
+        elif fmt == GRAPH_FORMAT and record.get("method") == "direct" and "genome" in record:
+            candidate = before.to_derived_json()
+        else:
+            return out
+        if same_controller(before, controller_of({**out, "controller": candidate})):
+            out["controller"] = candidate
+    except MALFORMED:
+        pass
+    return out
+
+
+def compact_file(path: str | Path) -> tuple[int, int]:
+    """Rewrite one champion file in today's layout (`compact_record`, with the config.yaml beside
+    it); returns its size in bytes before and after. The file is replaced only when the new text
+    reads back as a record whose controller is the old one's, bit for bit."""
+    path = Path(path)
+    text = path.read_text()
+    record = json.loads(text)
+    if not isinstance(record, dict):  # not a champion record: left as it is
+        return len(text.encode()), len(text.encode())
+    cfg_file = path.parent / "config.yaml"
+    config = read_yaml(cfg_file) if cfg_file.is_file() else None
+    new = record_json(compact_record(record, config if isinstance(config, dict) else None))
+    if new == text:
+        return len(text.encode()), len(text.encode())
+    again = json.loads(new)
+    def kept(r: dict) -> dict:
+        return {k: v for k, v in r.items() if k not in ("genome", "controller")}
+
+    if kept(again) != kept(record):
+        raise AssertionError(f"{path}: the rewrite changed a key it must keep")
+    if "controller" in record and not same_controller(controller_of(record), controller_of(again)):
+        raise AssertionError(f"{path}: the rewritten controller differs")
+    atomic_write(path, new.encode())
+    return len(text.encode()), len(new.encode())
+
+
+def champion_files(paths: list[str | Path]) -> list[Path]:
+    """The champion files (champion*.json) named or below the folders named."""
+    out: list[Path] = []
+    for p in map(Path, paths):
+        out += [p] if p.is_file() else sorted(p.rglob("champion*.json"))
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """`python -m evolve.runs.compact PATH...`: rewrite every champion file there; prints the bytes
+    before and after."""
+    paths = argv if argv is not None else sys.argv[1:]
+    missing = [p for p in paths if not Path(p).exists()]
+    if not paths or missing:
+        what = "no such file or folder: " + ", ".join(missing) if missing else "name files or folders"
+        print(f"error: {what} (usage: python -m evolve.runs.compact PATH...)", file=sys.stderr)
+        return 2
+    files = champion_files(paths)
+    before = after = 0
+    for f in files:
+        try:
+            b, a = compact_file(f)
+        except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+            print(f"error: {f}: not a readable JSON file ({exc}); the files before it are rewritten",
+                  file=sys.stderr)
+            return 2
+        before, after = before + b, after + a
+        print(f"{f}: {b} -> {a} bytes")
+    print(f"{len(files)} champion files: {before} -> {after} bytes")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
