@@ -19,7 +19,14 @@ from tsim import kernels as K
 from tsim import runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
 from tsim.launch import CachedLaunch
+from tsim.rounding import to_real
 from tsim.world import World
+
+# the terrain's x and y columns (`_build`'s ter_f: corners TL, TR, BR, BL as x, y, then the box)
+TER_X, TER_Y = [0, 2, 4, 6, 8, 9], [1, 3, 5, 7, 10, 11]
+# f32: the terrain's coordinates that float32 moves apart stay 2 float32 numbers apart, so that a
+# body's coordinate between two of them in float64 finds a float32 number between them too
+TER_STRIDE = 2
 
 # a world's status codes (`BatchSim.status`): only RUNNING worlds advance
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
@@ -148,8 +155,18 @@ class BatchSim:
             ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
             ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
             ter_i[:] = t.open
-        ter_f = to_real(ter_f, real)
-        self._pos0 = to_real(pos0, real)
+        # f32: the terrain rounded once, each world's bodies against it, every coordinate keeping
+        # its float64 order (`tsim.rounding`); f64: evogym's placement itself
+        self._ter_fixed = []  # per axis: the terrain's float64 coordinates and their rounding
+        if real != np.float64:
+            ter_r = np.zeros(ter_f.shape, dtype=real)
+            for cols in (TER_X, TER_Y):
+                ter_r[:, cols] = to_real(ter_f[:, cols], real, stride=TER_STRIDE)
+                self._ter_fixed.append((ter_f[:, cols].reshape(-1), ter_r[:, cols].reshape(-1)))
+            ter_f = ter_r
+        self._pos0_f64 = pos0
+        self._pos0 = pos0 if real == np.float64 else np.stack(
+            [self._round_world(w) for w in range(B)])
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -193,6 +210,15 @@ class BatchSim:
                         else tuple(_taichi_array(a) for a in static))
         self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
 
+    def _round_world(self, w: int) -> np.ndarray:
+        """World w's float64 placement in the real type, each axis rounded keeping the order of
+        its coordinates among themselves and against the terrain's (`tsim.rounding`; f32 only)."""
+        p = self._pos0_f64[w]
+        out = np.empty(p.shape, dtype=self.dtype)
+        for d in range(2):
+            out[:, d] = to_real(p[:, d], self.dtype, self._ter_fixed[d])
+        return out
+
     # ------------------------------------------------------------------ control
     @property
     def n_worlds(self) -> int:
@@ -220,8 +246,9 @@ class BatchSim:
         Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        self._pos0[w, off:off + obj.body.n_points] = to_real(obj.body.place(int(cell[0]), int(cell[1])).T,
-                                                             self.dtype)
+        self._pos0_f64[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
+        if self._pos0 is not self._pos0_f64:  # f32: the world rounded anew (`tsim.rounding`)
+            self._pos0[w] = self._round_world(w)
 
     def shift_robots(self, dx: np.ndarray) -> None:
         """Start each world's robot `dx[w]` further right (left when negative; evogym's length
@@ -231,7 +258,10 @@ class BatchSim:
         if dx.shape != (self.n_worlds,) or not np.all(np.isfinite(dx)):
             raise ValueError(f"shift_robots needs {self.n_worlds} finite shifts, got shape {dx.shape}")
         robot = np.arange(self._pos0.shape[1])[None, :] < self.n_robot_points[:, None]
-        self._pos0[:, :, 0] += np.where(robot, dx[:, None], 0.0)
+        self._pos0_f64[:, :, 0] += np.where(robot, dx[:, None], 0.0)
+        if self._pos0 is not self._pos0_f64:  # f32: shifted in float64, then rounded anew
+            for w in range(self.n_worlds):
+                self._pos0[w] = self._round_world(w)
 
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].
@@ -364,7 +394,8 @@ class BatchSim:
     def initial_positions(self) -> np.ndarray:
         """(B, P, 2) every point's position at reset, as `state`'s rows (the reference of an
         object's orientation). Writing it moves where the next reset starts, as `place_object`
-        and `shift_robots` do."""
+        and `shift_robots` do (in f32 until one of them, which round evogym's float64 placement
+        anew, `tsim.rounding`)."""
         return self._pos0
 
     @property
@@ -407,29 +438,6 @@ class BatchSim:
         mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
         s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
         return s / self.n_robot_points[:, None]
-
-
-def to_real(x: np.ndarray, dtype: type) -> np.ndarray:
-    """Positions x (float64, world units) in the real type `dtype`, each on the same side of the
-    grid line nearest to it (k * CELL, where terrain corners lie) as in float64.
-
-    Why: evogym places a robot a few float64 ulps above the ground (y = 0.10000000000000003 over
-    a terrain top of 0.1), so it first touches the ground a substep later. Rounded to float32
-    both are 0.1: the robot would start in contact, and a contact pushes with >= 10,500 force
-    units (a 1e-3 error after one step, Walker-v0). So a coordinate that float32 would put onto
-    the line (or past it) is moved to the float32 number next to the line on its float64 side.
-    Terrain corners get the same treatment: evogym's terrain tops are at times 0.09999999999999998,
-    where a robot's bottom is too."""
-    if dtype == np.float64:
-        return x
-    g = np.round(x / C.CELL) * C.CELL
-    r = x.astype(dtype)
-    g_r = g.astype(dtype)
-    above = (x > g) & (r <= g_r)
-    below = (x < g) & (r >= g_r)
-    r[above] = np.nextafter(g_r[above], dtype(np.inf))
-    r[below] = np.nextafter(g_r[below], dtype(-np.inf))
-    return r
 
 
 def _taichi_array(a: np.ndarray):

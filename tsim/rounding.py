@@ -1,0 +1,97 @@
+"""Initial coordinates in float32 that keep the order float64 gives them (f32 only; f64 keeps them).
+
+Why: evogym places bodies a few float64 ulps off the grid lines k * CELL, and which of two nearly
+equal coordinates is the larger decides contacts from the first substep on. Climber-v1's robot
+rests 3.4e-16 above its pipe's floor (y = 0.09999999999999998 over 0.09999999999999964): out of
+contact in f64, while float32 rounds both to 0.099999994 and the robot's corners start on the
+floor's edge, inside it (the point-in-voxel test counts the boundary), pushed up with >= 10,500
+force units: 1.8e-3 off evogym after one step. A robot on the ground (y = 0.10000000000000003
+over a terrain top of 0.1) started in contact the same way.
+
+So each float64 coordinate is rounded to a float32 number such that any two coordinates keep their
+order, or their equality, and each keeps its side of the nearest grid line; as close as that
+allows to plain rounding (neighbours in float32 where float64's coordinates crowd within one
+float32 ulp). The grid lines are anchors whose rounding is plain, and so are `fixed` coordinates
+(the terrain, rounded once for the whole batch, against which each world's bodies are rounded).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from tsim import constants as C
+
+
+def _keys(r: np.ndarray) -> np.ndarray:
+    """float32 -> int64, increasing with the value and by 1 between neighbouring float32 numbers
+    (-0.0 and 0.0 are both 0)."""
+    i = r.astype(np.float32).view(np.int32).astype(np.int64)
+    return np.where(i >= 0, i, -(i & 0x7FFFFFFF))
+
+
+def _floats(k: np.ndarray) -> np.ndarray:
+    """The inverse of `_keys`."""
+    bits = np.where(k >= 0, k, (-k) | 0x80000000).astype(np.uint32)
+    return bits.view(np.float32)
+
+
+def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | None = None,
+            stride: int = 1) -> np.ndarray:
+    """Coordinates x (float64, world units) in the real type `dtype`: for float64 x itself; for
+    float32 each value rounded so that the order of any two values of x (and of x against the grid
+    lines k * CELL and the `fixed` values) is float64's, as near plain rounding as that allows.
+    `fixed`: (float64 values, their float32 roundings), which stay as they are (the terrain's,
+    when a world's bodies are rounded). Equal values stay equal; two values that float32 cannot
+    tell apart become neighbouring float32 numbers, moved away from the nearest grid line or fixed
+    value (an order is lost, as a tie, only where more distinct values lie between two anchors than
+    float32 has numbers there). `stride` > 1 leaves that many - 1 float32 numbers free between
+    values moved apart, for values rounded later against these as `fixed` (the terrain's)."""
+    if dtype == np.float64:
+        return x
+    x = np.asarray(x, dtype=np.float64)
+    if x.size == 0:
+        return x.astype(dtype)
+    u, inv = np.unique(x, return_inverse=True)
+    k0 = int(np.floor(u[0] / C.CELL)) - 1
+    k1 = int(np.ceil(u[-1] / C.CELL)) + 1
+    grid = np.arange(k0, k1 + 1) * C.CELL  # evogym's grid lines, as its placement computes them
+    a_val, a_key = grid, _keys(grid)
+    if fixed is not None and len(fixed[0]):
+        a_val = np.concatenate([np.asarray(fixed[0], dtype=np.float64), a_val])
+        a_key = np.concatenate([_keys(np.asarray(fixed[1])), a_key])
+        a_val, first = np.unique(a_val, return_index=True)  # a fixed value wins over a grid line
+        a_key = a_key[first]
+    naive = _keys(u)
+    key = naive.copy()
+    j = np.searchsorted(a_val, u, side="right") - 1  # a_val[j] <= u < a_val[j + 1]
+    on = a_val[j] == u
+    key[on] = a_key[j[on]]
+    lo_key, hi_key = a_key[j], a_key[np.minimum(j + 1, len(a_val) - 1)]
+    lower = ~on & (u - a_val[j] <= a_val[np.minimum(j + 1, len(a_val) - 1)] - u)
+    upper = ~on & ~lower
+    big = np.int64(1) << 40  # keys lie within +-2^31: offsets that keep the groups apart
+    # values nearer their lower anchor, ascending per interval: each at least one float32 above
+    # the anchor and above the value before it
+    idx = np.nonzero(lower)[0]
+    if len(idx):
+        g = j[idx]
+        rank = np.arange(len(idx)) - np.searchsorted(g, g)
+        rank = rank * stride
+        run = (np.maximum.accumulate(np.maximum(naive[idx] - rank, lo_key[idx] + stride) + g * big)
+               - g * big)
+        key[idx] = run + rank
+    # values nearer their upper anchor, descending per interval: at least one below each
+    idx = np.nonzero(upper)[0][::-1]
+    if len(idx):
+        g = j[idx]
+        rank = np.arange(len(idx)) - np.searchsorted(-g, -g)
+        rank = rank * stride
+        run = (np.minimum.accumulate(np.minimum(naive[idx] + rank, hi_key[idx] - stride) + g * big)
+               - g * big)
+        key[idx] = run - rank
+    # crowded intervals: never reverse an order (ties at worst) nor pass an anchor
+    free = ~on
+    key[free] = np.clip(key[free], np.minimum(lo_key[free] + 1, hi_key[free]),
+                        np.maximum(hi_key[free] - 1, lo_key[free]))
+    key = np.maximum.accumulate(key)
+    return _floats(key)[inv].reshape(x.shape).astype(dtype)
