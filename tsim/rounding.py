@@ -57,10 +57,19 @@ def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | N
     grid = np.arange(k0, k1 + 1) * C.CELL  # evogym's grid lines, as its placement computes them
     a_val, a_key = grid, _keys(grid)
     if fixed is not None and len(fixed[0]):
-        a_val = np.concatenate([np.asarray(fixed[0], dtype=np.float64), a_val])
-        a_key = np.concatenate([_keys(np.asarray(fixed[1])), a_key])
-        a_val, first = np.unique(a_val, return_index=True)  # a fixed value wins over a grid line
-        a_key = a_key[first]
+        f_val, first = np.unique(np.asarray(fixed[0], dtype=np.float64), return_index=True)
+        f_key = _keys(np.asarray(fixed[1]))[first]
+        # a fixed value anchors its neighbourhood: the grid lines next to one are left out (else a
+        # value between the two might find no float32 number between theirs)
+        near = np.searchsorted(np.sort(f_key), a_key)
+        sk = np.sort(f_key)
+        gap = np.minimum(np.abs(a_key - sk[np.minimum(near, len(sk) - 1)]),
+                         np.abs(a_key - sk[np.maximum(near - 1, 0)]))
+        keep = gap > 2
+        a_val = np.concatenate([f_val, a_val[keep]])
+        a_key = np.concatenate([f_key, a_key[keep]])
+        order = np.argsort(a_val, kind="stable")
+        a_val, a_key = a_val[order], a_key[order]
     naive = _keys(u)
     key = naive.copy()
     j = np.searchsorted(a_val, u, side="right") - 1  # a_val[j] <= u < a_val[j + 1]

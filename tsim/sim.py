@@ -26,7 +26,7 @@ from tsim.world import World
 TER_X, TER_Y = [0, 2, 4, 6, 8, 9], [1, 3, 5, 7, 10, 11]
 # f32: the terrain's coordinates that float32 moves apart stay 2 float32 numbers apart, so that a
 # body's coordinate between two of them in float64 finds a float32 number between them too
-TER_STRIDE = 2
+TER_STRIDE = 1
 
 # a world's status codes (`BatchSim.status`): only RUNNING worlds advance
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
@@ -83,6 +83,7 @@ class BatchSim:
         pos0 = np.zeros((B, P, 2))  # evogym's f64 placement, then in the real type (below)
         edge_i = np.zeros((B, E, 4), dtype=np.int32)
         edge_f = np.zeros((B, E, K.N_EDGE_F), dtype=real)
+        self._rest_f64 = np.zeros((B, E))
         vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
         # fixed points: corners of material-5 voxels of simulated objects (never the robot's)
         fixed = [np.unique(o.body.voxel_points[o.body.voxel_type == C.FIXED]) for o in objs]
@@ -109,6 +110,7 @@ class BatchSim:
                 else:
                     edge_i[w, sl, 2:4] = -1
                 edge_f[w, sl, K.E_REST] = part.edge_rest
+                self._rest_f64[w, sl] = part.edge_rest
                 edge_f[w, sl, K.E_K] = part.edge_k
                 edge_f[w, sl, K.E_GOAL] = part.edge_rest
                 edge_f[w, sl, K.E_LEQ] = part.edge_rest
@@ -167,6 +169,9 @@ class BatchSim:
         self._pos0_f64 = pos0
         self._pos0 = pos0 if real == np.float64 else np.stack(
             [self._round_world(w) for w in range(B)])
+        if real != np.float64:
+            for w in range(B):
+                self._length_rounding(w, edge_f, edge_i)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -218,6 +223,18 @@ class BatchSim:
         for d in range(2):
             out[:, d] = to_real(p[:, d], self.dtype, self._ter_fixed[d])
         return out
+
+    def _length_rounding(self, w: int, edge_f: np.ndarray, edge_i: np.ndarray) -> None:
+        """f32: per edge of world w, its initial length as the kernel computes it in float32 from
+        the rounded placement, less evogym's float64 length (into edge_f's E_LEQ column)."""
+        a, b = edge_i[w, :, 0], edge_i[w, :, 1]  # padding: point 0 to itself, 0
+        p32, p64 = self._pos0[w], self._pos0_f64[w]
+        d32 = p32[a] - p32[b]
+        l32 = np.sqrt(d32[:, 0] * d32[:, 0] + d32[:, 1] * d32[:, 1])
+        d64 = p64[a] - p64[b]
+        l64 = np.sqrt(d64[:, 0] * d64[:, 0] + d64[:, 1] * d64[:, 1])
+        rest32 = edge_f[w, :, K.E_REST].astype(np.float64)
+        edge_f[w, :, K.E_LEQ] = ((l32.astype(np.float64) - l64) - (rest32 - self._rest_f64[w]))
 
     # ------------------------------------------------------------------ control
     @property
@@ -434,10 +451,20 @@ class BatchSim:
         raise KeyError(f"no free object {name!r} in world {self.world.name}")
 
     def robot_com(self) -> np.ndarray:
-        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass)."""
+        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass). In f32 the
+        mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in float64, then in
+        float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7 (Jumper-v0's COM was
+        8e-7 off evogym that way, 2e-7 from the pairs; evogym's chaos floor there is 3e-7)."""
         mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
-        s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
-        return s / self.n_robot_points[:, None]
+        if self.dtype == np.float64:
+            s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
+            return s / self.n_robot_points[:, None]
+        st = self.state
+        pos = st[:, :, 0:2].astype(np.float64)
+        pos += np.where(st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2],
+                        st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
+        s = (pos * mask[:, :, None]).sum(axis=1)
+        return (s / self.n_robot_points[:, None]).astype(self.dtype)
 
 
 def _taichi_array(a: np.ndarray):

@@ -60,7 +60,7 @@ def spring_forces(n_pts, n_edges, s: ti.template(), first: ti.template()):
                 dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
                 dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
                 dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = (dist - s.egoal[e]) * C.REST_CONVERGENCE
+                stretch = ((dist - s.egoal[e]) - s.leq[e]) * C.REST_CONVERGENCE
                 s.e0[4 * e] = dx
                 s.e0[4 * e + 1] = dy
                 s.e0[4 * e + 2] = dist
