@@ -167,11 +167,7 @@ class BatchSim:
                 self._ter_fixed.append((ter_f[:, cols].reshape(-1), ter_r[:, cols].reshape(-1)))
             ter_f = ter_r
         self._pos0_f64 = pos0
-        self._pos0 = pos0 if real == np.float64 else np.stack(
-            [self._round_world(w) for w in range(B)])
-        if real != np.float64:
-            for w in range(B):
-                self._length_rounding(w, edge_f, edge_i)
+        self._pos0 = pos0 if real == np.float64 else np.zeros(pos0.shape, dtype=real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -179,6 +175,8 @@ class BatchSim:
         self.vox_i = vox_i
         self.lists = lists
         self.ter_f = ter_f
+        if real != np.float64:
+            self._round_placement(range(B))
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
         self.state = np.zeros((B, P, K.state_columns()), dtype=real)
@@ -224,9 +222,25 @@ class BatchSim:
             out[:, d] = to_real(p[:, d], self.dtype, self._ter_fixed[d])
         return out
 
-    def _length_rounding(self, w: int, edge_f: np.ndarray, edge_i: np.ndarray) -> None:
-        """f32: per edge of world w, its initial length as the kernel computes it in float32 from
-        the rounded placement, less evogym's float64 length (into edge_f's E_LEQ column)."""
+    def _round_placement(self, worlds) -> None:
+        """f32: these worlds' float64 placement in float32 (`_round_world`), and their springs'
+        initial-length rounding (`_length_rounding`), also where the kernels read edge_f from a
+        copy of their own (a GPU's)."""
+        for w in worlds:
+            self._pos0[w] = self._round_world(w)
+            self._length_rounding(w)
+        static = getattr(self, "_static", None)
+        if static is not None and not isinstance(static[1], np.ndarray):
+            static[1].from_numpy(np.ascontiguousarray(self.edge_f.reshape(-1)))
+
+    def _length_rounding(self, w: int) -> None:
+        """f32: per spring of world w, how far its initial length as the kernel computes it in
+        float32 from the rounded placement lies from evogym's float64 length, less the float32
+        rounding of its rest length (edge_f's E_LEQ column; `springs.spring_forces` subtracts it
+        from the stretch, so that a spring starts as stretched as in evogym: else the rounding of
+        the placement (~4e-8) strains springs by ~0.02 force units, and points evogym holds still
+        to the last bit drift off the terrain corners they touch, PlatformJumper-v0)."""
+        edge_f, edge_i = self.edge_f, self.edge_i
         a, b = edge_i[w, :, 0], edge_i[w, :, 1]  # padding: point 0 to itself, 0
         p32, p64 = self._pos0[w], self._pos0_f64[w]
         d32 = p32[a] - p32[b]
@@ -265,7 +279,7 @@ class BatchSim:
         off = self._obj_offsets[k][w]
         self._pos0_f64[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
         if self._pos0 is not self._pos0_f64:  # f32: the world rounded anew (`tsim.rounding`)
-            self._pos0[w] = self._round_world(w)
+            self._round_placement([w])
 
     def shift_robots(self, dx: np.ndarray) -> None:
         """Start each world's robot `dx[w]` further right (left when negative; evogym's length
@@ -277,8 +291,7 @@ class BatchSim:
         robot = np.arange(self._pos0.shape[1])[None, :] < self.n_robot_points[:, None]
         self._pos0_f64[:, :, 0] += np.where(robot, dx[:, None], 0.0)
         if self._pos0 is not self._pos0_f64:  # f32: shifted in float64, then rounded anew
-            for w in range(self.n_worlds):
-                self._pos0[w] = self._round_world(w)
+            self._round_placement(range(self.n_worlds))
 
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].
