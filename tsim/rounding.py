@@ -9,10 +9,13 @@ force units: 1.8e-3 off evogym after one step. A robot on the ground (y = 0.1000
 over a terrain top of 0.1) started in contact the same way.
 
 So each float64 coordinate is rounded to a float32 number such that any two coordinates keep their
-order, or their equality, and each keeps its side of the nearest grid line; as close as that
-allows to plain rounding (neighbours in float32 where float64's coordinates crowd within one
-float32 ulp). The grid lines are anchors whose rounding is plain, and so are `fixed` coordinates
-(the terrain, rounded once for the whole batch, against which each world's bodies are rounded).
+order, or their equality; as close as that allows to plain rounding (neighbours in float32 where
+float64's coordinates crowd within one float32 ulp). Anchors, whose rounding is given: the grid
+lines (plain rounding; a value keeps its side of them) and `fixed` values (the terrain's, rounded
+once for the whole batch, against which each world's bodies are rounded; a grid line within 2
+float32 numbers of a fixed value gives way to it, so that a value between the two finds room).
+What float32 cannot keep is the size of such gaps: 3.4e-16 in float64 is 7.5e-9 or more in
+float32 (one float32 number at 0.1), which docs/VALIDATION.md finds deciding Lifter-v0.
 """
 
 from __future__ import annotations
@@ -35,8 +38,7 @@ def _floats(k: np.ndarray) -> np.ndarray:
     return bits.view(np.float32)
 
 
-def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | None = None,
-            stride: int = 1) -> np.ndarray:
+def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | None = None) -> np.ndarray:
     """Coordinates x (float64, world units) in the real type `dtype`: for float64 x itself; for
     float32 each value rounded so that the order of any two values of x (and of x against the grid
     lines k * CELL and the `fixed` values) is float64's, as near plain rounding as that allows.
@@ -44,8 +46,7 @@ def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | N
     when a world's bodies are rounded). Equal values stay equal; two values that float32 cannot
     tell apart become neighbouring float32 numbers, moved away from the nearest grid line or fixed
     value (an order is lost, as a tie, only where more distinct values lie between two anchors than
-    float32 has numbers there). `stride` > 1 leaves that many - 1 float32 numbers free between
-    values moved apart, for values rounded later against these as `fixed` (the terrain's)."""
+    float32 has numbers there)."""
     if dtype == np.float64:
         return x
     x = np.asarray(x, dtype=np.float64)
@@ -61,8 +62,8 @@ def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | N
         f_key = _keys(np.asarray(fixed[1]))[first]
         # a fixed value anchors its neighbourhood: the grid lines next to one are left out (else a
         # value between the two might find no float32 number between theirs)
-        near = np.searchsorted(np.sort(f_key), a_key)
         sk = np.sort(f_key)
+        near = np.searchsorted(sk, a_key)
         gap = np.minimum(np.abs(a_key - sk[np.minimum(near, len(sk) - 1)]),
                          np.abs(a_key - sk[np.maximum(near - 1, 0)]))
         keep = gap > 2
@@ -85,18 +86,14 @@ def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | N
     if len(idx):
         g = j[idx]
         rank = np.arange(len(idx)) - np.searchsorted(g, g)
-        rank = rank * stride
-        run = (np.maximum.accumulate(np.maximum(naive[idx] - rank, lo_key[idx] + stride) + g * big)
-               - g * big)
+        run = np.maximum.accumulate(np.maximum(naive[idx] - rank, lo_key[idx] + 1) + g * big) - g * big
         key[idx] = run + rank
     # values nearer their upper anchor, descending per interval: at least one below each
     idx = np.nonzero(upper)[0][::-1]
     if len(idx):
         g = j[idx]
         rank = np.arange(len(idx)) - np.searchsorted(-g, -g)
-        rank = rank * stride
-        run = (np.minimum.accumulate(np.minimum(naive[idx] + rank, hi_key[idx] - stride) + g * big)
-               - g * big)
+        run = np.minimum.accumulate(np.minimum(naive[idx] + rank, hi_key[idx] - 1) + g * big) - g * big
         key[idx] = run - rank
     # crowded intervals: never reverse an order (ties at worst) nor pass an anchor
     free = ~on

@@ -24,9 +24,6 @@ from tsim.world import World
 
 # the terrain's x and y columns (`_build`'s ter_f: corners TL, TR, BR, BL as x, y, then the box)
 TER_X, TER_Y = [0, 2, 4, 6, 8, 9], [1, 3, 5, 7, 10, 11]
-# f32: the terrain's coordinates that float32 moves apart stay 2 float32 numbers apart, so that a
-# body's coordinate between two of them in float64 finds a float32 number between them too
-TER_STRIDE = 1
 
 # a world's status codes (`BatchSim.status`): only RUNNING worlds advance
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
@@ -163,7 +160,7 @@ class BatchSim:
         if real != np.float64:
             ter_r = np.zeros(ter_f.shape, dtype=real)
             for cols in (TER_X, TER_Y):
-                ter_r[:, cols] = to_real(ter_f[:, cols], real, stride=TER_STRIDE)
+                ter_r[:, cols] = to_real(ter_f[:, cols], real)
                 self._ter_fixed.append((ter_f[:, cols].reshape(-1), ter_r[:, cols].reshape(-1)))
             ter_f = ter_r
         self._pos0_f64 = pos0
