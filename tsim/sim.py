@@ -209,6 +209,7 @@ class BatchSim:
         self._static = (tuple(np.ascontiguousarray(a) for a in static) if self.backend.cached_launch
                         else tuple(_taichi_array(a) for a in static))
         self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
+        self._edge_f_stale = False  # the copy above is current (`_round_placement`)
 
     def _round_world(self, w: int) -> np.ndarray:
         """World w's float64 placement in the real type, each axis rounded keeping the order of
@@ -221,14 +222,11 @@ class BatchSim:
 
     def _round_placement(self, worlds) -> None:
         """f32: these worlds' float64 placement in float32 (`_round_world`), and their springs'
-        initial-length rounding (`_length_rounding`), also where the kernels read edge_f from a
-        copy of their own (a GPU's)."""
+        initial-length rounding (`_length_rounding`)."""
         for w in worlds:
             self._pos0[w] = self._round_world(w)
             self._length_rounding(w)
-        static = getattr(self, "_static", None)
-        if static is not None and not isinstance(static[1], np.ndarray):
-            static[1].from_numpy(np.ascontiguousarray(self.edge_f.reshape(-1)))
+        self._edge_f_stale = True  # a GPU's copy: sent again before the next step (`step`)
 
     def _length_rounding(self, w: int) -> None:
         """f32: per spring of world w, how far its initial length as the kernel computes it in
@@ -333,6 +331,10 @@ class BatchSim:
 
     def step(self, n: int = 1) -> None:
         """Advance every running world by n env steps (30 substeps each)."""
+        if self._edge_f_stale:  # f32: edge_f changed since the kernels' own copy was made
+            if not isinstance(self._static[1], np.ndarray):
+                self._static[1].from_numpy(np.ascontiguousarray(self.edge_f.reshape(-1)))
+            self._edge_f_stale = False
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             edge_i, edge_f, vox_i, lists, ter_f, ter_i, ter_grid = self._static
