@@ -68,7 +68,8 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/test_readme.py": ALL,
         "tests/tsim/test_precision.py": ("test_f32_steps_in_float32_and_follows_evogym_at_the_start",
                                          "test_f32_pairs_keep_the_increments_a_float32_coordinate_loses",
-                                         "test_f32_state_written_from_outside_drops_stale_low_parts"),
+                                         "test_f32_state_written_from_outside_drops_stale_low_parts",
+                                         "test_f32_bodies_flush_against_walls_start_as_evogyms"),
         "tests/tsim/test_runtime.py": ALL,
         "tests/tsim/test_spirv.py": (
             "test_in_f32_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it_low_parts_too",),

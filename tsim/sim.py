@@ -19,7 +19,11 @@ from tsim import kernels as K
 from tsim import runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
 from tsim.launch import CachedLaunch
+from tsim.rounding import to_real
 from tsim.world import World
+
+# the terrain's x and y columns (`_build`'s ter_f: corners TL, TR, BR, BL as x, y, then the box)
+TER_X, TER_Y = [0, 2, 4, 6, 8, 9], [1, 3, 5, 7, 10, 11]
 
 # a world's status codes (`BatchSim.status`): only RUNNING worlds advance
 RUNNING, UNSTABLE, NONFINITE, INACTIVE = K.RUNNING, K.UNSTABLE, K.NONFINITE, K.INACTIVE
@@ -76,6 +80,7 @@ class BatchSim:
         pos0 = np.zeros((B, P, 2))  # evogym's f64 placement, then in the real type (below)
         edge_i = np.zeros((B, E, 4), dtype=np.int32)
         edge_f = np.zeros((B, E, K.N_EDGE_F), dtype=real)
+        self._rest_f64 = np.zeros((B, E))
         vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
         # fixed points: corners of material-5 voxels of simulated objects (never the robot's)
         fixed = [np.unique(o.body.voxel_points[o.body.voxel_type == C.FIXED]) for o in objs]
@@ -102,6 +107,7 @@ class BatchSim:
                 else:
                     edge_i[w, sl, 2:4] = -1
                 edge_f[w, sl, K.E_REST] = part.edge_rest
+                self._rest_f64[w, sl] = part.edge_rest
                 edge_f[w, sl, K.E_K] = part.edge_k
                 edge_f[w, sl, K.E_GOAL] = part.edge_rest
                 edge_f[w, sl, K.E_LEQ] = part.edge_rest
@@ -148,8 +154,17 @@ class BatchSim:
             ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
             ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
             ter_i[:] = t.open
-        ter_f = to_real(ter_f, real)
-        self._pos0 = to_real(pos0, real)
+        # f32: the terrain rounded once, each world's bodies against it, every coordinate keeping
+        # its float64 order (`tsim.rounding`); f64: evogym's placement itself
+        self._ter_fixed = []  # per axis: the terrain's float64 coordinates and their rounding
+        if real != np.float64:
+            ter_r = np.zeros(ter_f.shape, dtype=real)
+            for cols in (TER_X, TER_Y):
+                ter_r[:, cols] = to_real(ter_f[:, cols], real)
+                self._ter_fixed.append((ter_f[:, cols].reshape(-1), ter_r[:, cols].reshape(-1)))
+            ter_f = ter_r
+        self._pos0_f64 = pos0
+        self._pos0 = pos0 if real == np.float64 else np.zeros(pos0.shape, dtype=real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -157,6 +172,8 @@ class BatchSim:
         self.vox_i = vox_i
         self.lists = lists
         self.ter_f = ter_f
+        if real != np.float64:
+            self._round_placement(range(B))
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
         self.state = np.zeros((B, P, K.state_columns()), dtype=real)
@@ -192,6 +209,41 @@ class BatchSim:
         self._static = (tuple(np.ascontiguousarray(a) for a in static) if self.backend.cached_launch
                         else tuple(_taichi_array(a) for a in static))
         self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
+        self._edge_f_stale = False  # the copy above is current (`_round_placement`)
+
+    def _round_world(self, w: int) -> np.ndarray:
+        """World w's float64 placement in the real type, each axis rounded keeping the order of
+        its coordinates among themselves and against the terrain's (`tsim.rounding`; f32 only)."""
+        p = self._pos0_f64[w]
+        out = np.empty(p.shape, dtype=self.dtype)
+        for d in range(2):
+            out[:, d] = to_real(p[:, d], self.dtype, self._ter_fixed[d])
+        return out
+
+    def _round_placement(self, worlds) -> None:
+        """f32: these worlds' float64 placement in float32 (`_round_world`), and their springs'
+        initial-length rounding (`_length_rounding`)."""
+        for w in worlds:
+            self._pos0[w] = self._round_world(w)
+            self._length_rounding(w)
+        self._edge_f_stale = True  # a GPU's copy: sent again before the next step (`step`)
+
+    def _length_rounding(self, w: int) -> None:
+        """f32: per spring of world w, how far its initial length as the kernel computes it in
+        float32 from the rounded placement lies from evogym's float64 length, less the float32
+        rounding of its rest length (edge_f's E_LEQ column; `springs.spring_forces` subtracts it
+        from the stretch, so that a spring starts as stretched as in evogym: else the rounding of
+        the placement (~4e-8) strains springs by ~0.02 force units, and points evogym holds still
+        to the last bit drift off the terrain corners they touch, PlatformJumper-v0)."""
+        edge_f, edge_i = self.edge_f, self.edge_i
+        a, b = edge_i[w, :, 0], edge_i[w, :, 1]  # padding: point 0 to itself, 0
+        p32, p64 = self._pos0[w], self._pos0_f64[w]
+        d32 = p32[a] - p32[b]
+        l32 = np.sqrt(d32[:, 0] * d32[:, 0] + d32[:, 1] * d32[:, 1])
+        d64 = p64[a] - p64[b]
+        l64 = np.sqrt(d64[:, 0] * d64[:, 0] + d64[:, 1] * d64[:, 1])
+        rest32 = edge_f[w, :, K.E_REST].astype(np.float64)
+        edge_f[w, :, K.E_LEQ] = ((l32.astype(np.float64) - l64) - (rest32 - self._rest_f64[w]))
 
     # ------------------------------------------------------------------ control
     @property
@@ -220,8 +272,9 @@ class BatchSim:
         Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        self._pos0[w, off:off + obj.body.n_points] = to_real(obj.body.place(int(cell[0]), int(cell[1])).T,
-                                                             self.dtype)
+        self._pos0_f64[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
+        if self._pos0 is not self._pos0_f64:  # f32: the world rounded anew (`tsim.rounding`)
+            self._round_placement([w])
 
     def shift_robots(self, dx: np.ndarray) -> None:
         """Start each world's robot `dx[w]` further right (left when negative; evogym's length
@@ -231,7 +284,9 @@ class BatchSim:
         if dx.shape != (self.n_worlds,) or not np.all(np.isfinite(dx)):
             raise ValueError(f"shift_robots needs {self.n_worlds} finite shifts, got shape {dx.shape}")
         robot = np.arange(self._pos0.shape[1])[None, :] < self.n_robot_points[:, None]
-        self._pos0[:, :, 0] += np.where(robot, dx[:, None], 0.0)
+        self._pos0_f64[:, :, 0] += np.where(robot, dx[:, None], 0.0)
+        if self._pos0 is not self._pos0_f64:  # f32: shifted in float64, then rounded anew
+            self._round_placement(range(self.n_worlds))
 
     def set_actions(self, actions: np.ndarray | Sequence[np.ndarray]) -> None:
         """Actuator targets, one row per world in evogym's actuator order, clipped to [0.6, 1.6].
@@ -276,6 +331,10 @@ class BatchSim:
 
     def step(self, n: int = 1) -> None:
         """Advance every running world by n env steps (30 substeps each)."""
+        if self._edge_f_stale:  # f32: edge_f changed since the kernels' own copy was made
+            if not isinstance(self._static[1], np.ndarray):
+                self._static[1].from_numpy(np.ascontiguousarray(self.edge_f.reshape(-1)))
+            self._edge_f_stale = False
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             edge_i, edge_f, vox_i, lists, ter_f, ter_i, ter_grid = self._static
@@ -364,7 +423,8 @@ class BatchSim:
     def initial_positions(self) -> np.ndarray:
         """(B, P, 2) every point's position at reset, as `state`'s rows (the reference of an
         object's orientation). Writing it moves where the next reset starts, as `place_object`
-        and `shift_robots` do."""
+        and `shift_robots` do (in f32 until one of them, which round evogym's float64 placement
+        anew, `tsim.rounding`)."""
         return self._pos0
 
     @property
@@ -403,33 +463,20 @@ class BatchSim:
         raise KeyError(f"no free object {name!r} in world {self.world.name}")
 
     def robot_com(self) -> np.ndarray:
-        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass)."""
+        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass). In f32 the
+        mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in float64, then in
+        float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7 (Jumper-v0's COM was
+        8e-7 off evogym that way, 2e-7 from the pairs; evogym's chaos floor there is 3e-7)."""
         mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
-        s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
-        return s / self.n_robot_points[:, None]
-
-
-def to_real(x: np.ndarray, dtype: type) -> np.ndarray:
-    """Positions x (float64, world units) in the real type `dtype`, each on the same side of the
-    grid line nearest to it (k * CELL, where terrain corners lie) as in float64.
-
-    Why: evogym places a robot a few float64 ulps above the ground (y = 0.10000000000000003 over
-    a terrain top of 0.1), so it first touches the ground a substep later. Rounded to float32
-    both are 0.1: the robot would start in contact, and a contact pushes with >= 10,500 force
-    units (a 1e-3 error after one step, Walker-v0). So a coordinate that float32 would put onto
-    the line (or past it) is moved to the float32 number next to the line on its float64 side.
-    Terrain corners get the same treatment: evogym's terrain tops are at times 0.09999999999999998,
-    where a robot's bottom is too."""
-    if dtype == np.float64:
-        return x
-    g = np.round(x / C.CELL) * C.CELL
-    r = x.astype(dtype)
-    g_r = g.astype(dtype)
-    above = (x > g) & (r <= g_r)
-    below = (x < g) & (r >= g_r)
-    r[above] = np.nextafter(g_r[above], dtype(np.inf))
-    r[below] = np.nextafter(g_r[below], dtype(-np.inf))
-    return r
+        if self.dtype == np.float64:
+            s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
+            return s / self.n_robot_points[:, None]
+        st = self.state
+        pos = st[:, :, 0:2].astype(np.float64)
+        pos += np.where(st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2],
+                        st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
+        s = (pos * mask[:, :, None]).sum(axis=1)
+        return (s / self.n_robot_points[:, None]).astype(self.dtype)
 
 
 def _taichi_array(a: np.ndarray):

@@ -145,9 +145,11 @@ if __name__ == "__main__":
 def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     """Far from the origin a float32 coordinate cannot hold a substep's increment (v dt ~1e-6 to
     1e-4 against an ulp of 1.9e-6 at 20) and its springs see lengths rounded at that ulp. f32 keeps
-    positions and velocities as pairs hi + lo (tsim/kernels/pairs.py): 20 steps of a robot acting
-    while falling at x, y ~ 20 stay within 1e-7 of f64 run from the same float32 start (measured
-    1.5e-8; plain float32 coordinates, before the pairs, were 1.8e-5 off)."""
+    positions and velocities as pairs hi + lo (tsim/kernels/pairs.py), and its springs start as
+    strained as evogym's float64 placement makes them (`BatchSim._length_rounding`): 20 steps of a
+    robot acting while falling at x, y ~ 20 move it within 1e-7 of how f64 moves it from evogym's
+    own placement (measured 3.1e-8; 7.7e-7 when the springs felt the float32 placement's rounding,
+    1.8e-5 with plain float32 coordinates)."""
     out = subprocess.run([sys.executable, "-c", FALL], env=_clean_env(SGR_PRECISION="f32"),
                          capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
@@ -155,11 +157,42 @@ def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     assert r["dtype"] == "float32"
     space: dict = {}
     exec(FALL.replace('if __name__ == "__main__":', "if False:"), space)
-    dtype, start, pos64 = space["fall"](np.array(r["start"]))
-    assert dtype == "float64" and np.array_equal(start, r["start"])
-    assert np.abs(pos64 - start).max() > 0.1  # it fell and moved
-    err = np.abs(np.array(r["pos"]) - pos64).max()
+    dtype, start64, pos64 = space["fall"]()
+    start = np.array(r["start"])
+    assert dtype == "float64" and np.abs(start - start64).max() < 2e-6  # float32's rounding
+    assert np.abs(pos64 - start64).max() > 0.1  # it fell and moved
+    err = np.abs((np.array(r["pos"]) - start) - (pos64 - start64)).max()
     assert err < 1e-7, err
+
+
+CLIMB = """
+import json, sys
+import numpy as np
+from tasks.env import BatchEnv
+out = {}
+for task, robots in (("Climber-v1", [0, 2, 3, 4]), ("Climber-v2", [0, 1, 2, 3])):
+    z = np.load(f"{sys.argv[1]}/returns_{task}.npz")
+    env = BatchEnv(task, [z["body"][i] for i in robots], episode_steps=2, passive_ok=True)
+    env.step([z["actions"][i, 0, :z["n_act"][i]] for i in robots])
+    out[task] = np.linalg.norm(env.sim.robot_com() - z["com"][robots, 1], axis=1).tolist()
+print(json.dumps(out))
+"""
+
+
+def test_f32_bodies_flush_against_walls_start_as_evogyms(data_dir):
+    """Climber-v1's robot rests 3.4e-16 above its pipe's floor and Climber-v2's 3.4e-16 above the
+    terrain, flush between walls: plain float32 (with each coordinate on its float64 side of the
+    grid lines) rounds both to one number, the robot starts on the floor's edge, inside it, and
+    is pushed up: 1e-3 off evogym's COM after one step. Rounded keeping float64's order
+    (`tsim.rounding`), one step follows evogym's recorded COM to float32's rounding (measured
+    <= 4e-8)."""
+    out = subprocess.run([sys.executable, "-c", CLIMB, str(data_dir / "evogym32")],
+                         env=_clean_env(SGR_PRECISION="f32"), capture_output=True, text=True,
+                         timeout=300)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    for task, err in r.items():
+        assert max(err) < 1e-6, (task, err)
 
 
 REWRITE = """

@@ -8,8 +8,11 @@ the process's floating-point type (f64 by default, f32 on request; `tsim.runtime
   (robot points first, then free objects such as Thrower's package); in f32 also the low parts
   of pos (8:10) and vel (10:12) and the pos (12:14) they belong to (`pairs`, `state_columns`).
 - `edge_i[b, e, :]` int: a, b, driver0, driver1 (actuator indices or -1).
-- `edge_f[b, e, :]` real: rest length, k, goal at rest, current rest length at rest (the kernel
-  derives each step's goals from the actions and keeps the current rest lengths in local arrays).
+- `edge_f[b, e, :]` real: rest length, k, goal at rest, and (E_LEQ) in f64 the current rest length
+  at rest, unused (the kernel derives each step's goals from the actions and keeps the current
+  rest lengths in local arrays), in f32 how far the spring's float32 initial length lies from
+  evogym's float64 one, less the rest length's rounding (`BatchSim._length_rounding`,
+  `springs.spring_forces`).
 - `vox_i[b, v, :]` int: corner points (TL, TR, BR, BL), open sides (top, right, bottom, left),
   material, object id, row, col; `lists[b, i, 0]` surface voxels (robot first),
   `lists[b, i, 1]` rigid voxels, `lists[b, i, 2]` fixed points (corners of a simulated object's

@@ -33,7 +33,7 @@ class Scratch(NamedTuple):
     xlo: object
     e0: object
     # springs (ec), contiguous: their ends, stiffness, goal and rest lengths; per-edge outputs
-    leq: object  # current rest length (set at RK4 stage 0)
+    leq: object  # current rest length (set at RK4 stage 0); f32: edge_f's E_LEQ column (`layout`)
     ea: object
     eb: object
     ek: object

@@ -43,6 +43,10 @@ def spring_forces(n_pts, n_edges, s: ti.template(), first: ti.template()):
     length at stage 0), written as k ((dist - d0) + (d0 - goal) c) / dist, so that no length is
     subtracted from a nearly equal one: float32 would round each at ~4e-9 (at 0.1), and times
     k ~5e7 that is ~0.2 force units, against the ~0.03 a 1e-6 action change makes (k c 1e-7).
+    The stretch also leaves out s.leq, the rounding of the spring's initial length and rest length
+    (edge_f's E_LEQ column): a spring starts as strained as evogym's float64 placement makes it,
+    not as float32's rounding of it does (~4e-8 at 0.6, ~0.02 force units: enough to move points
+    that evogym holds still to the last bit off the terrain corners they touch).
     Stage 0 keeps its edge vector, length and stretch (d0 - goal) c in s.e0; a later stage's
     edge vector is that plus the difference of its ends' stage offsets s.xlo, and dist - d0 =
     (dist^2 - d0^2) / (dist + d0) is computed from those small differences."""
@@ -60,7 +64,7 @@ def spring_forces(n_pts, n_edges, s: ti.template(), first: ti.template()):
                 dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
                 dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
                 dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = (dist - s.egoal[e]) * C.REST_CONVERGENCE
+                stretch = ((dist - s.egoal[e]) - s.leq[e]) * C.REST_CONVERGENCE
                 s.e0[4 * e] = dx
                 s.e0[4 * e + 1] = dy
                 s.e0[4 * e + 2] = dist

@@ -15,6 +15,7 @@ from tsim.kernels.integrate import hold_fixed, rk4
 from tsim.kernels.layout import (
     E_GOAL,
     E_K,
+    E_LEQ,
     E_REST,
     I32_1,
     I32_2,
@@ -104,6 +105,8 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
                     total += actions[b, d1]
                     cnt = 2.0
                 egoal[e] = total * (erest[e] / cnt)
+            if ti.static(pairs()):  # f32: the rounding of the edge's initial length (`springs`)
+                leq[e] = edge_f[efo + N_EDGE_F * e + E_LEQ]
         ccx = ti.Vector([zf] * ec)
         ccy = ti.Vector([zf] * ec)
         box = ti.Vector([zf] * (4 * sc))
