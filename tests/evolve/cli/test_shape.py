@@ -58,14 +58,31 @@ def test_a_body_too_big_for_the_world_is_one_line_naming_the_key(tmp_path, capsy
 
 
 def test_a_10x10_run_starts_from_any_folder(tmp_path, monkeypatch):
+    """`sgr evolve --task Walker-v0 --shape 10x10` from a folder that is not the checkout takes the
+    packaged Walker-v0-10x10 config. The configs are a copy whose 10x10 file is the shipped one
+    with short episodes and a small final selection (the shipped 500-step episodes and 5 x 65
+    selection episodes at 10x10 took ~30 s of the suite to test the same lookup)."""
     import json
+    import shutil
 
     import yaml
 
+    import evolve.runs.config as run_config
+
+    configs = tmp_path / "configs"
+    shutil.copytree(configs_dir(), configs)
+    cfg_file = configs / "sgr" / "Walker-v0-10x10.yaml"
+    cfg = yaml.safe_load(cfg_file.read_text())
+    assert cfg["robot_shape"] == [10, 10] and cfg["final_selection"]  # the shipped file, as shipped
+    cfg.update(episode_steps=40, final_selection={**cfg["final_selection"], "candidates": 2,
+                                                  "episodes": 2, "confirm": 2})
+    cfg_file.write_text(yaml.safe_dump(cfg))
+    monkeypatch.setattr(run_config, "configs_dir", lambda: configs)  # the CLI imports it when called
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "r"
     assert main(["evolve", "--task", "Walker-v0", "--shape", "10x10", "--generations", "1", "--pop", "4",
                  "--workers", "1", "--quiet", "--out", str(out)]) == 0
-    assert yaml.safe_load((out / "config.yaml").read_text())["robot_shape"] == [10, 10]
+    run_cfg = yaml.safe_load((out / "config.yaml").read_text())
+    assert run_cfg["robot_shape"] == [10, 10] and run_cfg["episode_steps"] == 40  # that file's
     body = json.loads((out / "champion.json").read_text())["body"]
     assert len(body) == 10 and all(len(row) == 10 for row in body)
