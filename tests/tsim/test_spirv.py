@@ -37,8 +37,8 @@ def _run(task: str, bodies, steps: int, chunk: int | None, blow_up: int | None =
 
 
 @pytest.mark.parametrize("task, sweep, pair_list, chunk", [
-    ("Walker-v0", None, None, 1), ("Walker-v0", None, None, 7),
-    ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 1)])
+    ("Walker-v0", None, None, 1), ("Walker-v0", None, None, 7), ("Walker-v0", None, None, 0),
+    ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 1), ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 0)])
 def test_launches_of_a_few_substeps_give_the_bits_of_one_launch_per_step(task, sweep, pair_list,
                                                                          chunk):
     rng = np.random.default_rng(11)
@@ -50,7 +50,7 @@ def test_launches_of_a_few_substeps_give_the_bits_of_one_launch_per_step(task, s
     assert np.abs(ref.state[:, :, 0:2] - ref.initial_positions).max() > 0.05  # they moved
 
 
-@pytest.mark.parametrize("chunk", [1, 7])
+@pytest.mark.parametrize("chunk", [0, 1, 7])
 def test_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it(chunk):
     """A world with a point thrown far up turns unstable in a later substep of its env step
     (without `spirv.step`'s put-back the states differ); both launches leave it at the env step's
