@@ -55,7 +55,7 @@ from tsim.kernels.layout import (
     pairs,
     state_columns,
 )
-from tsim.kernels.scratch import Scratch, Terrain
+from tsim.kernels.scratch import N_PART_F, N_PART_I, Part, Scratch, Terrain
 from tsim.kernels.step import load_edges, load_points, move, store_world, terrain_top
 from tsim.runtime import PROFILE_SKIP, ti
 
@@ -96,14 +96,15 @@ def real_sizes(pc: int, ec: int, sc: int) -> dict[str, int]:
     sizes.update({k: lc for k in ("plo", "vlo", "pllo", "xlo")})
     sizes["e0"] = 4 * ec if pairs() else 1
     sizes.update({k: ec for k in ("leq", "ek", "egoal", "erest", "ccx", "ccy")})
-    sizes.update(box=4 * sc, refbox=4 * sc)
+    sizes.update(box=4 * sc, refbox=4 * sc, part_f=N_PART_F)
     return sizes
 
 
 def int_sizes(pc: int, ec: int, sc: int) -> dict[str, int]:
     """The i32 arrays of a world's scratch and their lengths, then the two slots (ST_*)."""
     return {"ea": ec, "eb": ec, "sv": 8 * sc, "sm": 4 * sc, "order": sc, "rank": sc, "cand": sc,
-            "nbr": LIST_PER_VOXEL * sc, "nstart": sc + 1, "sweep": 2, "plist": 1, "slots": 2}
+            "nbr": LIST_PER_VOXEL * sc, "nstart": sc + 1, "sweep": 2, "plist": 1, "part_i": N_PART_I,
+            "slots": 2}
 
 
 def scratch_lengths(pc: int, ec: int, sc: int) -> tuple[int, int]:
@@ -112,10 +113,13 @@ def scratch_lengths(pc: int, ec: int, sc: int) -> tuple[int, int]:
 
 
 class WorldScratch(NamedTuple):
-    """A world's scratch in the global arrays and its two slots (ST_STATUS, ST_COUNT)."""
+    """A world's scratch in the global arrays, its two slots (ST_STATUS, ST_COUNT) and those that
+    the pieces of a substep's contacts share (`scratch.Part`)."""
 
     s: Scratch
     slots: Slice
+    part_i: Slice
+    part_f: Slice
 
 
 def global_scratch(gf, gi, b, pc: int, ec: int, sc: int) -> WorldScratch:
@@ -127,8 +131,8 @@ def global_scratch(gf, gi, b, pc: int, ec: int, sc: int) -> WorldScratch:
         for name, n in sizes.items():
             out[name] = Slice(arr, b * per_world + off, n)
             off += n
-    slots = out.pop("slots")
-    return WorldScratch(Scratch(**out), slots)
+    slots, part_i, part_f = out.pop("slots"), out.pop("part_i"), out.pop("part_f")
+    return WorldScratch(Scratch(**out), slots, part_i, part_f)
 
 
 @ti.func
@@ -146,17 +150,19 @@ def laps(m):
 @ti.func
 def contacts_of(b, counts: ti.template(), s: ti.template(), slots: ti.template(),
                 ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
-                sweep_mode: ti.template(), pair_list: ti.template()):
-    """A running world's contacts of its substep (`step.step_world`'s first half of a substep):
-    the count into its slot, NONFINITE into its status when a coordinate is not finite."""
+                sweep_mode: ti.template(), pair_list: ti.template(), part: ti.template(), last):
+    """A running world's contacts of its substep (`step.step_world`'s first half of a substep),
+    all of them (part None) or one piece; after the `last` piece, the count into its slot,
+    NONFINITE into its status when a coordinate is not finite."""
     count = 0
     if ti.static("contacts" not in PROFILE_SKIP):
         ter_top = terrain_top(ter_f)
         ter = ti.static(Terrain(f=ter_f, i=ter_i, grid=ter_grid, top=ter_top))
-        count = contacts(b, counts[b, N_PTS], counts, s, ter, sweep_mode, pair_list)
-    slots[ST_COUNT] = count
-    if count < 0:
-        slots[ST_STATUS] = NONFINITE
+        count = contacts(b, counts[b, N_PTS], counts, s, ter, sweep_mode, pair_list, part)
+    if last:
+        slots[ST_COUNT] = count
+        if count < 0:
+            slots[ST_STATUS] = NONFINITE
 
 
 @ti.func
@@ -174,10 +180,11 @@ def phase_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
                  ter_grid: I32_2, n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(),
                  ec: ti.template(), sc: ti.template(), sweep_mode: ti.template(),
                  pair_list: ti.template(), block: ti.template(), n: ti.template(), gf: REAL_1,
-                 gi: I32_1, overrun: I32_1):
+                 gi: I32_1, piece: ti.i32, pieces: ti.i32, overrun: I32_1):
     """One part of an env step of every world (`kernels.step.step_kernel`'s arguments, then
     the batch tier n, the global scratch gf and gi, see `global_scratch`): BEGIN loads a running
-    world into its scratch; SUBSTEPS runs n_sub substeps; CONTACTS and MOVE the two halves of one;
+    world into its scratch; SUBSTEPS runs n_sub substeps; CONTACTS (piece `piece` of `pieces` of
+    them, `contacts.contacts`) and MOVE the two halves of one;
     END writes the state back (as `step.step_world` does at its end). overrun[b] = 1 where the
     driver's loop budget ran out (see the module docstring)."""
     ti.loop_config(block_dim=block)
@@ -205,12 +212,15 @@ def phase_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
             if ti.static(phase == SUBSTEPS):
                 for _ in range(n_sub):
                     if w.slots[ST_STATUS] == RUNNING:
-                        contacts_of(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode, pair_list)
+                        contacts_of(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode,
+                                    pair_list, None, True)
                         if w.slots[ST_STATUS] == RUNNING:
                             move_of(b, counts, vox_i, lists, s, w.slots)
             if ti.static(phase == CONTACTS):
                 if w.slots[ST_STATUS] == RUNNING:
-                    contacts_of(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode, pair_list)
+                    part = ti.static(Part(piece=piece, pieces=pieces, i=w.part_i, f=w.part_f))
+                    contacts_of(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode,
+                                pair_list, part, piece == pieces - 1)
             if ti.static(phase == MOVE):
                 if w.slots[ST_STATUS] == RUNNING:
                     move_of(b, counts, vox_i, lists, s, w.slots)
@@ -227,10 +237,12 @@ def phase_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
 class Launcher:
     """Env steps of one batch through `phase_kernel`: BEGIN, then the substeps in launches of
     `chunk` (all of them until the driver's loop budget runs out, then half as many, and so on,
-    remembered; 0: each substep in two launches, CONTACTS and MOVE), then END."""
+    remembered), then END. `chunk` 0: each substep in launches of its contacts, in `pieces`
+    pieces (doubled while a piece runs out), then MOVE."""
 
     def __init__(self, n_worlds: int):
         self.chunk: int | None = None  # substeps per launch; None: all of a step's; 0: halves
+        self.pieces = 1  # launches of a substep's contacts when chunk is 0
         self.overrun = np.zeros(n_worlds, dtype=np.int32)
         self._scratch: tuple | None = None  # the global scratch (gf, gi), made at the first step
 
@@ -239,13 +251,16 @@ class Launcher:
         the batch tier (args[N_SUB_ARG] substeps; counts and state are written in place)."""
         n_sub = args[N_SUB_ARG]
         gf, gi = self._scratch_for(args)
-        chunk = n_sub if self.chunk is None else self.chunk
-        while not self._run(args, gf, gi, min(chunk, n_sub)):
-            if chunk == 0:
-                raise SgrError("a world of this batch needs more loop iterations in one half of a "
+        chunk = n_sub if self.chunk is None else min(self.chunk, n_sub)
+        while not self._run(args, gf, gi, chunk):
+            if chunk > 0:
+                chunk //= 2
+            elif self.pieces < MAX_PIECES:
+                self.pieces *= 2
+            else:
+                raise SgrError("a world of this batch needs more loop iterations in one part of a "
                                "substep than this Vulkan driver runs in one shader (Mesa's lavapipe "
                                "stops every loop after 65,535); use SGR_ARCH=cpu, or a GPU's driver")
-            chunk = min(chunk, n_sub) // 2
         self.chunk = chunk
         self._launch(END, args, gf, gi, 1)
 
@@ -258,14 +273,16 @@ class Launcher:
             self._scratch = (ti.ndarray(real, n * nf), ti.ndarray(ti.i32, n * ni), (pc, ec, sc, n))
         return self._scratch[:2]
 
-    def _launch(self, phase: int, args: tuple, gf, gi, n_sub: int) -> bool:
+    def _launch(self, phase: int, args: tuple, gf, gi, n_sub: int, piece: int = 0,
+                pieces: int = 1) -> bool:
         """One launch of `phase`; False if the driver's loop budget ran out in it."""
-        phase_kernel(phase, *args[:N_SUB_ARG], n_sub, *args[N_SUB_ARG + 1:], gf, gi, self.overrun)
+        phase_kernel(phase, *args[:N_SUB_ARG], n_sub, *args[N_SUB_ARG + 1:], gf, gi, piece, pieces,
+                     self.overrun)
         return not self.overrun.any()
 
     def _run(self, args: tuple, gf, gi, chunk: int) -> bool:
-        """BEGIN, then the env step's substeps in launches of `chunk` (0: halves of one);
-        False at the first launch that overran."""
+        """BEGIN, then the env step's substeps in launches of `chunk` (0: each in launches of
+        its contacts' pieces, then the rest); False at the first launch that overran."""
         if not self._launch(BEGIN, args, gf, gi, 1):
             raise SgrError("a world of this batch is too large to load in one shader of this Vulkan "
                            "driver (Mesa's lavapipe stops every loop after 65,535 iterations); "
@@ -274,7 +291,10 @@ class Launcher:
         n_sub = args[N_SUB_ARG]
         while done < n_sub:
             if chunk == 0:
-                if not (self._launch(CONTACTS, args, gf, gi, 1) and self._launch(MOVE, args, gf, gi, 1)):
+                for piece in range(self.pieces):
+                    if not self._launch(CONTACTS, args, gf, gi, 1, piece, self.pieces):
+                        return False
+                if not self._launch(MOVE, args, gf, gi, 1):
                     return False
                 done += 1
             else:
@@ -287,3 +307,4 @@ class Launcher:
 
 N_SUB_ARG = 10  # the place of n_sub among the step kernels' arguments
 PC_ARG = 13  # the place of pc (then ec, sc)
+MAX_PIECES = 64  # most launches a substep's contacts are split into

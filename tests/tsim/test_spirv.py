@@ -20,10 +20,12 @@ from tsim.spirv import batch_tier
 
 
 def _run(task: str, bodies, steps: int, chunk: int | None, blow_up: int | None = None,
-         sweep: int | None = None, pair_list: int | None = None) -> BatchSim:
-    """chunk: substeps per launch of the SPIR-V launch, None: the CPU's kernel."""
+         sweep: int | None = None, pair_list: int | None = None, pieces: int = 1) -> BatchSim:
+    """chunk: substeps per launch of the SPIR-V launch (0: a substep's contacts in `pieces`
+    launches, then the rest in one), None: the CPU's kernel."""
     sim = BatchSim(task_world(task), bodies, task_spec(task).origin)
     sim.choose_kernel(serial=False, spirv_launch=chunk is not None, substeps_per_launch=chunk)
+    sim._spirv_launcher.pieces = pieces
     if sweep is not None:
         sim.sweep_mode = sweep
     if pair_list is not None:
@@ -36,29 +38,32 @@ def _run(task: str, bodies, steps: int, chunk: int | None, blow_up: int | None =
     return drive(sim, steps, throw)
 
 
-@pytest.mark.parametrize("task, sweep, pair_list, chunk", [
-    ("Walker-v0", None, None, 1), ("Walker-v0", None, None, 7), ("Walker-v0", None, None, 0),
-    ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 1), ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 0)])
+@pytest.mark.parametrize("task, sweep, pair_list, chunk, pieces", [
+    ("Walker-v0", None, None, 1, 1), ("Walker-v0", None, None, 7, 1), ("Walker-v0", None, None, 0, 1),
+    ("Walker-v0", None, None, 0, 3), ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 1, 1),
+    ("BeamToppler-v0", K.SWEEP_ALWAYS, K.LIST_ALWAYS, 0, 3)])
 def test_launches_of_a_few_substeps_give_the_bits_of_one_launch_per_step(task, sweep, pair_list,
-                                                                         chunk):
+                                                                         chunk, pieces):
+    """Launches of 1 or 7 substeps, or of a substep's contacts (in 1 or 3 pieces: voxels split
+    between launches) then the rest: with sweeps and pair lists, the bits of one launch."""
     rng = np.random.default_rng(11)
     bodies = [sample_robot((5, 5), rng) for _ in range(3)]
     ref = _run(task, bodies, 20, None, sweep=sweep, pair_list=pair_list)
-    sub = _run(task, bodies, 20, chunk, sweep=sweep, pair_list=pair_list)
+    sub = _run(task, bodies, 20, chunk, sweep=sweep, pair_list=pair_list, pieces=pieces)
     assert np.array_equal(sub.state, ref.state) and np.array_equal(sub.counts, ref.counts)
     assert np.array_equal(sub.time, ref.time)
     assert np.abs(ref.state[:, :, 0:2] - ref.initial_positions).max() > 0.05  # they moved
 
 
-@pytest.mark.parametrize("chunk", [0, 1, 7])
-def test_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it(chunk):
+@pytest.mark.parametrize("chunk, pieces", [(0, 2), (1, 1), (7, 1)])
+def test_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it(chunk, pieces):
     """A world with a point thrown far up turns unstable in a later substep of its env step
-    (without `spirv.step`'s put-back the states differ); both launches leave it at the env step's
+    (its status carried between launches in the global scratch); both launches leave it at the env step's
     start, at rest (pos_last = pos, vel_true = 0), while the others go on."""
     rng = np.random.default_rng(3)
     bodies = [sample_robot((5, 5), rng) for _ in range(3)]
     ref = _run("Walker-v0", bodies, 8, None, blow_up=1)
-    sub = _run("Walker-v0", bodies, 8, chunk, blow_up=1)
+    sub = _run("Walker-v0", bodies, 8, chunk, blow_up=1, pieces=pieces)
     assert ref.counts[1, K.STATUS] == K.UNSTABLE and ref.time.tolist() == [8, 3, 8]
     assert np.array_equal(sub.counts, ref.counts) and np.array_equal(sub.time, ref.time)
     assert np.array_equal(sub.state, ref.state)

@@ -64,3 +64,25 @@ class Terrain(NamedTuple):
     i: object
     grid: object
     top: object
+
+
+# a `Part`'s slots: i32 (what one piece of a substep's contacts hands the next, `contacts`)
+P_COUNT, P_N_LIST, P_FITS, P_FINITE = range(4)
+N_PART_I = 4
+P_WX, P_WY = range(2)  # real
+N_PART_F = 2
+
+
+class Part(NamedTuple):
+    """Piece `piece` of `pieces` of a substep's contacts (`contacts.contacts`, SPIR-V only), with
+    the slots `i` (i32, P_COUNT ...) and `f` (real, P_WX, P_WY) that the pieces share."""
+
+    piece: object
+    pieces: object
+    i: object
+    f: object
+
+
+def pieced(part: Part | None) -> bool:
+    """Whether `contacts` runs one piece (`part`) of a substep's contacts, not all (None)."""
+    return part is not None

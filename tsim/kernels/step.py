@@ -223,7 +223,7 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
             if status == RUNNING:
                 count = 0
                 if ti.static("contacts" not in PROFILE_SKIP):
-                    count = contacts(b, n_pts, counts, s, ter, sweep_mode, pair_list)
+                    count = contacts(b, n_pts, counts, s, ter, sweep_mode, pair_list, None)
                 if count < 0:
                     status = NONFINITE
                 else:
