@@ -7,7 +7,7 @@ length dispatches as many as it needs. The kernels here loop over a compile-time
 size rounded up, `batch_tier`) and skip the worlds past the batch. One kernel is compiled per
 batch tier.
 
-Why the scratch lives in global arrays here (`GlobalScratch`), not in local ones as on the CPU:
+Why the scratch lives in global arrays here (`global_scratch`), not in local ones as on the CPU:
 a SPIR-V driver keeps a shader's local arrays in registers or private memory, and Mesa's lavapipe
 compiles a dynamically indexed local array slowly: the step kernel with capacity tier 3's arrays
 (1,024 reals per point array) took 630 s of CPU to compile, tier 2's 162 s. As per-world slices
@@ -96,7 +96,7 @@ def real_sizes(pc: int, ec: int, sc: int) -> dict[str, int]:
     sizes.update({k: lc for k in ("plo", "vlo", "pllo", "xlo")})
     sizes["e0"] = 4 * ec if pairs() else 1
     sizes.update({k: ec for k in ("leq", "ek", "egoal", "erest", "ccx", "ccy")})
-    sizes.update(box=4 * sc, refbox=4 * sc, part_f=N_PART_F)
+    sizes.update(box=4 * sc, refbox=4 * sc, one=1, part_f=N_PART_F)
     return sizes
 
 
@@ -199,6 +199,7 @@ def phase_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
                     s.sweep[0] = -1
                     s.sweep[1] = 0
                     s.plist[0] = 0
+                    s.one[0] = 1.0
                     for i in range(counts[b, N_SURF]):
                         s.order[i] = i
                     if ti.static(pairs()):  # the local arrays start at zero (step_world)

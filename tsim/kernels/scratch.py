@@ -55,6 +55,9 @@ class Scratch(NamedTuple):
     nstart: object
     refbox: object
     plist: object
+    # None in local scratch (the CPU); in the SPIR-V global scratch one real holding 1.0, read at
+    # run time by f32's two-sum (`pairs.renormalize` says why)
+    one: object
 
 
 class Terrain(NamedTuple):

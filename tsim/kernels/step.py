@@ -118,7 +118,7 @@ def move(b, n_pts, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
         constraints(b, n_edges, counts, vox_i, lists, s)
     for i in range(2 * n_pts):
         if ti.static(pairs()):
-            renormalize(s.pos, s.plo, i)
+            renormalize(s.pos, s.plo, i, s.one)
             s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
             s.pllo[i] = s.plo[i]
         else:
@@ -214,7 +214,8 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
                               adx=adx, adv=adv, plo=plo, vlo=vlo, pllo=pllo, xlo=xlo, e0=e0,
                               leq=leq, ea=ea, eb=eb, ek=ek, egoal=egoal, erest=erest, ccx=ccx, ccy=ccy,
                               box=box, sv=sv, sm=sm, order=order, rank=rank, cand=cand,
-                              sweep=sweep, nbr=nbr, nstart=nstart, refbox=refbox, plist=plist))
+                              sweep=sweep, nbr=nbr, nstart=nstart, refbox=refbox, plist=plist,
+                              one=None))
         load_points(b, n_pts, so, counts, state, vox_i, lists, s)
         ter_top = terrain_top(ter_f)
         ter = ti.static(Terrain(f=ter_f, i=ter_i, grid=ter_grid, top=ter_top))
