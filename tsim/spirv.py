@@ -24,9 +24,15 @@ iterations a substep without contacts and more with them; BridgeWalker-v0's brid
 object of ~200 surface voxels) more than 65,535 in one substep. So every kernel here ends with a
 sentinel loop that such a driver cuts short once the budget is spent, and flags the world; the
 launcher then starts the env step again from its state (which only the last launch writes) in
-launches of half as many substeps, down to one substep, then one stage (contacts; the rest) per
-launch (a GPU's driver has no such bound: one launch of all substeps per step). Every split gives
-the bits of one launch (tests/tsim/test_spirv.py, run on the CPU backend).
+launches of half as many substeps, down to one substep, then one half of a substep (its contacts,
+in pieces if need be; the rest) per launch (a GPU's driver has no such bound: one launch of all
+substeps per step). Every split gives the bits of one launch (tests/tsim/test_spirv.py, run on
+the CPU backend).
+
+Why two more differences from the CPU's code, both SPIR-V only and decided at compile time: f32's
+two-sum reads a 1.0 from the global scratch (`Scratch.one`; lavapipe's compiler otherwise turns
+(a + b) - a into b, `pairs.renormalize`), and `tanh` is tsim/portable.py's formula in f32 too
+(SPIR-V's f32 `Tanh` on lavapipe is 19 % off at 1e-7).
 """
 
 from typing import NamedTuple
@@ -248,8 +254,8 @@ class Launcher:
         self._scratch: tuple | None = None  # the global scratch (gf, gi), made at the first step
 
     def step(self, args: tuple) -> None:
-        """One env step with `step_kernel_sized`'s arguments: `kernels.step.step_kernel`'s, then
-        the batch tier (args[N_SUB_ARG] substeps; counts and state are written in place)."""
+        """One env step: args are `kernels.step.step_kernel`'s arguments, then the batch tier
+        (args[N_SUB_ARG] substeps; counts and state, numpy arrays, are written in place)."""
         n_sub = args[N_SUB_ARG]
         gf, gi = self._scratch_for(args)
         chunk = n_sub if self.chunk is None else min(self.chunk, n_sub)

@@ -94,9 +94,10 @@ print(ref.state.dtype, ref.state.shape[-1], int(ref.counts[1, K.STATUS] == K.UNS
 
 
 def test_in_f32_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it_low_parts_too():
-    """f32's state has more columns (the pairs' low parts, tsim/kernels/pairs.py): the put-back
-    restores them too, so launches of one substep leave the unstable world bit for bit where one
-    launch does (run in f32 in a subprocess; this process is f64)."""
+    """f32's state has more columns (the pairs' low parts, tsim/kernels/pairs.py), and its two-sum
+    reads the global scratch's 1.0 in the SPIR-V launch: launches of one substep leave the unstable
+    world, low parts too, bit for bit where one launch does (run in f32 in a subprocess; this
+    process is f64)."""
     env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
     out = subprocess.run([sys.executable, "-c", F32_STOP], env={**env, "SGR_PRECISION": "f32"},
                          cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True,

@@ -116,7 +116,7 @@ ti = runtime.ti
 def k(n: ti.i32, m: ti.i32, out: ti.types.ndarray(dtype=ti.i32, ndim=1)):
     for b in range(1):
         out[0] = laps(n)
-        out[1] = laps(m)  # as in step_kernel_sized: a runtime length (a constant one is unrolled)
+        out[1] = laps(m)  # as in spirv.phase_kernel: a runtime length (a constant one is unrolled)
 
 res = {}
 for n in (1000, 70000):
