@@ -1,7 +1,8 @@
-"""The SPIR-V backends' launch (tsim/spirv.py: an env step in several launches where the driver
-bounds a shader's loop iterations, as lavapipe does) gives the numbers of one launch of all
-substeps. Run here on the CPU backend, where both launches are plain Taichi kernels: bit for bit,
-including worlds that stop mid-step and the pair lists and sweeps rebuilt at every launch."""
+"""The SPIR-V backends' launch (tsim/spirv.py: the scratch in global arrays, an env step in
+several launches where the driver bounds a shader's loop iterations, as lavapipe does) gives the
+numbers of one launch of all substeps. Run here on the CPU backend, where both are plain Taichi
+kernels: bit for bit, with sweeps and pair lists kept between launches, a substep's contacts in
+pieces, and worlds that stop mid-step."""
 
 import os
 import subprocess
