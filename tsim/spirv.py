@@ -259,10 +259,10 @@ class Launcher:
         n_sub = args[N_SUB_ARG]
         gf, gi = self._scratch_for(args)
         chunk = n_sub if self.chunk is None else min(self.chunk, n_sub)
-        while not self._run(args, gf, gi, chunk):
+        while (overran := self._run(args, gf, gi, chunk)) is not None:
             if chunk > 0:
                 chunk //= 2
-            elif self.pieces < MAX_PIECES:
+            elif overran == CONTACTS and self.pieces < MAX_PIECES:
                 self.pieces *= 2
             else:
                 raise SgrError("a world of this batch needs more loop iterations in one part of a "
@@ -287,9 +287,10 @@ class Launcher:
                      self.overrun)
         return not self.overrun.any()
 
-    def _run(self, args: tuple, gf, gi, chunk: int) -> bool:
+    def _run(self, args: tuple, gf, gi, chunk: int) -> int | None:
         """BEGIN, then the env step's substeps in launches of `chunk` (0: each in launches of
-        its contacts' pieces, then the rest); False at the first launch that overran."""
+        its contacts' pieces, then the rest); the phase of the first launch that overran, or
+        None."""
         if not self._launch(BEGIN, args, gf, gi, 1):
             raise SgrError("a world of this batch is too large to load in one shader of this Vulkan "
                            "driver (Mesa's lavapipe stops every loop after 65,535 iterations); "
@@ -300,16 +301,16 @@ class Launcher:
             if chunk == 0:
                 for piece in range(self.pieces):
                     if not self._launch(CONTACTS, args, gf, gi, 1, piece, self.pieces):
-                        return False
+                        return CONTACTS
                 if not self._launch(MOVE, args, gf, gi, 1):
-                    return False
+                    return MOVE
                 done += 1
             else:
                 k = min(chunk, n_sub - done)
                 if not self._launch(SUBSTEPS, args, gf, gi, k):
-                    return False
+                    return SUBSTEPS
                 done += k
-        return True
+        return None
 
 
 N_SUB_ARG = 10  # the place of n_sub among the step kernels' arguments

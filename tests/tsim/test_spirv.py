@@ -15,6 +15,8 @@ import pytest
 from tasks.specs import task_spec, task_world
 from tests.tsim.conftest import drive
 from tsim import kernels as K
+from tsim import spirv
+from tsim.errors import SgrError
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
 from tsim.spirv import batch_tier
@@ -118,3 +120,42 @@ def test_with_no_loop_bound_a_step_is_one_launch():
 
 def test_batch_tier_is_the_block_doubled_until_the_batch_fits():
     assert [batch_tier(n) for n in (1, 64, 65, 200)] == [64, 64, 128, 256]
+
+
+def _overrunning(sim: BatchSim, monkeypatch, overruns) -> None:
+    """Make the launcher see the driver's loop budget run out where `overruns(phase, n_sub,
+    pieces)` says (the CPU has no budget: simulated around the real launches)."""
+    launcher = sim._spirv_launcher
+    real = launcher._launch
+
+    def launch(phase, args, gf, gi, n_sub, piece=0, pieces=1):
+        return real(phase, args, gf, gi, n_sub, piece, pieces) and not overruns(phase, n_sub, pieces)
+
+    monkeypatch.setattr(launcher, "_launch", launch)
+
+
+def test_the_launcher_halves_then_splits_contacts_until_launches_fit(monkeypatch):
+    """Launches of more than one substep and contacts in fewer than 4 pieces overrun: the step
+    ends as halves with 4 pieces, remembered, and with one launch's bits."""
+    rng = np.random.default_rng(5)
+    bodies = [sample_robot((5, 5), rng) for _ in range(2)]
+    ref = _run("Walker-v0", bodies, 3, None)
+    sim = BatchSim(task_world("Walker-v0"), bodies, task_spec("Walker-v0").origin)
+    sim.choose_kernel(serial=False, spirv_launch=True)
+    _overrunning(sim, monkeypatch, lambda phase, n_sub, pieces: (
+        (phase == spirv.SUBSTEPS and n_sub > 0) or (phase == spirv.CONTACTS and pieces < 4)))
+    drive(sim, 3)
+    assert sim._spirv_launcher.chunk == 0 and sim._spirv_launcher.pieces == 4
+    assert np.array_equal(sim.state, ref.state) and np.array_equal(sim.counts, ref.counts)
+
+
+def test_a_world_whose_half_substep_overruns_stops_with_one_error_at_once(monkeypatch):
+    """Where a substep's integration and constraints alone overrun (MOVE cannot be split), the
+    launcher raises its one-line error without trying more pieces of the contacts."""
+    rng = np.random.default_rng(5)
+    sim = BatchSim(task_world("Walker-v0"), [sample_robot((5, 5), rng)], task_spec("Walker-v0").origin)
+    sim.choose_kernel(serial=False, spirv_launch=True, substeps_per_launch=0)
+    _overrunning(sim, monkeypatch, lambda phase, n_sub, pieces: phase == spirv.MOVE)
+    with pytest.raises(SgrError, match="more loop iterations in one part of a substep"):
+        sim.step()
+    assert sim._spirv_launcher.pieces == 1
