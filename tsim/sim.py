@@ -343,8 +343,7 @@ class BatchSim:
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
             if self._spirv:  # maybe several launches per step (see tsim/spirv.py)
-                self._spirv_launcher.step((*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds)),
-                                          self.counts, self.state)
+                self._spirv_launcher.step((*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds)))
                 self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
                 continue
             if self._serial:

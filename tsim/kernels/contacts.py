@@ -23,12 +23,13 @@ from tsim.kernels.broadphase import (
 )
 from tsim.kernels.layout import N_SURF, N_SURF_ROBOT
 from tsim.kernels.narrowphase import load_quad, resolve
+from tsim.kernels.scratch import P_COUNT, P_FINITE, P_FITS, P_N_LIST, P_WX, P_WY, pieced
 from tsim.runtime import PROFILE_SKIP, ti
 
 
 @ti.func
 def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template(),
-             sweep_mode: ti.template(), pair_list: ti.template()):
+             sweep_mode: ti.template(), pair_list: ti.template(), part: ti.template()):
     """Recompute the surface voxels' boxes and the contact forces (into s.fcol); return evogym's
     robot self-collision count (-1 when a coordinate is not finite). Surface voxel i has corners
     s.sv[8i:8i+4], open sides s.sv[8i+4:8i+8] and object, row, col s.sm[4i:4i+3]. Pairs of surface
@@ -36,16 +37,32 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
     by the plain loop or by sweep and prune along x or y as `sweep_mode` says, or from the pair
     list (see `broadphase.SKIN`) while it holds: s.plist[0] = 1 when s.nbr[s.nstart[i]:
     s.nstart[i + 1]] lists voxel i's partners j > i within SKIN of its box when the boxes were
-    s.refbox. `ter`: a `scratch.Terrain`."""
+    s.refbox. `ter`: a `scratch.Terrain`.
+
+    `part`: None, all of it (the CPU's kernels); or a `scratch.Part`: the surface voxels i of
+    piece part.piece of part.pieces (SPIR-V, tsim/spirv.py: a driver that bounds a shader's loops
+    may need a substep's contacts in several launches), in the order of one call, with what one
+    piece hands the next (its count, the list's length, the boxes' widths) in part's slots; the
+    boxes are made and the sweep decided in the first piece, the list closed in the last."""
     grid_slack = ti.static(L.tol().grid_slack)
     n_surf = counts[b, N_SURF]
     n_surf_robot = counts[b, N_SURF_ROBOT]
-    for i in range(2 * n_pts):
-        s.fcol[i] = 0.0
+    i0 = 0
+    i1 = n_surf
+    first = True
+    last = True
+    if ti.static(pieced(part)):
+        i0 = n_surf * part.piece // part.pieces
+        i1 = n_surf * (part.piece + 1) // part.pieces
+        first = part.piece == 0
+        last = part.piece == part.pieces - 1
+    if first:
+        for i in range(2 * n_pts):
+            s.fcol[i] = 0.0
     finite = True
     wx = 0.0  # the widest box along x and along y
     wy = 0.0
-    for i in range(n_surf):
+    for i in range(n_surf if first else 0):
         p0 = s.sv[8 * i]
         x0 = s.pos[2 * p0]
         y0 = s.pos[2 * p0 + 1]
@@ -69,6 +86,16 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                 and ti.abs(y1) < 1e30):
             finite = False
     count = 0
+    if ti.static(pieced(part)):
+        if first:
+            part.i[P_FINITE] = 1 if finite else 0
+            part.f[P_WX] = wx
+            part.f[P_WY] = wy
+        else:
+            finite = part.i[P_FINITE] == 1
+            wx = part.f[P_WX]
+            wy = part.f[P_WY]
+            count = part.i[P_COUNT]
     if finite:
         qf = ti.Matrix.zero(float, 8, 4)
         qi = ti.Matrix.zero(ti.i32, 8, 2)
@@ -85,16 +112,21 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
         if ti.static(sweep_mode != SWEEP_OFF):
             # s.sweep[0]: -1 undecided (the env step's first substep), 0 plain loop, 1 sweep along
             # axis s.sweep[1]
-            if n_surf < SWEEP_MIN and ti.static(sweep_mode == SWEEP_AUTO):
-                s.sweep[0] = 0
-            if s.sweep[0] < 0:
-                choose_sweep(n_surf, wx, wy, s.box, s.order, s.rank, s.sweep,
-                              ti.static(sweep_mode == SWEEP_ALWAYS))
-            elif s.sweep[0] == 1 and not use_list:
-                sort_along(n_surf, s.box, s.order, s.rank, s.sweep[1])
+            if first:
+                if n_surf < SWEEP_MIN and ti.static(sweep_mode == SWEEP_AUTO):
+                    s.sweep[0] = 0
+                if s.sweep[0] < 0:
+                    choose_sweep(n_surf, wx, wy, s.box, s.order, s.rank, s.sweep,
+                                  ti.static(sweep_mode == SWEEP_ALWAYS))
+                elif s.sweep[0] == 1 and not use_list:
+                    sort_along(n_surf, s.box, s.order, s.rank, s.sweep[1])
         n_list = 0  # building the list: its length, and whether it fits
         fits = True
-        for i in range(n_surf):
+        if ti.static(pieced(part)):
+            if not first:
+                n_list = part.i[P_N_LIST]
+                fits = part.i[P_FITS] == 1
+        for i in range(i0, i1):
             loaded = False
             # f32 (`L.pairs`): the quads are loaded relative to voxel i's first corner, from the
             # positions' pairs, so that the contact tests see the pairs' differences, not
@@ -191,8 +223,12 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                                     qi[4 + k, 1] = ter.i[t, k]
                                 for d in range(2):
                                     resolve(s.fcol, qf, qi, d, 1 - d, 1.0)
+        if ti.static(pieced(part)):
+            part.i[P_COUNT] = count
+            part.i[P_N_LIST] = n_list
+            part.i[P_FITS] = 1 if fits else 0
         if ti.static("pairs" not in PROFILE_SKIP and pair_list != LIST_OFF):
-            if not use_list:
+            if not use_list and last:
                 s.nstart[n_surf] = n_list
                 s.plist[0] = 1 if fits and listing else 0
                 for k in range(4 * n_surf):

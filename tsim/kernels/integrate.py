@@ -85,7 +85,7 @@ def rk4(n_pts, n_edges, s: ti.template()):
         if ti.static(pairs()):
             s.plo[i] += s.adx[i] / 6
             s.vlo[i] += s.adv[i] / 6
-            renormalize(s.vel, s.vlo, i)
+            renormalize(s.vel, s.vlo, i, s.one)
         else:
             s.pos[i] += s.adx[i] / 6
             s.vel[i] += s.adv[i] / 6

@@ -15,13 +15,29 @@ without reassociation, which `runtime.init` asks for (fast_math off).
 from tsim.runtime import ti
 
 
+def given(x: object) -> bool:
+    """Whether an optional compile-time argument was given (Taichi's scope has no `is None`)."""
+    return x is not None
+
+
 @ti.func
-def renormalize(hi: ti.template(), lo: ti.template(), i):
+def renormalize(hi: ti.template(), lo: ti.template(), i, one: ti.template()):
     """(hi[i], lo[i]) <- the same sum with hi[i] its float32 rounding, lo[i] the exact rest
-    (Knuth's two-sum: exact whichever part is larger)."""
+    (Knuth's two-sum: exact whichever part is larger).
+
+    `one`: None on the CPU; on SPIR-V an array whose one[0] holds 1.0, read at run time. A Vulkan
+    driver may simplify float arithmetic as if it were exact (SPIR-V's operations are not exact
+    unless decorated, and Taichi does not decorate them): lavapipe turns (a + b) - a into b, so
+    the two-sum's rest came out 0 and f32 on Vulkan ran without its pairs (measured; tests/tsim/
+    test_vulkan.py). Multiplying by a 1.0 that the compiler cannot see changes no value and hides
+    the sum from such rewrites."""
     a = hi[i]
     b = lo[i]
     s = a + b
+    if ti.static(given(one)):
+        s = s * one[0]
     bb = s - a
+    if ti.static(given(one)):
+        bb = bb * one[0]
     lo[i] = (a - (s - bb)) + (b - bb)
     hi[i] = s

@@ -55,6 +55,9 @@ class Scratch(NamedTuple):
     nstart: object
     refbox: object
     plist: object
+    # None in local scratch (the CPU); in the SPIR-V global scratch one real holding 1.0, read at
+    # run time by f32's two-sum (`pairs.renormalize` says why)
+    one: object
 
 
 class Terrain(NamedTuple):
@@ -64,3 +67,25 @@ class Terrain(NamedTuple):
     i: object
     grid: object
     top: object
+
+
+# a `Part`'s slots: i32 (what one piece of a substep's contacts hands the next, `contacts`)
+P_COUNT, P_N_LIST, P_FITS, P_FINITE = range(4)
+N_PART_I = 4
+P_WX, P_WY = range(2)  # real
+N_PART_F = 2
+
+
+class Part(NamedTuple):
+    """Piece `piece` of `pieces` of a substep's contacts (`contacts.contacts`, SPIR-V only), with
+    the slots `i` (i32, P_COUNT ...) and `f` (real, P_WX, P_WY) that the pieces share."""
+
+    piece: object
+    pieces: object
+    i: object
+    f: object
+
+
+def pieced(part: Part | None) -> bool:
+    """Whether `contacts` runs one piece (`part`) of a substep's contacts, not all (None)."""
+    return part is not None

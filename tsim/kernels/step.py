@@ -48,6 +48,119 @@ from tsim.runtime import PROFILE_SKIP, ti
 
 
 @ti.func
+def load_edges(b, n_edges, eio, efo, edge_i: ti.template(), edge_f: ti.template(),
+               actions: ti.template(), ea: ti.template(), eb: ti.template(), ek: ti.template(),
+               egoal: ti.template(), erest: ti.template(), leq: ti.template()):
+    """World b's n_edges springs (from eio in edge_i, efo in edge_f) into its scratch at the start
+    of an env step: ends, stiffness, rest lengths and goals (from the actions); in f32, leq gets
+    the rounding of each spring's initial length (edge_f's E_LEQ column, `springs`)."""
+    for e in range(n_edges):
+        ea[e] = edge_i[eio + 4 * e]
+        eb[e] = edge_i[eio + 4 * e + 1]
+        ek[e] = edge_f[efo + N_EDGE_F * e + E_K]
+        erest[e] = edge_f[efo + N_EDGE_F * e + E_REST]
+        egoal[e] = edge_f[efo + N_EDGE_F * e + E_GOAL]  # the rest length, unless driven:
+        d0 = edge_i[eio + 4 * e + 2]
+        if d0 >= 0:  # the mean of its actuators' targets times its rest length
+            d1 = edge_i[eio + 4 * e + 3]
+            total = actions[b, d0]
+            cnt = 1.0
+            if d1 >= 0:
+                total += actions[b, d1]
+                cnt = 2.0
+            egoal[e] = total * (erest[e] / cnt)
+        if ti.static(pairs()):  # f32: the rounding of the edge's initial length (`springs`)
+            leq[e] = edge_f[efo + N_EDGE_F * e + E_LEQ]
+
+
+@ti.func
+def load_points(b, n_pts, so, counts: ti.template(), state: ti.template(), vox_i: ti.template(),
+                lists: ti.template(), s: ti.template()):
+    """World b's surface voxels and n_pts points (from so in state) into its scratch s at the
+    start of an env step."""
+    ns = ti.static(state_columns())
+    for i in range(counts[b, N_SURF]):
+        v = lists[b, i, 0]
+        for k in ti.static(range(4)):
+            s.sv[8 * i + k] = vox_i[b, v, V_PTS + k]
+            s.sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
+        s.sm[4 * i] = vox_i[b, v, V_OBJ]
+        s.sm[4 * i + 1] = vox_i[b, v, V_ROW]
+        s.sm[4 * i + 2] = vox_i[b, v, V_COL]
+    for p in range(n_pts):
+        for d in ti.static(range(2)):
+            s.pos[2 * p + d] = state[so + ns * p + d]
+            s.vel[2 * p + d] = state[so + ns * p + 2 + d]
+            s.pl[2 * p + d] = state[so + ns * p + 4 + d]
+            s.vt[2 * p + d] = state[so + ns * p + 6 + d]
+            if ti.static(pairs()):
+                # the low parts hold only for the positions they were stored with: a state
+                # written from outside (reset, evogym's revert) starts with none
+                if state[so + ns * p + S_LO_OF + d] == s.pos[2 * p + d]:
+                    s.plo[2 * p + d] = state[so + ns * p + S_POS_LO + d]
+                    s.vlo[2 * p + d] = state[so + ns * p + S_VEL_LO + d]
+                if s.pl[2 * p + d] == s.pos[2 * p + d]:
+                    s.pllo[2 * p + d] = s.plo[2 * p + d]
+
+
+@ti.func
+def terrain_top(ter_f: ti.template()):
+    """The highest top of a terrain voxel's box."""
+    ter_top = ter_f[0, 11]
+    for t in range(1, ter_f.shape[0]):
+        ter_top = ti.max(ter_top, ter_f[t, 11])
+    return ter_top
+
+
+@ti.func
+def move(b, n_pts, n_edges, counts: ti.template(), vox_i: ti.template(), lists: ti.template(),
+         s: ti.template()):
+    """A substep after its contacts: integration, fixed points, constraints, the new snapshot."""
+    rk4(n_pts, n_edges, s)
+    hold_fixed(b, counts, lists, s)
+    if ti.static("constraints" not in PROFILE_SKIP):
+        constraints(b, n_edges, counts, vox_i, lists, s)
+    for i in range(2 * n_pts):
+        if ti.static(pairs()):
+            renormalize(s.pos, s.plo, i, s.one)
+            s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
+            s.pllo[i] = s.plo[i]
+        else:
+            s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
+        s.pl[i] = s.pos[i]
+
+
+@ti.func
+def store_world(b, n_pts, so, counts: ti.template(), state: ti.template(), status,
+                s: ti.template()):
+    """The end of world b's env step: its scratch back into the state (n_pts points from so) if
+    it is still running and finite, else its last snapshot kept and its status set."""
+    ns = ti.static(state_columns())
+    if status == RUNNING:
+        for i in range(2 * n_pts):
+            if not (ti.abs(s.pos[i]) < 1e30 and ti.abs(s.vel[i]) < 1e30):
+                status = NONFINITE
+    if status == RUNNING:
+        for p in range(n_pts):
+            for d in ti.static(range(2)):
+                state[so + ns * p + d] = s.pos[2 * p + d]
+                state[so + ns * p + 2 + d] = s.vel[2 * p + d]
+                state[so + ns * p + 4 + d] = s.pl[2 * p + d]
+                state[so + ns * p + 6 + d] = s.vt[2 * p + d]
+                if ti.static(pairs()):
+                    state[so + ns * p + S_POS_LO + d] = s.plo[2 * p + d]
+                    state[so + ns * p + S_VEL_LO + d] = s.vlo[2 * p + d]
+                    state[so + ns * p + S_LO_OF + d] = s.pos[2 * p + d]
+    else:
+        # evogym keeps the last snapshot: the step never happened for observers
+        for p in range(n_pts):
+            for d in ti.static(range(2)):
+                state[so + ns * p + 4 + d] = state[so + ns * p + d]
+                state[so + ns * p + 6 + d] = 0.0
+        counts[b, STATUS] = status
+
+
+@ti.func
 def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.template(),
                edge_f: ti.template(), vox_i: ti.template(), lists: ti.template(),
                actions: ti.template(), ter_f: ti.template(), ter_i: ti.template(),
@@ -90,23 +203,7 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
         ek = ti.Vector([zf] * ec)
         egoal = ti.Vector([zf] * ec)
         erest = ti.Vector([zf] * ec)
-        for e in range(n_edges):
-            ea[e] = edge_i[eio + 4 * e]
-            eb[e] = edge_i[eio + 4 * e + 1]
-            ek[e] = edge_f[efo + N_EDGE_F * e + E_K]
-            erest[e] = edge_f[efo + N_EDGE_F * e + E_REST]
-            egoal[e] = edge_f[efo + N_EDGE_F * e + E_GOAL]  # the rest length, unless driven:
-            d0 = edge_i[eio + 4 * e + 2]
-            if d0 >= 0:  # the mean of its actuators' targets times its rest length
-                d1 = edge_i[eio + 4 * e + 3]
-                total = actions[b, d0]
-                cnt = 1.0
-                if d1 >= 0:
-                    total += actions[b, d1]
-                    cnt = 2.0
-                egoal[e] = total * (erest[e] / cnt)
-            if ti.static(pairs()):  # f32: the rounding of the edge's initial length (`springs`)
-                leq[e] = edge_f[efo + N_EDGE_F * e + E_LEQ]
+        load_edges(b, n_edges, eio, efo, edge_i, edge_f, actions, ea, eb, ek, egoal, erest, leq)
         ccx = ti.Vector([zf] * ec)
         ccy = ti.Vector([zf] * ec)
         box = ti.Vector([zf] * (4 * sc))
@@ -126,78 +223,24 @@ def step_world(b, counts: ti.template(), state: ti.template(), edge_i: ti.templa
                               adx=adx, adv=adv, plo=plo, vlo=vlo, pllo=pllo, xlo=xlo, e0=e0,
                               leq=leq, ea=ea, eb=eb, ek=ek, egoal=egoal, erest=erest, ccx=ccx, ccy=ccy,
                               box=box, sv=sv, sm=sm, order=order, rank=rank, cand=cand,
-                              sweep=sweep, nbr=nbr, nstart=nstart, refbox=refbox, plist=plist))
-        for i in range(counts[b, N_SURF]):
-            v = lists[b, i, 0]
-            for k in ti.static(range(4)):
-                s.sv[8 * i + k] = vox_i[b, v, V_PTS + k]
-                s.sv[8 * i + 4 + k] = vox_i[b, v, V_OPEN + k]
-            s.sm[4 * i] = vox_i[b, v, V_OBJ]
-            s.sm[4 * i + 1] = vox_i[b, v, V_ROW]
-            s.sm[4 * i + 2] = vox_i[b, v, V_COL]
-        for p in range(n_pts):
-            for d in ti.static(range(2)):
-                s.pos[2 * p + d] = state[so + ns * p + d]
-                s.vel[2 * p + d] = state[so + ns * p + 2 + d]
-                s.pl[2 * p + d] = state[so + ns * p + 4 + d]
-                s.vt[2 * p + d] = state[so + ns * p + 6 + d]
-                if ti.static(pairs()):
-                    # the low parts hold only for the positions they were stored with: a state
-                    # written from outside (reset, evogym's revert) starts with none
-                    if state[so + ns * p + S_LO_OF + d] == s.pos[2 * p + d]:
-                        s.plo[2 * p + d] = state[so + ns * p + S_POS_LO + d]
-                        s.vlo[2 * p + d] = state[so + ns * p + S_VEL_LO + d]
-                    if s.pl[2 * p + d] == s.pos[2 * p + d]:
-                        s.pllo[2 * p + d] = s.plo[2 * p + d]
-        ter_top = ter_f[0, 11]  # the highest top of a terrain voxel's box
-        for t in range(1, ter_f.shape[0]):
-            ter_top = ti.max(ter_top, ter_f[t, 11])
+                              sweep=sweep, nbr=nbr, nstart=nstart, refbox=refbox, plist=plist,
+                              one=None))
+        load_points(b, n_pts, so, counts, state, vox_i, lists, s)
+        ter_top = terrain_top(ter_f)
         ter = ti.static(Terrain(f=ter_f, i=ter_i, grid=ter_grid, top=ter_top))
         status = RUNNING
         for _ in range(n_sub):
             if status == RUNNING:
                 count = 0
                 if ti.static("contacts" not in PROFILE_SKIP):
-                    count = contacts(b, n_pts, counts, s, ter, sweep_mode, pair_list)
+                    count = contacts(b, n_pts, counts, s, ter, sweep_mode, pair_list, None)
                 if count < 0:
                     status = NONFINITE
                 else:
-                    rk4(n_pts, n_edges, s)
-                    hold_fixed(b, counts, lists, s)
-                    if ti.static("constraints" not in PROFILE_SKIP):
-                        constraints(b, n_edges, counts, vox_i, lists, s)
-                    for i in range(2 * n_pts):
-                        if ti.static(pairs()):
-                            renormalize(s.pos, s.plo, i)
-                            s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
-                            s.pllo[i] = s.plo[i]
-                        else:
-                            s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
-                        s.pl[i] = s.pos[i]
+                    move(b, n_pts, n_edges, counts, vox_i, lists, s)
                     if count > counts[b, N_SURF_ROBOT]:
                         status = UNSTABLE
-        if status == RUNNING:
-            for i in range(2 * n_pts):
-                if not (ti.abs(s.pos[i]) < 1e30 and ti.abs(s.vel[i]) < 1e30):
-                    status = NONFINITE
-        if status == RUNNING:
-            for p in range(n_pts):
-                for d in ti.static(range(2)):
-                    state[so + ns * p + d] = s.pos[2 * p + d]
-                    state[so + ns * p + 2 + d] = s.vel[2 * p + d]
-                    state[so + ns * p + 4 + d] = s.pl[2 * p + d]
-                    state[so + ns * p + 6 + d] = s.vt[2 * p + d]
-                    if ti.static(pairs()):
-                        state[so + ns * p + S_POS_LO + d] = s.plo[2 * p + d]
-                        state[so + ns * p + S_VEL_LO + d] = s.vlo[2 * p + d]
-                        state[so + ns * p + S_LO_OF + d] = s.pos[2 * p + d]
-        else:
-            # evogym keeps the last snapshot: the step never happened for observers
-            for p in range(n_pts):
-                for d in ti.static(range(2)):
-                    state[so + ns * p + 4 + d] = state[so + ns * p + d]
-                    state[so + ns * p + 6 + d] = 0.0
-            counts[b, STATUS] = status
+        store_world(b, n_pts, so, counts, state, status, s)
 
 
 @ti.kernel
