@@ -119,12 +119,25 @@ def marks_of(path: str, name: str) -> set[str]:
     return found | ({"slow"} if found & set(STARTS_PROGRAMS) else set())
 
 
+def xdist_group(rel: str, marks: set[str]) -> str:
+    """The group of tests one pytest-xdist worker runs in order (`--dist loadgroup`, pyproject's
+    addopts): a test file's tests together (they share module fixtures and some run in order),
+    and every test that starts Ray in one group, since stopping a Ray instance stops the
+    machine's others (a test's actors died beside another file's in a two-worker trial)."""
+    return "ray" if "ray" in marks else rel
+
+
 def pytest_collection_modifyitems(config, items) -> None:
-    """Apply MARKS (a file's own `pytest.mark.slow` etc. count as well)."""
+    """Apply MARKS (a file's own `pytest.mark.slow` etc. count as well), and each test's xdist
+    group."""
     root = Path(__file__).resolve().parents[1]
     for item in items:
         rel = Path(str(item.path)).resolve().relative_to(root).as_posix()
-        for mark in sorted(marks_of(rel, item.originalname)):
+        marks = marks_of(rel, item.originalname)
+        for mark in sorted(marks):
             item.add_marker(getattr(pytest.mark, mark))
         if any(item.get_closest_marker(m) for m in STARTS_PROGRAMS) and not item.get_closest_marker("slow"):
             item.add_marker(pytest.mark.slow)
+        if item.get_closest_marker("ray"):
+            marks.add("ray")
+        item.add_marker(pytest.mark.xdist_group(xdist_group(rel, marks)))

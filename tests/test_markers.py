@@ -4,7 +4,7 @@ otherwise silently leave the `not slow` loop slower (or a slow test unmarked).""
 import ast
 from pathlib import Path
 
-from tests.conftest import MARKS, marks_of
+from tests.conftest import MARKS, marks_of, xdist_group
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -26,3 +26,13 @@ def test_a_test_that_starts_programs_is_slow():
         "subprocess", "slow"}
     assert marks_of("tests/evolve/runs/test_resume.py", "test_damaged_newest_checkpoint_falls_back_to_the"
                     "_previous_one") == set()
+
+
+def test_every_ray_test_shares_one_xdist_group_and_other_tests_go_by_file():
+    """Two workers would otherwise run two Ray files at once, and one's `ray stop` kills the
+    other's actors."""
+    ray_tests = [(f, names[0] if names else "any") for f, names in MARKS["ray"].items()]
+    assert len(ray_tests) >= 2
+    assert {xdist_group(f, marks_of(f, name)) for f, name in ray_tests} == {"ray"}
+    assert xdist_group("tests/tsim/test_kernels.py", marks_of("tests/tsim/test_kernels.py", "t")) == (
+        "tests/tsim/test_kernels.py")
