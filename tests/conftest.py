@@ -1,4 +1,3 @@
-from collections import Counter
 from pathlib import Path
 
 import pytest
@@ -142,11 +141,3 @@ def pytest_collection_modifyitems(config, items) -> None:
         if item.get_closest_marker("ray"):
             marks.add("ray")
         item.add_marker(pytest.mark.xdist_group(xdist_group(rel, marks)))
-    # groups with the most slow tests first: xdist hands out groups in this order, so the long
-    # ones start early and the short ones fill in at the end (tests/tsim, long, came last by
-    # name and left one worker idle); the order within a group is kept
-    def group(item) -> str:
-        return item.get_closest_marker("xdist_group").args[0]
-
-    n_slow = Counter(group(item) for item in items if item.get_closest_marker("slow"))
-    items.sort(key=lambda item: -n_slow[group(item)])  # most slow tests first, a proxy for time
