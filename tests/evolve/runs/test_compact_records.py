@@ -18,25 +18,13 @@ from evolve.nn.graph import GraphController
 from evolve.runs.champion import load_champion, rescore_champion
 from evolve.runs.compact import compact_file
 from evolve.runs.decode import write_decoded
-from evolve.runs.experiment import Experiment
 from evolve.runs.files import record_json
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
+from tests.evolve.runs.conftest import tiny_run
 from tsim.errors import SgrError
 
 OLD = Path(__file__).resolve().parents[2] / "data" / "champions"
-TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20,
-        "workers": 1, "render_champion": False}
-
-
-@pytest.fixture(scope="module")
-def sgr_run(tmp_path_factory):
-    d = tmp_path_factory.mktemp("compact") / "sgr"
-    with Experiment.from_config({"method": "sgr", **TINY}, d, quiet=True) as exp:
-        exp.run_all()
-    return d
-
-
 @pytest.fixture(scope="module")
 def big(sgr_run, tmp_path_factory):
     """The tiny run's champion genome decoded at 10x10: a champion folder."""
@@ -102,9 +90,7 @@ def test_a_compact_record_whose_genome_no_longer_gives_its_weights_is_refused_in
 
 
 def test_a_direct_champion_records_its_network_as_its_genome_and_replays_its_fitness(tmp_path):
-    d = tmp_path / "direct"
-    with Experiment.from_config({"method": "direct", **TINY}, d, quiet=True) as exp:
-        exp.run_all()
+    d = tiny_run("direct", tmp_path / "direct")
     record = json.loads((d / "champion.json").read_text())
     assert record["controller"]["format"] == "sgr-genome-graph-controller-1"
     assert "nodes" not in record["controller"]

@@ -12,18 +12,8 @@ from evolve.cli import main
 from evolve.runs.champion import load_champion, rescore_champion
 from evolve.runs.decode import write_decoded
 from evolve.runs.experiment import Experiment
+from tests.evolve.runs.conftest import TINY, tiny_run
 from tsim.body import check_robot, has_actuator, is_connected
-
-TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20,
-        "workers": 1, "render_champion": False}
-
-
-@pytest.fixture(scope="module")
-def sgr_run(tmp_path_factory):
-    d = tmp_path_factory.mktemp("decode") / "sgr"
-    with Experiment.from_config({"method": "sgr", **TINY}, d, quiet=True) as exp:
-        exp.run_all()
-    return d
 
 
 def test_decoding_at_the_runs_own_size_gives_its_champion_bit_for_bit(sgr_run, tmp_path):
@@ -75,9 +65,7 @@ def test_a_body_too_big_for_the_world_is_one_line(sgr_run, tmp_path, capsys):
 
 
 def test_direct_decodes_at_its_own_size_only(tmp_path, capsys):
-    d = tmp_path / "direct"
-    with Experiment.from_config({"method": "direct", **TINY}, d, quiet=True) as exp:
-        exp.run_all()
+    d = tiny_run("direct", tmp_path / "direct")
     before = json.loads((d / "champion.json").read_text())
     out = write_decoded(d, (5, 5), tmp_path / "same")
     after = json.loads((out / "champion.json").read_text())

@@ -1,0 +1,23 @@
+"""What the run tests share: a tiny run of a method (2 generations of 8 genomes, 20-step episodes)."""
+
+from pathlib import Path
+
+import pytest
+
+from evolve.runs.experiment import Experiment
+
+TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20,
+        "workers": 1, "render_champion": False}
+
+
+def tiny_run(method: str, folder: Path) -> Path:
+    """Run `method` with the TINY settings into `folder` and return it."""
+    with Experiment.from_config({"method": method, **TINY}, folder, quiet=True) as exp:
+        exp.run_all()
+    return folder
+
+
+@pytest.fixture(scope="module")
+def sgr_run(tmp_path_factory) -> Path:
+    """A finished tiny SGR run, once per test file."""
+    return tiny_run("sgr", tmp_path_factory.mktemp("tiny") / "sgr")
