@@ -101,3 +101,20 @@ def to_real(x: np.ndarray, dtype: type, fixed: tuple[np.ndarray, np.ndarray] | N
                         np.maximum(hi_key[free] - 1, lo_key[free]))
     key = np.maximum.accumulate(key)
     return _floats(key)[inv].reshape(x.shape).astype(dtype)
+
+
+def rest(x: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """x - hi in float64: exact (hi is x rounded to a nearby float32 number, Sterbenz)."""
+    return np.asarray(x, dtype=np.float64) - np.asarray(hi).astype(np.float64)
+
+
+def to_pair(x: np.ndarray, dtype: type,
+            fixed_rest: tuple[np.ndarray, np.ndarray] | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Coordinates x (float64) as float32 pairs hi + lo: hi plain rounding, lo the rest x - hi
+    rounded by `to_real` (against `fixed_rest`: the terrain's rests and their roundings), so that
+    the pairs hold x to ~1e-15 where hi alone is 6e-8 off at 0.6, and keep float64's order: among
+    equal hi, the rests' order is the coordinates' (evogym's 0.6 and 0.6000000000000001 share a hi
+    and keep their gap in lo, which the contacts read as a difference: `narrowphase.load_quad`)."""
+    x = np.asarray(x, dtype=np.float64)
+    hi = x.astype(dtype)
+    return hi, to_real(rest(x, hi), dtype, fixed_rest)

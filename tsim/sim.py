@@ -19,7 +19,7 @@ from tsim import kernels as K
 from tsim import runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
 from tsim.launch import CachedLaunch
-from tsim.rounding import to_real
+from tsim.rounding import rest, to_pair
 from tsim.world import World
 
 # the terrain's x and y columns (`_build`'s ter_f: corners TL, TR, BR, BL as x, y, then the box)
@@ -158,13 +158,23 @@ class BatchSim:
         # its float64 order (`tsim.rounding`); f64: evogym's placement itself
         self._ter_fixed = []  # per axis: the terrain's float64 coordinates and their rounding
         if real != np.float64:
-            ter_r = np.zeros(ter_f.shape, dtype=real)
+            # and each corner's rest, x - its rounding, as a low part (K.TER_LO columns), rounded
+            # keeping the rests' order too: the pairs hold the terrain to ~1e-15, as the state's
+            ter_r = np.zeros((nt, K.N_TER_F_PAIRS), dtype=real)
             for cols in (TER_X, TER_Y):
-                ter_r[:, cols] = to_real(ter_f[:, cols], real)
-                self._ter_fixed.append((ter_f[:, cols].reshape(-1), ter_r[:, cols].reshape(-1)))
+                hi, lo = to_pair(ter_f[:, cols], real)
+                ter_r[:, cols] = hi
+                ter_r[:, [K.TER_LO + c for c in cols[:4]]] = lo[:, :4]
+                self._ter_fixed.append((rest(ter_f[:, cols], hi).reshape(-1), lo.reshape(-1)))
             ter_f = ter_r
         self._pos0_f64 = pos0
         self._pos0 = pos0 if real == np.float64 else np.zeros(pos0.shape, dtype=real)
+        # f32: the placement's low parts (its rest below float32, `_round_world`), and the
+        # positions they belong to (a `reset` after `initial_positions` was written drops them)
+        self._pos0_lo = self._pos0_lo_of = None
+        if real != np.float64:
+            self._pos0_lo = np.zeros(pos0.shape, dtype=real)
+            self._pos0_lo_of = np.zeros(pos0.shape, dtype=real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
         self.edge_f = edge_f
@@ -211,34 +221,39 @@ class BatchSim:
         self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
         self._edge_f_stale = False  # the copy above is current (`_round_placement`)
 
-    def _round_world(self, w: int) -> np.ndarray:
-        """World w's float64 placement in the real type, each axis rounded keeping the order of
-        its coordinates among themselves and against the terrain's (`tsim.rounding`; f32 only)."""
+    def _round_world(self, w: int) -> tuple[np.ndarray, np.ndarray]:
+        """World w's float64 placement as float32 pairs hi + lo (f32 only): hi each axis rounded
+        keeping the order of its coordinates among themselves and against the terrain's, lo the
+        rest x - hi rounded the same way (`tsim.rounding`, `_pair`), so that hi + lo holds evogym's
+        placement to ~1e-15 and in its order: Lifter-v0's robot stands 1.1e-16 from its slot's
+        walls, which decides its first contacts, where float32 numbers alone are 6e-8 apart."""
         p = self._pos0_f64[w]
-        out = np.empty(p.shape, dtype=self.dtype)
+        hi = np.empty(p.shape, dtype=self.dtype)
+        lo = np.empty(p.shape, dtype=self.dtype)
         for d in range(2):
-            out[:, d] = to_real(p[:, d], self.dtype, self._ter_fixed[d])
-        return out
+            hi[:, d], lo[:, d] = to_pair(p[:, d], self.dtype, self._ter_fixed[d])
+        return hi, lo
 
     def _round_placement(self, worlds) -> None:
-        """f32: these worlds' float64 placement in float32 (`_round_world`), and their springs'
-        initial-length rounding (`_length_rounding`)."""
+        """f32: these worlds' float64 placement as float32 pairs (`_round_world`), and their
+        springs' initial-length rounding (`_length_rounding`)."""
         for w in worlds:
-            self._pos0[w] = self._round_world(w)
+            self._pos0[w], self._pos0_lo[w] = self._round_world(w)
+            self._pos0_lo_of[w] = self._pos0[w]
             self._length_rounding(w)
         self._edge_f_stale = True  # a GPU's copy: sent again before the next step (`step`)
 
     def _length_rounding(self, w: int) -> None:
         """f32: per spring of world w, how far its initial length as the kernel computes it in
-        float32 from the rounded placement lies from evogym's float64 length, less the float32
+        float32 from the placement's pairs lies from evogym's float64 length, less the float32
         rounding of its rest length (edge_f's E_LEQ column; `springs.spring_forces` subtracts it
         from the stretch, so that a spring starts as stretched as in evogym: else the rounding of
-        the placement (~4e-8) strains springs by ~0.02 force units, and points evogym holds still
-        to the last bit drift off the terrain corners they touch, PlatformJumper-v0)."""
+        its length (~4e-9 at 0.1) strains a spring by ~0.2 force units, and points evogym holds
+        still to the last bit drift off the terrain corners they touch, PlatformJumper-v0)."""
         edge_f, edge_i = self.edge_f, self.edge_i
         a, b = edge_i[w, :, 0], edge_i[w, :, 1]  # padding: point 0 to itself, 0
-        p32, p64 = self._pos0[w], self._pos0_f64[w]
-        d32 = p32[a] - p32[b]
+        hi, lo, p64 = self._pos0[w], self._pos0_lo[w], self._pos0_f64[w]
+        d32 = (hi[a] - hi[b]) + (lo[a] - lo[b])  # float32, as `spring_forces` at stage 0
         l32 = np.sqrt(d32[:, 0] * d32[:, 0] + d32[:, 1] * d32[:, 1])
         d64 = p64[a] - p64[b]
         l64 = np.sqrt(d64[:, 0] * d64[:, 0] + d64[:, 1] * d64[:, 1])
@@ -262,6 +277,9 @@ class BatchSim:
         self.state[sel] = 0.0
         self.state[sel, :, 0:2] = self._pos0[sel]
         self.state[sel, :, 4:6] = self._pos0[sel]
+        if self._pos0_lo is not None:  # f32: the placement's low parts (`_round_world`)
+            self.state[sel, :, K.S_POS_LO:K.S_POS_LO + 2] = self._pos0_lo[sel]
+            self.state[sel, :, K.S_LO_OF:K.S_LO_OF + 2] = self._pos0_lo_of[sel]
         self.counts[sel] = self._counts0[sel]  # in place: a cached launch holds its address
         self.actions[sel] = 1.0
         self.time[sel] = 0

@@ -47,6 +47,7 @@ from tsim.kernels.layout import (
                                      N_RIGID,
                                      N_SURF,
                                      N_SURF_ROBOT,
+                                     N_TER_F_PAIRS,
                                      N_VOX,
                                      N_VOX_I,
                                      NONFINITE,
@@ -58,6 +59,7 @@ from tsim.kernels.layout import (
                                      S_VEL_LO,
                                      SC,
                                      STATUS,
+                                     TER_LO,
                                      TOLERANCES,
                                      UNSTABLE,
                                      V_COL,
@@ -75,10 +77,9 @@ from tsim.kernels.layout import (
 from tsim.kernels.step import step_kernel, step_kernel_serial
 
 __all__ = ["E_GOAL", "E_K", "E_LEQ", "E_REST", "EC", "GPU_BLOCK", "INACTIVE", "LIST_ALWAYS", "LIST_AUTO",
-           "LIST_MIN", "LIST_OFF", "LIST_PER_VOXEL", "N_ACT", "N_COUNTS", "N_EDGE_F", "N_EDGES",
-           "N_FIXED", "N_PTS", "N_RIGID", "N_SURF", "N_SURF_ROBOT", "N_VOX", "N_VOX_I", "NONFINITE",
-           "NS", "PC", "RUNNING", "S_LO_OF", "S_POS_LO", "S_VEL_LO", "SC", "SKIN", "STATUS",
-           "SWEEP_ALWAYS", "SWEEP_AUTO", "SWEEP_MIN",
-           "SWEEP_OFF", "SWEEP_RATIO", "TOLERANCES", "UNSTABLE", "V_COL", "V_OBJ", "V_OPEN", "V_PTS",
-           "V_ROW", "V_TYPE", "Tolerances", "capacity", "pairs", "state_columns", "step_kernel",
-           "step_kernel_serial", "tol"]
+           "LIST_MIN", "LIST_OFF", "LIST_PER_VOXEL", "N_ACT", "N_COUNTS", "N_EDGE_F", "N_EDGES", "N_FIXED",
+           "N_PTS", "N_RIGID", "N_SURF", "N_SURF_ROBOT", "N_TER_F_PAIRS", "N_VOX", "N_VOX_I", "NONFINITE",
+           "NS", "PC", "RUNNING", "S_LO_OF", "S_POS_LO", "S_VEL_LO", "SC", "SKIN", "STATUS", "SWEEP_ALWAYS",
+           "SWEEP_AUTO", "SWEEP_MIN", "SWEEP_OFF", "SWEEP_RATIO", "TER_LO", "TOLERANCES", "UNSTABLE",
+           "V_COL", "V_OBJ", "V_OPEN", "V_PTS", "V_ROW", "V_TYPE", "Tolerances", "capacity", "pairs",
+           "state_columns", "step_kernel", "step_kernel_serial", "tol"]

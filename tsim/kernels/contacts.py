@@ -22,7 +22,7 @@ from tsim.kernels.broadphase import (
     terrain_pair_acts,
 )
 from tsim.kernels.layout import N_SURF, N_SURF_ROBOT
-from tsim.kernels.narrowphase import load_quad, resolve
+from tsim.kernels.narrowphase import Q_LO, load_quad, n_qf, resolve
 from tsim.kernels.scratch import P_COUNT, P_FINITE, P_FITS, P_N_LIST, P_WX, P_WY, pieced
 from tsim.runtime import PROFILE_SKIP, ti
 
@@ -97,7 +97,7 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
             wy = part.f[P_WY]
             count = part.i[P_COUNT]
     if finite:
-        qf = ti.Matrix.zero(float, 8, 4)
+        qf = ti.Matrix.zero(float, 8, ti.static(n_qf()))
         qi = ti.Matrix.zero(ti.i32, 8, 2)
         gw = ter.grid.shape[0]
         gh = ter.grid.shape[1]
@@ -128,14 +128,6 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                 fits = part.i[P_FITS] == 1
         for i in range(i0, i1):
             loaded = False
-            # f32 (`L.pairs`): the quads are loaded relative to voxel i's first corner, from the
-            # positions' pairs, so that the contact tests see the pairs' differences, not
-            # coordinates rounded at ~5e-7 (the narrow phase uses only differences)
-            ox = 0.0
-            oy = 0.0
-            if ti.static(L.pairs()):
-                ox = s.pos[2 * s.sv[8 * i]]
-                oy = s.pos[2 * s.sv[8 * i] + 1]
             bx0 = s.box[4 * i]
             bx1 = s.box[4 * i + 1]
             by0 = s.box[4 * i + 2]
@@ -188,9 +180,9 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                                 count += 2
                         if robot_pair_acts(s.pos, s.sv, s.box, i, j):
                             if not loaded:
-                                load_quad(s, qf, qi, 0, i, ox, oy)
+                                load_quad(s, qf, qi, 0, i)
                                 loaded = True
-                            load_quad(s, qf, qi, 1, j, ox, oy)
+                            load_quad(s, qf, qi, 1, j)
                             for d in range(2):
                                 resolve(s.fcol, qf, qi, d, 1 - d, scale)
             # no terrain box reaches above ter.top, so no terrain test can pass for a box above it
@@ -209,14 +201,14 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
                                 acts = terrain_pair_acts(s.pos, s.sv, s.box, ter.f, i, t)
                             if acts:
                                 if not loaded:
-                                    load_quad(s, qf, qi, 0, i, ox, oy)
+                                    load_quad(s, qf, qi, 0, i)
                                     loaded = True
                                 for k in range(4):
                                     qf[4 + k, 0] = ter.f[t, 2 * k]
                                     qf[4 + k, 1] = ter.f[t, 2 * k + 1]
                                     if ti.static(L.pairs()):
-                                        qf[4 + k, 0] = ter.f[t, 2 * k] - ox
-                                        qf[4 + k, 1] = ter.f[t, 2 * k + 1] - oy
+                                        qf[4 + k, Q_LO] = ter.f[t, L.TER_LO + 2 * k]
+                                        qf[4 + k, Q_LO + 1] = ter.f[t, L.TER_LO + 2 * k + 1]
                                     qf[4 + k, 2] = 0.0
                                     qf[4 + k, 3] = 0.0
                                     qi[4 + k, 0] = -1

@@ -12,12 +12,10 @@ def cross(a, b):
 
 
 @ti.func
-def point_in_quad(p, tl, tr, br, bl):
-    """evogym's point-in-voxel test: triangles (TL,TR,BR) and (TL,BR,BL), boundary inside."""
-    a_tl = tl - p
-    a_tr = tr - p
-    a_br = br - p
-    a_bl = bl - p
+def point_in_quad(a_tl, a_tr, a_br, a_bl):
+    """evogym's point-in-voxel test of a point p, given the voxel's corners less p (tl - p, ...):
+    triangles (TL,TR,BR) and (TL,BR,BL), boundary inside. (Differences, so that f32 can give them
+    from its pairs: `narrowphase.corner_less`.)"""
     ca = cross(a_tl, a_tr)
     cb = cross(a_tr, a_br)
     cc = cross(a_br, a_tl)
@@ -30,15 +28,14 @@ def point_in_quad(p, tl, tr, br, bl):
 
 
 @ti.func
-def intersects(a1, b1, a2, b2):
-    """Closed segment intersection; near-parallel pairs (|det| < 1e-4) never intersect."""
-    d1 = b1 - a1
-    d2 = b2 - a2
+def intersects(d1, d2, a21):
+    """Closed intersection of segments a1 + t d1 and a2 + s d2 (a21 = a2 - a1); near-parallel
+    pairs (|det| < 1e-4) never intersect."""
     det = -d1[0] * d2[1] + d2[0] * d1[1]
     hit = False
     if ti.abs(det) >= C.PARALLEL_EPS:
-        xd = a2[0] - a1[0]
-        yd = a2[1] - a1[1]
+        xd = a21[0]
+        yd = a21[1]
         t = (-d2[1] * xd + d2[0] * yd) / det
         s = (-d1[1] * xd + d1[0] * yd) / det
         hit = 0.0 <= t and t <= 1.0 and 0.0 <= s and s <= 1.0
@@ -46,13 +43,29 @@ def intersects(a1, b1, a2, b2):
 
 
 @ti.func
-def dist_point_edge(p, a, b):
-    """Distance from p to the line through a and b (evogym's); 1000 for a degenerate edge."""
-    base = b - a
+def intersects_ends(d1, d2, a21, a2b1, b2a1):
+    """`intersects`, with its bounds t <= 1 and s <= 1 tested as the signs of cross products of
+    the segments' ends (a2b1 = a2 - b1, b2a1 = b2 - a1) instead of quotients (f32): a quotient
+    rounds at 6e-8 relative, so a crossing 7.7e-12 beyond a segment's end (0.1 long) reads as on
+    it, where float64's quotient (1 + 7.7e-11) does not (Lifter-v0). The same test in exact
+    arithmetic: t det = d2 x a21, (t - 1) det = d2 x (a2 - b1), s det = d1 x a21, (s - 1) det =
+    d1 x (b2 - a1)."""
+    det = -d1[0] * d2[1] + d2[0] * d1[1]
+    hit = False
+    if ti.abs(det) >= C.PARALLEL_EPS:
+        sg = 1.0 if det > 0 else -1.0
+        hit = (cross(d2, a21) * sg >= 0.0 and cross(d2, a2b1) * sg <= 0.0
+               and cross(d1, a21) * sg >= 0.0 and cross(d1, b2a1) * sg <= 0.0)
+    return hit
+
+
+@ti.func
+def dist_point_edge(slant, base):
+    """Distance from p to the line through a and b (evogym's), given slant = p - a and base =
+    b - a; 1000 for a degenerate edge."""
     length = ti.sqrt(base[0] * base[0] + base[1] * base[1])
     d = 1000.0
     if length >= C.DEGENERATE_EDGE:
-        slant = p - a
         d = ti.abs(base[0] * slant[1] - slant[0] * base[1]) / length
     return d
 

@@ -18,7 +18,8 @@ the process's floating-point type (f64 by default, f32 on request; `tsim.runtime
   `lists[b, i, 1]` rigid voxels, `lists[b, i, 2]` fixed points (corners of a simulated object's
   material-5 voxels: evogym discards their RK4 increment and their edge-constraint moves).
 - terrain (shared by the batch, static): `ter_f[t, :]` corners TL, TR, BR, BL as x, y pairs then
-  the AABB; `ter_i[t, :]` open sides; `ter_grid[gx, gy]` the surface voxel in that cell or -1.
+  the AABB, in f32 then the corners' low parts (`pairs`); `ter_i[t, :]` open sides;
+  `ter_grid[gx, gy]` the surface voxel in that cell or -1.
 """
 
 from __future__ import annotations
@@ -47,6 +48,9 @@ NS = 8  # state columns of every real type (pos, vel, pos_last, vel_true)
 # state's own column; the low parts follow the 8 columns, with the positions they belong to
 S_POS_LO, S_VEL_LO, S_LO_OF = 8, 10, 12
 NS_PAIRS = 14
+# ter_f: corners (0:8), box (8:12), and in f32 the corners' low parts (TER_LO:TER_LO + 8)
+TER_LO = 12
+N_TER_F_PAIRS = 20
 
 # Real arrays take the process's real type (their dtype is left to the argument: one kernel
 # source for f64 and f32); integer arrays are i32
