@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from tsim import runtime
-from tsim.sim import to_real
+from tsim.rounding import to_pair, to_real
 
 F32_PROBE = """
 import json, sys
@@ -28,11 +28,11 @@ for task in sys.argv[2:]:
     n_act, B = z["n_act"], len(z["n_act"])
     env = BatchEnv(task, list(z["body"]), episode_steps=100)
     obs = env.observe()
-    err = []
+    err = np.zeros(B)  # per robot, the largest over 3 steps
     for t in range(3):
         obs, rew, *_ = env.step([z["actions"][i, t, :n_act[i]] for i in range(B)])
-        err.append(float(np.linalg.norm(env.sim.robot_com() - z["com"][:, t + 1], axis=1).max()))
-    out["com_err"][task] = err
+        err = np.maximum(err, np.linalg.norm(env.sim.robot_com() - z["com"][:, t + 1], axis=1))
+    out["com_err"][task] = err.tolist()
     out.update({"state": str(env.sim.state.dtype), "obs": str(obs.dtype), "reward": str(rew.dtype)})
 print(json.dumps(out))
 """
@@ -44,20 +44,30 @@ def _clean_env(**extra: str) -> dict:
 
 
 def test_f32_steps_in_float32_and_follows_evogym_at_the_start(data_dir):
-    """In an f32 process the state, observations and rewards are float32, and the first 3 steps of
-    evogym's 24 recorded robots of Walker-v0 and HeightMaximizer-v0 stay within 1e-6 of evogym's
-    COMs (f32 rounds at ~3e-8 here). Starting the robots in contact with the ground, as plain
-    rounding did (Walker-v0: robot 0.10000000000000003 over ground 0.1) or rounding the robot but
-    not the terrain (HeightMaximizer-v0: both at 0.09999999999999998), gave 3e-4 after one step."""
-    out = subprocess.run([sys.executable, "-c", F32_PROBE, str(data_dir / "evogym32"), "Walker-v0",
-                          "HeightMaximizer-v0"],
+    """In an f32 process the state, observations and rewards are float32, and in the first 3 steps
+    evogym's 24 recorded robots follow evogym's COMs to float32's rounding (~3e-8; bound 1e-6):
+    - Walker-v0 and HeightMaximizer-v0, every robot. Starting the robots in contact with the
+      ground, as plain rounding did (Walker-v0: robot 0.10000000000000003 over ground 0.1) or
+      rounding the robot but not the terrain (HeightMaximizer-v0: both at 0.09999999999999998),
+      gave 3e-4 after one step.
+    - Lifter-v0 and PlatformJumper-v0, at least 22 of 24 (measured 23 and 22). Their robots stand
+      1.1e-16 from walls and terrain corners, and a 7.7e-12 tilt in the first substep decides a
+      contact: with float32 numbers for coordinates (6e-8 apart there), fewer robots
+      followed (5 and 17); the contacts now read the positions' pairs (`narrowphase.corner_less`) and test
+      a segment's ends by signs (`geometry.intersects_ends`). The rest meet f64's exact zeros
+      (a point exactly on an edge), which float32 pairs cannot always reproduce."""
+    tasks = ("Walker-v0", "HeightMaximizer-v0", "Lifter-v0", "PlatformJumper-v0")
+    out = subprocess.run([sys.executable, "-c", F32_PROBE, str(data_dir / "evogym32"), *tasks],
                          env=_clean_env(SGR_PRECISION="f32"), capture_output=True, text=True, timeout=300)
     assert out.returncode == 0, out.stderr
     r = json.loads(out.stdout.strip().splitlines()[-1])
     assert r["precision"] == "f32"
     assert (r["state"], r["obs"], r["reward"]) == ("float32", "float32", "float32")
-    for task, err in r["com_err"].items():
-        assert max(err) < 1e-6, (task, err)
+    err = {task: np.array(e) for task, e in r["com_err"].items()}
+    for task in tasks[:2]:
+        assert err[task].max() < 1e-6, (task, err[task])
+    for task in tasks[2:]:
+        assert (err[task] < 1e-6).sum() >= 22, (task, err[task])
 
 
 def test_to_real_keeps_each_coordinate_on_its_f64_side_of_the_grid():
@@ -125,15 +135,18 @@ def fall(pos0=None):
     if pos0 is not None:
         sim.state[0, :n, 0:2] = pos0
         sim.state[0, :n, 4:6] = pos0
-    start = sim.state[0, :n, 0:2].astype(float)
+    def position():
+        pos = sim.state[0, :n, 0:2].astype(float)
+        if sim.state.shape[2] > 8:  # f32's pairs: the position is hi + lo
+            pos += sim.state[0, :n, 8:10].astype(float)
+        return pos
+
+    start = position()
     act = np.array([1.5, 0.75, 1.25, 1.0, 1.375, 1.125])  # exact in float32
     for t in range(20):
         sim.set_actions([act if t % 2 else 2.25 - act])
         sim.step()
-    pos = sim.state[0, :n, 0:2].astype(float)
-    if sim.state.shape[2] > 8:  # f32's pairs: the position is hi + lo
-        pos += sim.state[0, :n, 8:10].astype(float)
-    return str(sim.state.dtype), start, pos
+    return str(sim.state.dtype), start, position()
 
 
 if __name__ == "__main__":
@@ -159,7 +172,8 @@ def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     exec(FALL.replace('if __name__ == "__main__":', "if False:"), space)
     dtype, start64, pos64 = space["fall"]()
     start = np.array(r["start"])
-    assert dtype == "float64" and np.abs(start - start64).max() < 2e-6  # float32's rounding
+    # the placement's pairs hold evogym's float64 placement (a float32 number alone: 1.9e-6 off)
+    assert dtype == "float64" and np.abs(start - start64).max() < 1e-13
     assert np.abs(pos64 - start64).max() > 0.1  # it fell and moved
     err = np.abs((np.array(r["pos"]) - start) - (pos64 - start64)).max()
     assert err < 1e-7, err
