@@ -1,21 +1,25 @@
-"""Initial coordinates in float32 that keep the order float64 gives them (f32 only; f64 keeps them).
+"""Initial coordinates in float32 pairs that hold evogym's float64 placement in its order (f32
+only; f64 keeps the placement itself).
 
 Why: evogym places bodies a few float64 ulps off the grid lines k * CELL, and which of two nearly
 equal coordinates is the larger decides contacts from the first substep on. Climber-v1's robot
 rests 3.4e-16 above its pipe's floor (y = 0.09999999999999998 over 0.09999999999999964): out of
 contact in f64, while float32 rounds both to 0.099999994 and the robot's corners start on the
 floor's edge, inside it (the point-in-voxel test counts the boundary), pushed up with >= 10,500
-force units: 1.8e-3 off evogym after one step. A robot on the ground (y = 0.10000000000000003
-over a terrain top of 0.1) started in contact the same way.
+force units. Lifter-v0's robot stands 1.1e-16 left of its slot's wall (0.6 against
+0.6000000000000001), and a tilt of 7.7e-12 in the first substep makes a contact there: float32
+numbers alone cannot hold that gap, whether they tie (a contact at once) or keep the order 6e-8
+apart (the tilt never reaches the wall).
 
-So each float64 coordinate is rounded to a float32 number such that any two coordinates keep their
-order, or their equality; as close as that allows to plain rounding (neighbours in float32 where
-float64's coordinates crowd within one float32 ulp). Anchors, whose rounding is given: the grid
-lines (plain rounding; a value keeps its side of them) and `fixed` values (the terrain's, rounded
-once for the whole batch, against which each world's bodies are rounded; a grid line within 2
-float32 numbers of a fixed value gives way to it, so that a value between the two finds room).
-What float32 cannot keep is the size of such gaps: 3.4e-16 in float64 is 7.5e-9 or more in
-float32 (one float32 number at 0.1), which docs/VALIDATION.md finds deciding Lifter-v0.
+So each coordinate x becomes a pair hi + lo (`to_pair`): hi its float32 rounding, lo the rest
+x - hi (exact in float64) rounded to float32 by `to_real`, which keeps the order and the ties of
+what it rounds. Among coordinates with one hi, the rests' order is the coordinates', so the pairs
+keep float64's order and hold x to ~1e-15; the contacts read them as differences of pairs
+(`tsim.kernels.narrowphase.corner_less`). `to_real`'s anchors, whose rounding is given: the grid
+lines (plain rounding; a value keeps its side of them: for rests, 0) and `fixed` values (the
+terrain's rests, rounded once for the whole batch, against which each world's bodies are
+rounded; a grid line within 2 float32 numbers of a fixed value gives way to it, so that a value
+between the two finds room).
 """
 
 from __future__ import annotations
