@@ -39,5 +39,20 @@ def renormalize(hi: ti.template(), lo: ti.template(), i, one: ti.template()):
     bb = s - a
     if ti.static(given(one)):
         bb = bb * one[0]
-    lo[i] = (a - (s - bb)) + (b - bb)
+    r = (a - (s - bb)) + (b - bb)
+    # the rest on float64's grid at s (its spacing u = float32's spacing at s times 2^-29):
+    # evogym's float64 sum drops an increment below half of u (a point at x = 0.5 that float64
+    # holds still to the bit, where the pair kept 3e-21 and put it 3e-21 off a terrain voxel's
+    # side, out of a contact evogym makes: Climber-v0). r + m - m with m = 1.5 * 2^23 * u rounds
+    # r to a multiple of u while |r| < 2^22 u; beyond 2^23 u, r already is one (its own spacing
+    # is u or more), and in between this rounds to u / 2 at worst. Exponents <= 29 (|s| < 2^-98):
+    # left as they are.
+    e = (ti.bit_cast(s, ti.i32) >> 23) & 0xFF
+    if e > 29:
+        m = ti.bit_cast(((e - 29) << 23) | 0x400000, ti.f32)
+        t = r + m
+        if ti.static(given(one)):
+            t = t * one[0]
+        r = t - m
+    lo[i] = r
     hi[i] = s
