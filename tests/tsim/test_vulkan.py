@@ -256,13 +256,13 @@ def test_vulkan_f64_matches_the_cpu_within_1e_9_on_every_task(vulkan):
 
 
 # f32 on Vulkan against f32 on the CPU after 2 steps (positions and velocities as pairs hi + lo)
-F32_POS, F32_VEL = 2e-8, 2e-5
+F32_POS, F32_VEL = 1e-8, 5e-6
 
 
 @pytest.mark.vulkan
 def test_vulkan_f32_matches_the_cpus_f32_within_its_rounding_on_every_task(vulkan):
-    """All 32 tasks as above, in f32 on Vulkan against f32 on the CPU: positions within 2e-8 and
-    velocities within 2e-5 (measured on lavapipe: 1.7e-9 and 1.7e-6; f32 on the CPU is validated
+    """All 32 tasks as above, in f32 on Vulkan against f32 on the CPU: positions within 1e-8 and
+    velocities within 5e-6 (measured on lavapipe: 1.4e-9 and 5.4e-7; f32 on the CPU is validated
     against evogym's chaos floor, docs/VALIDATION.md "Single precision"). Not bits: lavapipe may
     fuse multiply-adds, and Vulkan's f32 division and square root need not round correctly; over
     long episodes the difference grows like any perturbation, to evogym's chaos floor. Before
