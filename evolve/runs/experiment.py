@@ -57,6 +57,7 @@ class Experiment:
         overrides the config's (a resumed run may use another machine's CPUs)."""
         cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
+        self._warned_population = False  # `_warn_if_population_grew`
         # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
         runtime.use_precision(cfg.get("precision"))
         self.neat_config = load_neat_config(run.path / "neat.ini")
@@ -157,6 +158,7 @@ class Experiment:
                 if g % cfg["checkpoint_every"] == 0 or g == cfg["generations"] or stop.is_set():
                     self.run.save_checkpoint(search.generation, self.state())
                 self._progress(row, time.perf_counter() - t_start)
+                self._warn_if_population_grew(row)
                 if final and not self.quiet:
                     print(chosen, flush=True)
                 if after_generation is not None:
@@ -174,6 +176,20 @@ class Experiment:
         t0 = time.perf_counter()
         champ = select_champion(self, self.selection)
         return f"final selection: {describe(champ)} ({time.perf_counter() - t0:.0f} s)"
+
+    def _warn_if_population_grew(self, row: dict) -> None:
+        """One line on stderr, once per run, when the population outgrows pop_size by a quarter:
+        neat-python keeps each species' elites whatever pop_size says, so a speciation that
+        splits nearly every genome off grows the population (and each generation's cost) without
+        bound."""
+        n, pop = row["n_valid"] + row["n_invalid"], int(self.cfg["pop_size"])
+        if self._warned_population or n <= 1.25 * pop:
+            return
+        self._warned_population = True
+        print(f"warning: the population has grown to {n} genomes for pop_size {pop}: {row['n_species']} "
+              "species each keep their elites. Speciation splits too finely: raise "
+              "compatibility_threshold in the NEAT config or lower body_distance_weight",
+              file=sys.stderr, flush=True)
 
     def _progress(self, row: dict, elapsed: float) -> None:
         if self.quiet:

@@ -2,8 +2,9 @@
 (SGR paper eq. 1), a reproduction that survives more species than the population can hold, and
 a genome config that can be pickled without side effects.
 
-distance = NEAT genomic distance + v * body_distance(body, body'). The bodies come from a cache
-the search fills (by genome key) before every speciation, so no genome is decoded twice.
+distance = NEAT genomic distance + v * scaled_body_distance(body, body') (eq. 2, scaled to 5x5).
+The bodies come from a cache the search fills (by genome key) before every speciation, so no
+genome is decoded twice.
 """
 
 from __future__ import annotations
@@ -16,7 +17,7 @@ from neat.genes import DefaultConnectionGene, DefaultNodeGene
 from neat.genome import DefaultGenomeConfig
 from neat.graphs import creates_cycle
 
-from evolve.search.body_distance import body_distance
+from evolve.search.body_distance import scaled_body_distance
 
 
 def _creates_cycle(connections, test) -> bool:
@@ -65,14 +66,16 @@ class BodyAwareGenome(DefaultGenome):
         return GenomeConfig(param_dict, cls.__name__)
 
     def distance(self, other, config) -> float:
-        """NEAT distance + body_distance_weight x body distance; with a non-zero weight both
-        genomes' bodies must be in config.body_cache (KeyError otherwise)."""
+        """NEAT distance + body_distance_weight x body distance, the body distance scaled to the
+        paper's 5x5 bodies (`scaled_body_distance`); with a non-zero weight both genomes' bodies
+        must be in config.body_cache (KeyError otherwise)."""
         d = super().distance(other, config)
         v = getattr(config, "body_distance_weight", 0.0)
         if v:
             bodies = config.body_cache
-            d += v * body_distance(bodies[self.key], bodies[other.key])
+            d += v * scaled_body_distance(bodies[self.key], bodies[other.key])
         return d
+
 
 
 class FlexibleReproduction(DefaultReproduction):

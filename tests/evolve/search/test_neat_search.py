@@ -31,14 +31,26 @@ def test_invalid_bodies_are_counted_excluded_from_simulation_and_from_the_popula
     assert total_bad > 0  # the random CPPNs do produce invalid bodies, so the check above bites
 
 
-def test_speciation_distance_adds_v_times_the_body_distance(neat_config, genomes):
+def test_speciation_distance_adds_v_times_the_body_distance_scaled_to_5x5(neat_config, genomes):
+    """At 5x5 the paper's eq. 1 and 2 exactly; a 10x10 body made of each cell of a 5x5 one as 2x2
+    cells lies as far from another made so as the two 5x5 bodies (eq. 2 counts 4x as many cells,
+    scaled by 25 / 100), and 6x9 bodies are scaled by 25 / 54."""
     cfg = neat_config()
     gc = cfg.genome_config
     a, b = genomes(cfg, 2, mutations=3)
     base = neat.DefaultGenome.distance(a, b, gc)
-    gc.body_cache = {a.key: np.array([[1, 2], [3, 0]]), b.key: np.array([[2, 2], [0, 0]])}
+    rng = np.random.default_rng(0)
+    body_a, body_b = rng.integers(0, 5, (5, 5)), rng.integers(0, 5, (5, 5))
+    gc.body_cache = {a.key: body_a, b.key: body_b}
     gc.body_distance_weight = 0.25
-    assert a.distance(b, gc) == base + 0.25 * body_distance(gc.body_cache[a.key], gc.body_cache[b.key])
+    small = body_distance(body_a, body_b)
+    assert small > 5 and a.distance(b, gc) == base + 0.25 * small
+    gc.body_cache = {k: np.kron(m, np.ones((2, 2), dtype=int)) for k, m in ((a.key, body_a), (b.key, body_b))}
+    assert body_distance(gc.body_cache[a.key], gc.body_cache[b.key]) == 4 * small
+    assert a.distance(b, gc) == base + 0.25 * small
+    gc.body_cache = {a.key: rng.integers(0, 5, (6, 9)), b.key: rng.integers(0, 5, (6, 9))}
+    wide = body_distance(gc.body_cache[a.key], gc.body_cache[b.key])
+    assert abs(a.distance(b, gc) - (base + 0.25 * wide * 25 / 54)) < 1e-12
     gc.body_distance_weight = 0.0
     assert a.distance(b, gc) == base
 
@@ -170,3 +182,33 @@ def test_a_settled_genome_keeps_its_mean_and_is_not_simulated_again(neat_config)
     for k in long_lived:
         total, tags = search.scores[k]
         assert search.population[k].fitness == (_tag_score(tags[0]) + _tag_score(tags[1])) / 2
+
+
+def _species_and_population(neat_config, shape: tuple[int, int], generations: int) -> list:
+    """(n_species, population) per generation of SGR's decoding at `shape` with the packaged
+    speciation (sgr.ini's threshold 3.0, body_distance_weight 0.1) and a stand-in fitness."""
+    cfg = neat_config(pop=40)
+    settings = DecoderSettings(shape=shape)
+
+    def evaluate(phenotypes):  # stand-in: bigger bodies score more
+        return np.array([float(np.count_nonzero(p.body)) for p in phenotypes]), len(phenotypes)
+
+    search = NeatSearch(cfg, lambda g: decode(g, cfg.genome_config, "Walker-v0", settings), evaluate,
+                        seed=1, body_distance_weight=0.1)
+    out = []
+    for _ in range(generations):
+        row = search.step()
+        out.append((row["n_species"], len(search.population)))
+    return out
+
+
+def test_speciation_keeps_the_population_at_pop_size_at_10x10(neat_config):
+    """The body distance (eq. 2) sums over cells, so at 10x10 it is 4x what the same share of
+    differing cells gives at 5x5: with the paper's v and threshold nearly every genome became a
+    species of its own, each kept its elites, and the population grew past pop_size (the first
+    10x10 SGR run: 15 species at generation 1, 1,335 and a population of 2,320 for pop_size 128 at
+    generation 35). Scaled to the paper's 25 cells, the distance means at any size what it means at
+    5x5, and the population stays at pop_size."""
+    rows = _species_and_population(neat_config, (10, 10), 12)
+    assert all(pop == 40 for _, pop in rows), rows
+    assert max(n for n, _ in rows) <= 20, rows
