@@ -118,7 +118,7 @@ def to_pair(x: np.ndarray, dtype: type,
     rounded by `to_real` (against `fixed_rest`: the terrain's rests and their roundings), so that
     the pairs hold x to ~1e-15 where hi alone is 6e-8 off at 0.6, and keep float64's order: among
     equal hi, the rests' order is the coordinates' (evogym's 0.6 and 0.6000000000000001 share a hi
-    and keep their gap in lo, which the contacts read as a difference: `narrowphase.load_quad`)."""
+    and keep their gap in lo, which the contacts read as a difference: `narrowphase.corner_less`)."""
     x = np.asarray(x, dtype=np.float64)
     hi = x.astype(dtype)
     return hi, to_real(rest(x, hi), dtype, fixed_rest)

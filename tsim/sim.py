@@ -222,11 +222,11 @@ class BatchSim:
         self._edge_f_stale = False  # the copy above is current (`_round_placement`)
 
     def _round_world(self, w: int) -> tuple[np.ndarray, np.ndarray]:
-        """World w's float64 placement as float32 pairs hi + lo (f32 only): hi each axis rounded
-        keeping the order of its coordinates among themselves and against the terrain's, lo the
-        rest x - hi rounded the same way (`tsim.rounding`, `_pair`), so that hi + lo holds evogym's
-        placement to ~1e-15 and in its order: Lifter-v0's robot stands 1.1e-16 from its slot's
-        walls, which decides its first contacts, where float32 numbers alone are 6e-8 apart."""
+        """World w's float64 placement as float32 pairs hi + lo (f32 only, `tsim.rounding.to_pair`):
+        hi each coordinate's float32 rounding, lo its rest rounded keeping the order of the rests
+        among themselves and against the terrain's, so that hi + lo holds evogym's placement to
+        ~1e-15 and in its order: Lifter-v0's robot stands 1.1e-16 from its slot's walls, which
+        decides its first contacts, where float32 numbers alone are 6e-8 apart."""
         p = self._pos0_f64[w]
         hi = np.empty(p.shape, dtype=self.dtype)
         lo = np.empty(p.shape, dtype=self.dtype)

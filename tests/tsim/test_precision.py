@@ -10,12 +10,15 @@ import json
 import os
 import subprocess
 import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from tsim import runtime
 from tsim.rounding import to_real
+
+ROOT = Path(__file__).resolve().parents[2]
 
 F32_PROBE = """
 import json, sys
@@ -123,16 +126,13 @@ from tsim.sim import BatchSim
 from tsim.world import world_from_matrix
 
 
-def fall(pos0=None):
+def fall():
     # a 3x3 robot acting while it falls freely at x, y ~ 20 (float32's ulp there: 1.9e-6)
     m = np.zeros((260, 260), dtype=int)
     m[-1, 0] = 5
     body = build_body(np.array([[3, 3, 3], [2, 4, 2], [3, 1, 3]]))
     sim = BatchSim(world_from_matrix(m), [body], (200, 200))
     n = body.n_points
-    if pos0 is not None:
-        sim.state[0, :n, 0:2] = pos0
-        sim.state[0, :n, 4:6] = pos0
     def position():
         pos = sim.state[0, :n, 0:2].astype(float)
         if sim.state.shape[2] > 8:  # f32's pairs: the position is hi + lo
@@ -206,6 +206,83 @@ def test_f32_bodies_flush_against_walls_start_as_evogyms(data_dir):
     r = json.loads(out.stdout.strip().splitlines()[-1])
     for task, err in r.items():
         assert max(err) < 1e-6, (task, err)
+
+
+UNITS = """
+import json
+from fractions import Fraction
+import numpy as np
+from tsim import runtime
+runtime.init()
+ti = runtime.ti
+from tsim.kernels.geometry import intersects, intersects_ends
+from tsim.kernels.pairs import renormalize
+
+
+@ti.kernel
+def renorm(h: ti.types.ndarray(), l: ti.types.ndarray()):
+    for i in range(h.shape[0]):
+        renormalize(h, l, i, None)
+
+
+@ti.kernel
+def segments(p: ti.types.ndarray(), out: ti.types.ndarray()):
+    for i in range(p.shape[0]):
+        a1 = ti.Vector([p[i, 0], p[i, 1]])
+        b1 = ti.Vector([p[i, 2], p[i, 3]])
+        a2 = ti.Vector([p[i, 4], p[i, 5]])
+        b2 = ti.Vector([p[i, 6], p[i, 7]])
+        out[i, 0] = 1 if intersects(b1 - a1, b2 - a2, a2 - a1) else 0
+        out[i, 1] = 1 if intersects_ends(b1 - a1, b2 - a2, a2 - a1, a2 - b1, b2 - a1) else 0
+
+
+rng = np.random.default_rng(7)
+n = 20000
+a = (rng.uniform(0.05, 20, n) * rng.choice([-1, 1], n)).astype(np.float32)
+b = (rng.uniform(-0.5, 0.5, n) * np.spacing(np.abs(a)).astype(np.float64)
+     * 2.0 ** -rng.integers(0, 32, n)).astype(np.float32)
+# powers of two (float64's spacing halves below them) and grid values, increments of either sign
+a = np.concatenate([a, np.array([0.5, 1, 2, -2, 4, 0.5, 1, -0.5, 0.25], dtype=np.float32)])
+b = np.concatenate([b, np.array([-3 * 2.0**-56, -2.0**-53, 2.0**-52, 2.0**-52, -2.0**-51, 3e-21,
+                                 2.0**-29 + 2.0**-52, 1e-20, -1e-22], dtype=np.float32)])
+h, l = a.copy(), b.copy()
+renorm(h, l)
+wrong = sum(Fraction(H) + Fraction(L) != Fraction(float(Fraction(x) + Fraction(y)))
+            for x, y, H, L in zip(a.tolist(), b.tolist(), h.tolist(), l.tolist()))
+P = rng.integers(-4, 5, (20000, 8)).astype(np.float32) * 0.5  # exact arithmetic throughout
+# a side from (0.6 + 1.4e-6, 0.2) to (0.6, 0.1 - 5.5e-7) against a floor's edge from (0.5, 0.1) to
+# (0.6 + 1e-15, 0.1), relative to the side's bottom end: they cross 7.7e-12 beyond the edge's end
+near = np.array([[1.4e-6, 0.1 + 5.5e-7, 0, 0, -0.1, 5.5e-7, 1e-15, 5.5e-7]], dtype=np.float32)
+out = np.zeros((len(P) + 1, 2), dtype=np.int32)
+segments(np.concatenate([P, near]), out)
+print(json.dumps({"pairs": len(a), "wrong": int(wrong), "agree": int((out[:-1, 0] == out[:-1, 1]).sum()),
+                  "hits": int(out[:-1, 0].sum()), "near": out[-1].tolist(), "near_input": near[0].tolist()}))
+"""
+
+
+def test_f32_pairs_sum_as_float64_does_and_segment_ends_resolve_what_quotients_cannot(tmp_path):
+    """Two f32 building blocks against exact oracles, in an f32 process:
+    - `pairs.renormalize`: a pair hi + lo plus an increment is float64's sum of them (Python's
+      Fraction rounded once to float64), on 20,009 cases: increments down to 2^-32 of float32's
+      spacing, and powers of two, where float64's spacing halves below (measured: 0 wrong; 16,842
+      without rounding the rest to float64's grid, 582 with the first way of rounding it).
+    - `geometry.intersects_ends` gives evogym's segment test (`intersects`) on 20,000 segment pairs
+      of exact coordinates, and where a crossing lies 7.7e-12 beyond a segment's end (Lifter-v0's
+      wall) says "no" as float64 does, where float32's quotient rounds s = 1 + 7.7e-11 to 1."""
+    script = tmp_path / "units.py"  # a file: Taichi reads its kernels' source
+    script.write_text(UNITS)
+    out = subprocess.run([sys.executable, str(script)], env=_clean_env(SGR_PRECISION="f32"),
+                         capture_output=True, text=True, timeout=300, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    r = json.loads(out.stdout.strip().splitlines()[-1])
+    assert r["wrong"] == 0, r
+    assert r["agree"] == 20000 and r["hits"] > 3000, r  # both outcomes occur
+    a1x, a1y, b1x, b1y, a2x, a2y, b2x, b2y = np.array(r["near_input"], dtype=np.float64)
+    d1, d2, a21 = (b1x - a1x, b1y - a1y), (b2x - a2x, b2y - a2y), (a2x - a1x, a2y - a1y)
+    det = -d1[0] * d2[1] + d2[0] * d1[1]
+    s = (-d1[1] * a21[0] + d1[0] * a21[1]) / det  # float64 on the same float32 inputs
+    assert s > 1.0
+    assert r["near"] == [1, 0]  # the quotient in float32 says "crosses"; the ends, as float64, do not
 
 
 RANDOM = """

@@ -40,19 +40,26 @@ def renormalize(hi: ti.template(), lo: ti.template(), i, one: ti.template()):
     if ti.static(given(one)):
         bb = bb * one[0]
     r = (a - (s - bb)) + (b - bb)
-    # the rest on float64's grid at s (its spacing u = float32's spacing at s times 2^-29):
-    # evogym's float64 sum drops an increment below half of u (a point at x = 0.5 that float64
-    # holds still to the bit, where the pair kept 3e-21 and put it 3e-21 off a terrain voxel's
-    # side, out of a contact evogym makes: Climber-v0). r + m - m with m = 1.5 * 2^23 * u rounds
-    # r to a multiple of u while |r| < 2^22 u; beyond 2^23 u, r already is one (its own spacing
-    # is u or more), and in between this rounds to u / 2 at worst. Exponents <= 29 (|s| < 2^-98):
-    # left as they are.
-    e = (ti.bit_cast(s, ti.i32) >> 23) & 0xFF
-    if e > 29:
-        m = ti.bit_cast(((e - 29) << 23) | 0x400000, ti.f32)
-        t = r + m
-        if ti.static(given(one)):
-            t = t * one[0]
-        r = t - m
+    # the rest on float64's grid, so that hi + lo is float64's sum: evogym's float64 sum drops an
+    # increment below half of its spacing (a point at x = 0.5 that float64 holds still to the bit,
+    # where the pair kept 3e-21 and put it 3e-21 off a terrain voxel's side, out of a contact
+    # evogym makes: Climber-v0). float64's spacing at s is u = float32's times 2^-29, or u / 2
+    # when s is a power of two and r takes the sum below it. With m = 2^23 u carrying r's sign,
+    # r + m lies in [2^23 u, 2^24 u], where float32's spacing is u: r + m - m is r rounded to a
+    # multiple of u, ties to even as float64's. A rest of 2^23 u or more is a multiple of u already
+    # (its own spacing is u or more). Exponents <= 29 (|s| < 2^-97): left as they are.
+    bits = ti.bit_cast(s, ti.i32)
+    k = ((bits >> 23) & 0xFF) - 29  # the biased exponent of 2^23 u
+    if (bits & 0x7FFFFF) == 0 and r != 0.0 and (r < 0.0) != (bits < 0):
+        k -= 1
+    if k > 0:
+        m = ti.bit_cast(k << 23, ti.f32)
+        if ti.abs(r) < m:
+            if r < 0.0:
+                m = -m
+            t = r + m
+            if ti.static(given(one)):
+                t = t * one[0]
+            r = t - m
     lo[i] = r
     hi[i] = s
