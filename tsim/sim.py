@@ -154,12 +154,11 @@ class BatchSim:
             ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
             ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
             ter_i[:] = t.open
-        # f32: the terrain rounded once, each world's bodies against it, every coordinate keeping
-        # its float64 order (`tsim.rounding`); f64: evogym's placement itself
-        self._ter_fixed = []  # per axis: the terrain's float64 coordinates and their rounding
+        # f32: the terrain as float32 pairs hi + lo, rounded once (`tsim.rounding.to_pair`), each
+        # world's bodies against it (`_round_world`); f64: evogym's placement itself
+        self._ter_fixed = []  # per axis (f32): the terrain's rests x - hi and their float32 lo
         if real != np.float64:
-            # and each corner's rest, x - its rounding, as a low part (K.TER_LO columns), rounded
-            # keeping the rests' order too: the pairs hold the terrain to ~1e-15, as the state's
+            # the corners' low parts go to the K.TER_LO columns (the boxes keep their hi alone)
             ter_r = np.zeros((nt, K.N_TER_F_PAIRS), dtype=real)
             for cols in (TER_X, TER_Y):
                 hi, lo = to_pair(ter_f[:, cols], real)

@@ -77,7 +77,6 @@ class BodyAwareGenome(DefaultGenome):
         return d
 
 
-
 class FlexibleReproduction(DefaultReproduction):
     """neat-python 2's reproduction with a total-preserving spawn adjustment that cannot fail:
     largest species shrink first, smallest grow first, and when there are more species than
