@@ -487,12 +487,22 @@ class BatchSim:
         if self.dtype == np.float64:
             s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
             return s / self.n_robot_points[:, None]
-        st = self.state
-        pos = st[:, :, 0:2].astype(np.float64)
-        pos += np.where(st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2],
-                        st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
-        s = (pos * mask[:, :, None]).sum(axis=1)
+        s = (self.states64()[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
         return (s / self.n_robot_points[:, None]).astype(self.dtype)
+
+    def states64(self) -> np.ndarray:
+        """(B, P, 4) every point's position (0:2) and velocity (2:4) in float64: in f64 the state's
+        own columns; in f32 each as its pair hi + lo (`tsim.kernels.pairs`), which holds it to
+        ~1e-15, where float32 alone rounds at ~1e-8. A low part counts only while its position is
+        the one it was written for (a position changed from Python, e.g. by `place_object`, has
+        none until the next step). For comparing f32 with f64 or evogym."""
+        st = self.state
+        out = st[:, :, 0:4].astype(np.float64)
+        if st.shape[2] > K.NS:
+            own = st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2]
+            out[:, :, 0:2] += np.where(own, st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
+            out[:, :, 2:4] += np.where(own, st[:, :, K.S_VEL_LO:K.S_VEL_LO + 2], 0.0)
+        return out
 
 
 def _taichi_array(a: np.ndarray):

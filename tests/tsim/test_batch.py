@@ -42,6 +42,15 @@ def test_blown_up_world_is_flagged_and_frozen_while_others_go_on(sim):
     assert sim.time.tolist() == [6, 1, 6]
 
 
+def test_states64_in_f64_is_a_copy_of_the_state_positions_and_velocities(sim):
+    sim.set_actions(np.full((3, sim.max_actuators), 1.6))
+    sim.step(3)
+    s = sim.states64()
+    assert s.dtype == np.float64 and np.array_equal(s, sim.state[:, :, 0:4])
+    s[:] = 0.0
+    assert np.abs(sim.state[:, :, 0:2]).max() > 0  # the caller's array, not the state
+
+
 def test_deactivated_world_stops_moving(sim):
     """A deactivated world keeps every point exactly where it was while the other worlds still move.
 

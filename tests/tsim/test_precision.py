@@ -134,22 +134,22 @@ def fall():
     sim = BatchSim(world_from_matrix(m), [body], (200, 200))
     n = body.n_points
     def position():
-        pos = sim.state[0, :n, 0:2].astype(float)
-        if sim.state.shape[2] > 8:  # f32's pairs: the position is hi + lo
-            pos += sim.state[0, :n, 8:10].astype(float)
-        return pos
+        return sim.states64()[0, :n, 0:2]  # f32: each position as its pair hi + lo
 
     start = position()
     act = np.array([1.5, 0.75, 1.25, 1.0, 1.375, 1.125])  # exact in float32
     for t in range(20):
         sim.set_actions([act if t % 2 else 2.25 - act])
         sim.step()
-    return str(sim.state.dtype), start, position()
+    end = position()
+    sim.state[0, 0, 0] += 0.5  # moved from Python: its low part no longer belongs to it
+    moved = [float(sim.states64()[0, 0, 0]), float(sim.state[0, 0, 0])]
+    return str(sim.state.dtype), start, end, moved
 
 
 if __name__ == "__main__":
-    dtype, start, pos = fall()
-    print(json.dumps({"dtype": dtype, "start": start.tolist(), "pos": pos.tolist()}))
+    dtype, start, pos, moved = fall()
+    print(json.dumps({"dtype": dtype, "start": start.tolist(), "pos": pos.tolist(), "moved": moved}))
 """
 
 
@@ -169,13 +169,15 @@ def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     assert r["dtype"] == "float32"
     space: dict = {}
     exec(FALL.replace('if __name__ == "__main__":', "if False:"), space)
-    dtype, start64, pos64 = space["fall"]()
+    dtype, start64, pos64, moved64 = space["fall"]()
     start = np.array(r["start"])
     # the placement's pairs hold evogym's float64 placement (a float32 number alone: 1.9e-6 off)
     assert dtype == "float64" and np.abs(start - start64).max() < 1e-13
     assert np.abs(pos64 - start64).max() > 0.1  # it fell and moved
     err = np.abs((np.array(r["pos"]) - start) - (pos64 - start64)).max()
     assert err < 5e-8, err
+    # `states64` drops a low part whose position was changed from Python (the pair no longer holds)
+    assert r["moved"][0] == r["moved"][1] and moved64[0] == moved64[1]
 
 
 CLIMB = """
@@ -299,11 +301,7 @@ def positions(task):
     env.reset()
     for t in range(2):
         env.step(np.full((2, env.sim.max_actuators), 1.3 if t % 2 else 0.7))
-    st = env.sim.state.astype(np.float64)
-    pos = st[:, :, 0:2].copy()
-    if st.shape[2] > 8:
-        pos += np.where(st[:, :, 12:14] == st[:, :, 0:2], st[:, :, 8:10], 0.0)
-    return pos
+    return env.sim.states64()[:, :, 0:2]
 
 
 if __name__ == "__main__":

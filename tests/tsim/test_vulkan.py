@@ -49,13 +49,7 @@ def run_states(tasks: list[str], steps: int, robots: int) -> dict[str, list]:
         A = env.sim.max_actuators
         for t in range(steps):
             env.step(np.full((len(env.sim.bodies), A), 1.3 if t % 2 else 0.7))
-        state = env.sim.state.astype(np.float64)
-        out[task] = state[:, :, :4].copy()
-        if state.shape[-1] > 8:  # f32's low parts, where they belong to the positions
-            own = state[:, :, 12:14] == state[:, :, 0:2]
-            out[task][:, :, 0:2] += np.where(own, state[:, :, 8:10], 0.0)
-            out[task][:, :, 2:4] += np.where(own, state[:, :, 10:12], 0.0)
-        out[task] = out[task].tolist()
+        out[task] = env.sim.states64().tolist()
     return out
 
 
