@@ -22,6 +22,7 @@ Seeds go outermost, so a partial study has every arm of the first seeds.
     python bench/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
     python bench/big_study.py --decode-only                     # only the decoded champions (minutes)
     python bench/big_study.py --pictures                        # docs/big/bodies.png from the records
+    python bench/big_study.py --table                           # docs/RESULTS.md's table from them
 
 The decoded champions are committed with the rest (champion.json of a 10x10 body is ~2.5 KB: the
 controller is recorded as its genome's decoding); decoding is exact, so --decode-only remakes them
@@ -128,6 +129,58 @@ def pictures(records: Path, out: Path) -> Path:
     return out
 
 
+ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
+    ("SGR at the big size, 100 gens", "sgr-{task}-{size}-s{seed}"),
+    ("direct NEAT at the big size, 100 gens", "direct-{task}-{size}-s{seed}"),
+    ("SGR 5x5 for 50, then the big size for 50", "sgr-{task}-5x5to{size}-s{seed}"),
+    ("its 5x5 champion at 50", "sgr-{task}-5x5-g50-s{seed}"),
+    ("5x5 champion (100 gens) decoded, no evolution", "decoded-{task}-{size}-s{seed}"),
+    ("5x5 champion, 100 gens (robust-fast)", str(ROOT / "docs" / "robust-fast" / "runs")
+     + "/sgr-{task}-s{seed}"),
+)
+
+
+def arm_cell(folders: list[Path]) -> str:
+    """One table cell: the champions' mean return under uniform(+-1e-3) action noise (20 replays,
+    the verdict's, `evolve.runs.champion.judge`), mean +- sd over seeds, then each seed's, how many
+    hold, and the runs' median seconds per generation (generations.csv; none for a decoded one, nor
+    for robust-fast's runs, timed on another machine two at a time)."""
+    import statistics
+
+    import numpy as np
+
+    from evolve.runs.champion import judge
+    from evolve.runs.plots import read_generations
+
+    have = [d for d in folders if (d / "champion.json").is_file()]
+    if not have:
+        return "-"
+    verdicts = [judge(d) for d in have]
+    means = [v.noisy_mean for v in verdicts]
+    sd = statistics.stdev(means) if len(means) > 1 else 0.0
+    text = f"{statistics.fmean(means):.2f} ± {sd:.2f} ({' / '.join(f'{m:.2f}' for m in means)})"
+    text += f"; holds {sum(v.holds for v in verdicts)} of {len(verdicts)}"
+    secs = [float(np.median(read_generations(d)["total_s"])) for d in have
+            if (d / "generations.csv").is_file() and ROOT / "docs" / "robust-fast" not in d.parents]
+    if secs:
+        text += f"; {statistics.fmean(secs):.1f} s/gen"
+    return text
+
+
+def table(records: Path, seeds: list[int], tasks: list[str]) -> str:
+    """docs/RESULTS.md's table of the study: a row per task, a column per arm (`ARMS`), from the
+    committed records alone."""
+    lines = ["| task (big size) | " + " | ".join(t for t, _ in ARMS) + " |",
+             "|---" * (len(ARMS) + 1) + "|"]
+    for task in tasks:
+        rows, cols = SHAPES[task]
+        size = f"{rows}x{cols}"
+        cells = [arm_cell([records / pat.format(task=task, size=size, seed=s) for s in seeds])
+                 for _, pat in ARMS]
+        lines.append(f"| {task} ({size}) | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(SHAPES), choices=list(SHAPES))
@@ -137,7 +190,11 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--pictures", action="store_true", help="only draw RECORDS/../bodies.png")
     ap.add_argument("--decode-only", action="store_true", help="only decode the 5x5 champions")
+    ap.add_argument("--table", action="store_true", help="only print the study's table from RECORDS")
     a = ap.parse_args()
+    if a.table:
+        print(table(a.records, a.seeds, a.tasks))
+        return
     if a.pictures:
         print(pictures(a.records, a.records.parent / "bodies.png"))
         return
