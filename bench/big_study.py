@@ -97,38 +97,6 @@ def study(task: str, seed: int, out: Path, records: Path, workers: int, decode_o
     keep(grown, records)
 
 
-def pictures(records: Path, out: Path) -> Path:
-    """One picture of every champion body under `records` (runs and decoded champions), a row per
-    task, labelled with the folder's arm and its fitness."""
-    import json
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from evolve.runs.gallery import body_image
-
-    per_task: dict[str, list[tuple[Path, dict]]] = {}
-    for d in sorted(d for d in records.iterdir() if (d / "champion.json").is_file()):
-        rec = json.loads((d / "champion.json").read_text())
-        per_task.setdefault(rec["task"], []).append((d, rec))
-    tasks = sorted(per_task)
-    cols = max(len(v) for v in per_task.values())
-    fig, axes = plt.subplots(len(tasks), cols, figsize=(1.6 * cols, 2.0 * len(tasks)), squeeze=False)
-    for ax in axes.flat:
-        ax.axis("off")
-    for r, t in enumerate(tasks):
-        for c, (d, rec) in enumerate(per_task[t]):
-            axes[r][c].imshow(body_image(rec["body"], cell=8))
-            arm = d.name.replace(f"-{t}", "")
-            axes[r][c].set_title(f"{t}\n{arm}\n{rec['fitness']:.2f}", fontsize=6)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
-
-
 ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
     ("SGR at the big size, 100 gens", "sgr-{task}-{size}-s{seed}"),
     ("direct NEAT at the big size, 100 gens", "direct-{task}-{size}-s{seed}"),
@@ -181,6 +149,39 @@ def table(records: Path, seeds: list[int], tasks: list[str]) -> str:
     return "\n".join(lines)
 
 
+def pictures(records: Path, out: Path, seeds: list[int], tasks: list[str]) -> Path:
+    """One picture of every champion body of the study: a row per task and seed, a column per arm
+    (`ARMS`), each labelled with its fitness; an arm not run yet is left blank."""
+    import json
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from evolve.runs.gallery import body_image
+
+    rows = [(t, s) for t in tasks for s in seeds]
+    fig, axes = plt.subplots(len(rows), len(ARMS), figsize=(1.9 * len(ARMS), 1.9 * len(rows)),
+                             squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    short = ("SGR big", "direct big", "5x5 -> big", "5x5 at 50", "5x5 decoded", "5x5 (100 gens)")
+    for r, (task, seed) in enumerate(rows):
+        size = "x".join(map(str, SHAPES[task]))
+        for c, (_, pat) in enumerate(ARMS):
+            f = records / pat.format(task=task, size=size, seed=seed) / "champion.json"
+            if not f.is_file():
+                continue
+            rec = json.loads(f.read_text())
+            axes[r][c].imshow(body_image(rec["body"], cell=8))
+            axes[r][c].set_title(f"{task} s{seed}\n{short[c]}: {rec['fitness']:.2f}", fontsize=6)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(SHAPES), choices=list(SHAPES))
@@ -196,7 +197,7 @@ def main() -> None:
         print(table(a.records, a.seeds, a.tasks))
         return
     if a.pictures:
-        print(pictures(a.records, a.records.parent / "bodies.png"))
+        print(pictures(a.records, a.records.parent / "bodies.png", a.seeds, a.tasks))
         return
     a.out.mkdir(parents=True, exist_ok=True)
     for seed in a.seeds:
