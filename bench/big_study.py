@@ -111,8 +111,9 @@ ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
 def arm_cell(folders: list[Path]) -> str:
     """One table cell: the champions' mean return under uniform(+-1e-3) action noise (20 replays,
     the verdict's, `evolve.runs.champion.judge`), mean +- sd over seeds, then each seed's, how many
-    hold, and the runs' median seconds per generation (generations.csv; none for a decoded one, nor
-    for robust-fast's runs, timed on another machine two at a time)."""
+    hold, and each run's median seconds per generation (generations.csv, each seed's, since
+    seeds may run on different machines; none for a decoded one, nor for robust-fast's runs,
+    timed on another machine two at a time)."""
     import statistics
 
     import numpy as np
@@ -131,7 +132,7 @@ def arm_cell(folders: list[Path]) -> str:
     secs = [float(np.median(read_generations(d)["total_s"])) for d in have
             if (d / "generations.csv").is_file() and ROOT / "docs" / "robust-fast" not in d.parents]
     if secs:
-        text += f"; {statistics.fmean(secs):.1f} s/gen"
+        text += f"; {' / '.join(f'{x:.1f}' for x in secs)} s/gen"
     return text
 
 
