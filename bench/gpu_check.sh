@@ -13,6 +13,8 @@
 #    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
 #    evogym| exceeds 1e-9 on the GPU;
 # 4. `sgr bench` on Walker-v0 at B = 1024, 8192 and 65536 (robot-steps/s).
+# They run in the order 1, 4, 3, 2 (the slowest last), so a call cut short still brings back the
+# throughput and evogym's data.
 # Everything goes to $OUT (default gpu-check/) as JSON and text, with a summary at the end; exit 1
 # on a failed check. Rehearsal on a CPU (what bench/gpu_rehearsal.sh does):
 #   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 DATA=tests/data/returns PY=python3.12 bash bench/gpu_check.sh
@@ -36,24 +38,13 @@ SGR_ARCH=$GPU "$PY" -c "import tsim.runtime as r; print('taichi arch:', r.init()
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv | tee -a "$OUT/arch.txt" || true
 
 fail=0
-# 2. GPU against the CPU on every task, in each precision (SGR_PRECISION; PRECISIONS="f64 f32").
-# f64 is judged statistically: Taichi 1.7's CUDA JIT (taichi/runtime/cuda/jit_cuda.cpp) keeps
-# FPOpFusion::Strict with fast_math off but marks every function "unsafe-fp-math"="true", which
-# lets LLVM's NVPTX backend fuse multiply-adds (fma.rn.f64), so bits need not match the CPU's
-# (docs/VALIDATION.md, "CUDA f64"): the check fails on a task's median |return difference| above
-# F64_TOL and says whether the bits matched. f32 is compared with the CPU in f32 (F32_TOL).
-for prec in ${PRECISIONS:-f64 f32}; do
-  if [ "$prec" = f32 ] && ! grep -rqs "SGR_PRECISION" tsim/; then
-    echo "gpu_check: f32 skipped: this tree has no SGR_PRECISION option (branch precision)" | tee "$OUT/arch_compare_f32.txt"
-    continue
-  fi
-  tol=$([ "$prec" = f32 ] && echo "${F32_TOL:-1e-3}" || echo "${F64_TOL:-1e-6}")
-  SGR_PRECISION=$prec SGR_ARCH=cpu "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_cpu_$prec.json"
-  SGR_PRECISION=$prec SGR_ARCH=$GPU "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_gpu_$prec.json"
-  "$PY" bench/arch_returns.py --tol "$tol" --compare "$OUT/arch_cpu_$prec.json" "$OUT/arch_gpu_$prec.json" | tee "$OUT/arch_compare_$prec.txt" || fail=1
+# 1b. throughput first, each size under its own limit (BENCH_LIMIT s): on the H200 on 2026-12-04 the
+# 32-task comparison below took ~7 of the first call's 9 minutes (CUDA compiles each task's kernels
+# afresh), and B = 65536 did not finish in 70 s while 8192 took 14 s with its compile
+for B in ${SIZES:-1024 8192 32768}; do
+  SGR_ARCH=$GPU timeout "${BENCH_LIMIT:-120}" "$PY" -m evolve.cli bench --task Walker-v0 --robots "$B" --steps 50 --json | tee "$OUT/bench_$B.json" || echo "gpu_check: bench at B = $B did not finish in ${BENCH_LIMIT:-120} s" | tee -a "$OUT/summary.txt"
 done
-
-# 3. recorded evogym data that travelled
+# 2. recorded evogym data that travelled
 for d in ${DATA:-tests/data/returns tests/data/traces tests/data/evogym32}; do
   [ -d "$d" ] || continue
   name=$(basename "$d")
@@ -82,9 +73,22 @@ if bad:
 print(f"evogym's recorded data on the GPU: ok ({seen} task records)")
 PY
 
-# 4. throughput
-for B in ${SIZES:-1024 8192 65536}; do
-  SGR_ARCH=$GPU "$PY" -m evolve.cli bench --task Walker-v0 --robots "$B" --steps 50 --json | tee "$OUT/bench_$B.json"
+# 3. GPU against the CPU on every task (last: the slowest, ~7 min for f64 on the H200), in each precision (SGR_PRECISION; PRECISIONS="f64 f32").
+# f64 is judged statistically: Taichi 1.7's CUDA JIT (taichi/runtime/cuda/jit_cuda.cpp) keeps
+# FPOpFusion::Strict with fast_math off but marks every function "unsafe-fp-math"="true", which
+# lets LLVM's NVPTX backend fuse multiply-adds (fma.rn.f64), so bits need not match the CPU's
+# (docs/VALIDATION.md, "CUDA f64"): the check fails on a task's median |return difference| above
+# F64_TOL and says whether the bits matched. f32 is compared with the CPU in f32 (F32_TOL).
+for prec in ${PRECISIONS:-f64 f32}; do
+  if [ "$prec" = f32 ] && ! grep -rqs "SGR_PRECISION" tsim/; then
+    echo "gpu_check: f32 skipped: this tree has no SGR_PRECISION option (branch precision)" | tee "$OUT/arch_compare_f32.txt"
+    continue
+  fi
+  tol=$([ "$prec" = f32 ] && echo "${F32_TOL:-1e-3}" || echo "${F64_TOL:-1e-6}")
+  SGR_PRECISION=$prec SGR_ARCH=cpu "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_cpu_$prec.json"
+  SGR_PRECISION=$prec SGR_ARCH=$GPU "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_gpu_$prec.json"
+  "$PY" bench/arch_returns.py --tol "$tol" --compare "$OUT/arch_cpu_$prec.json" "$OUT/arch_gpu_$prec.json" | tee "$OUT/arch_compare_$prec.txt" || fail=1
 done
+
 echo "gpu_check: $(( $(date +%s) - start )) s; $([ $fail = 0 ] && echo ok || echo FAILED)" | tee "$OUT/summary.txt"
 exit $fail
