@@ -111,9 +111,9 @@ ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
 def arm_cell(folders: list[Path]) -> str:
     """One table cell: the champions' mean return under uniform(+-1e-3) action noise (20 replays,
     the verdict's, `evolve.runs.champion.judge`), mean +- sd over seeds, then each seed's, how many
-    hold, and each run's median seconds per generation (generations.csv, each seed's, since
-    seeds may run on different machines; none for a decoded one, nor for robust-fast's runs,
-    timed on another machine two at a time)."""
+    hold, and each seed's median seconds per generation (generations.csv; per seed, since seeds
+    may run on different machines; none for a decoded one, nor for robust-fast's runs, timed on
+    another machine two at a time)."""
     import statistics
 
     import numpy as np
