@@ -41,7 +41,7 @@ def run(args: argparse.Namespace) -> int:
     one = Path(paths[0])
     if len(paths) == 1 and not (args.compare or args.per_run) and (
             (one / "generations.csv").is_file() or not one.is_dir() or not find_runs(one, False)[0]):
-        out = plot_run(one, args.out or one / "fitness.png")  # (names what is missing, if anything)
+        out = plot_run(one, args.out or one / "fitness.png", diversity=True)  # (names what is missing)
     else:
         runs, skipped = find_runs(paths, need_config=False)
         for s in skipped:

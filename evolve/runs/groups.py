@@ -189,9 +189,9 @@ def _evaluation(raw) -> str:
     except (ValueError, TypeError):
         return f"robust {raw}"
     scale = f"±{r['action_scale']:g} {r['action_noise']}"
-    extra = [f"{k} {v}" for k, v in r.items()
+    extra = [k if v is True else f"{k} {v}" for k, v in r.items()
              if k not in ("episodes", "statistic", "action_scale", "action_noise") and v]
-    return f"robust: {r['episodes']} x {r['statistic']} {scale}" + "".join(f", {x}" for x in extra)
+    return f"robust {r['episodes']} x {r['statistic']} {scale}" + "".join(f", {x}" for x in extra)
 
 
 def _selection(raw) -> str:
@@ -204,7 +204,8 @@ def _selection(raw) -> str:
         s = FinalSelection.from_config(raw).to_json()
     except (ValueError, TypeError):
         return str(raw)
-    return ", ".join(f"{k} {v}" for k, v in s.items())
+    return (f"{s['candidates']} candidates, {s['episodes']} episodes {s['statistic']}, tolerance "
+            f"{s['tolerance']:g}, rank {s['rank']}" + (f", confirm {s['confirm']}" if s["confirm"] else ""))
 
 
 def _classic(settings: dict[str, str], pooled: Sequence[str]) -> str:
@@ -221,6 +222,16 @@ def _classic(settings: dict[str, str], pooled: Sequence[str]) -> str:
 
 SHORT = {"pop": "pop", "generations": "generations", "steps": "steps", "evaluation": "",
          "selection": "final selection", "precision": "", "arch": "arch", "shape": "", "start": ""}
+
+
+def _difference(key: str, value: str, values: Sequence[str]) -> str:
+    """What a label shows of a setting in which groups of one name differ: of a value listing
+    several items (evaluation, final selection), the items that not every group has."""
+    if key == "selection" and value == "none":
+        return "no final selection"
+    common = set.intersection(*(set(v.split(", ")) for v in values))
+    shown = ", ".join(p for p in value.split(", ") if p not in common) or value
+    return f"{SHORT[key]} {shown}".strip()
 
 
 def group_runs(run_dirs: Sequence[Path], pool: Sequence[str] = ()) -> list[Group]:
@@ -246,7 +257,7 @@ def group_runs(run_dirs: Sequence[Path], pool: Sequence[str] = ()) -> list[Group
     for same in alike.values():
         differ = [k for k in POOLABLE if len({g.settings[k] for g in same}) > 1]
         for g in same:
-            tell = [f"{SHORT[k]} {g.settings[k]}".strip() for k in differ]
+            tell = [_difference(k, g.settings[k], [o.settings[k] for o in same]) for k in differ]
             g.label = g.classic + (f" ({', '.join(tell)})" if tell else "")
     return sorted(groups, key=lambda g: (g.task, g.label))
 

@@ -1,8 +1,11 @@
 """Fitness plots of run directories (PNG, matplotlib's Agg canvas: no display needed).
 
-`plot_runs` compares methods: runs are grouped by (method, task) from their config.yaml, and each
-group becomes one curve, the mean over seeds of the best fitness per generation, with a min..max
-band over seeds, so the spread between seeds is visible rather than hidden in a mean.
+`plot_runs` compares methods: runs are grouped by every setting that makes them comparable
+(evolve/runs/groups.py: runs that differ in their seed alone), and each group becomes one curve,
+the mean over seeds of the best fitness per generation, with a min..max band over seeds, so the
+spread between seeds is visible rather than hidden in a mean. Each task gets its own row of
+panels (tasks never share a y axis), with the species count and the body diversity (generations.csv's
+n_species and body_diversity) beside the fitness where the runs record them.
 `plot_runs(..., per_run=True)` draws one line per run instead. `plot_run` shows one run's best, mean
 and median fitness. Generations are counted from 1 and the ticks are whole generations.
 """
@@ -268,17 +271,20 @@ def runs_plot_path(run_dirs: Sequence[str | Path]) -> Path:
     return common / "fitness.png"
 
 
-def plot_run(run_dir: str | Path, out: str | Path) -> Path:
+def plot_run(run_dir: str | Path, out: str | Path, diversity: bool = False) -> Path:
     """PNG of one run's best, mean and median fitness per generation, and its champion (of
-    champion.json) as a star; beside it, where the run records them, its species count and body
-    diversity. Returns the PNG path."""
+    champion.json) as a star; with `diversity` (`sgr plot RUN`), beside it, where the run records
+    them, its species count and body diversity (the run's own end file, fitness.png, keeps to
+    fitness: its size is what the run's end budgets for). Returns the PNG path."""
     cols = read_generations(run_dir)
     if "generation" not in cols:
         raise SgrError(f"{run_dir}/generations.csv has no rows")
     method, task = run_labels(run_dir)
-    extra = diversity_columns([run_dir])
-    fig = Figure(figsize=(8 + 4.5 * len(extra), 4.5))
-    ax = fig.add_subplot(1, 1 + len(extra), 1)
+    extra = diversity_columns([run_dir]) if diversity else []
+    # the diversity panels stacked small at the right: the PNG stays about the size it was
+    fig = Figure(figsize=(8 + 2.5 * bool(extra), 4.5))
+    grid = fig.add_gridspec(max(1, len(extra)), 2 if extra else 1, width_ratios=[2.4, 1] if extra else None)
+    ax = fig.add_subplot(grid[:, 0])
     for name in ("best", "mean", "median"):
         if name in cols:
             ax.plot(cols["generation"], cols[name], label=name)
@@ -287,10 +293,11 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
         ax.plot([champ[0]], [champ[1]], "k*", markersize=11,
                 label=f"champion: {champ[1]:.3f} (generation {champ[0]})")
     for j, column in enumerate(extra):
-        side = fig.add_subplot(1, 1 + len(extra), 2 + j)
-        side.plot(cols["generation"], np.where(np.isfinite(cols[column]), cols[column], np.nan),
-                  label=DIVERSITY[column].splitlines()[0])
-        _style(side, DIVERSITY[column].splitlines()[0], DIVERSITY[column])
+        side = fig.add_subplot(grid[j, 1])
+        side.plot(cols["generation"], np.where(np.isfinite(cols[column]), cols[column], np.nan))
+        _style(side, DIVERSITY[column].splitlines()[0], "")
+        if j < len(extra) - 1:
+            side.set_xlabel("")
     return _finish(fig, ax, f"{method} / {task}: {Path(run_dir).name}", "fitness", out)
 
 
@@ -309,7 +316,7 @@ def _style(ax: Axes, title: str, ylabel: str) -> None:
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # whole generations, never 2.5
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    if ax.get_lines():
+    if any(not line.get_label().startswith("_") for line in ax.get_lines()):
         ax.legend(fontsize="small")
 
 

@@ -1,9 +1,13 @@
 """A sweep's results as a table, a CSV and a figure, with the SGR authors' figures beside ours.
 
-`sgr report DIR` reads every run directory under DIR (a sweep's `runs/` or any folder of runs) and
-writes report.md, summary.csv and curves.png. "Best at generation g" is the best fitness found in
-generations 1..g (1-based; generation 1 is the first evaluated population), the quantity the
-paper's curves plot.
+`sgr report DIR` reads every run directory at any depth below DIR (a sweep, a folder of runs or of
+sweeps) and writes report.md, summary.csv and curves.png; what it passes over (files, a decoded
+champion, half a run) it names, with why. Runs are averaged only when they differ in their seed
+alone (evolve/runs/groups.py; `--pool` averages across the settings it names), and report.md lists
+the groups with their settings and runs. Between methods on a task (every other setting equal), a
+two-sided Mann-Whitney U test on the runs' champion fitness gives a p-value and the Vargha-Delaney
+A12. "Best at generation g" is the best fitness found in generations 1..g (1-based; generation 1 is
+the first evaluated population), the quantity the paper's curves plot.
 
 Robustness: evolution in a chaotic simulator can select a lucky trajectory, so each champion is
 replayed from its champion.json at each noise level eps (default 1e-9, rounding, and 1e-3, a

@@ -242,3 +242,18 @@ def test_old_runs_without_body_diversity_plot_and_report(tmp_path, saved):
     assert [ax.get_title() for ax in saved[-1].axes][1:] == ["Walker-v0: species"]
     text, _ = report(tmp_path / "runs")
     assert "sgr / Walker-v0" in table_rows(text)
+
+
+def test_sgr_plot_of_one_run_draws_its_species_and_body_diversity(tmp_path, saved, capsys):
+    """`sgr plot RUN`: the run's fitness and, beside it, its species and body diversity (the run's
+    0.5 / g); the run's own end file (plot_run's default) keeps to fitness."""
+    from evolve.runs.plots import plot_run
+
+    run = make_run(tmp_path / "run", best=(1.0, 2.0, 3.0))
+    assert main(["plot", str(run)]) == 0
+    titles = {ax.get_title(): ax for ax in saved[-1].axes}
+    assert set(titles) == {"sgr / Walker-v0: run", "species", "body diversity"}
+    assert list(titles["species"].get_lines()[0].get_ydata()) == [1, 2, 3]
+    assert list(titles["body diversity"].get_lines()[0].get_ydata()) == [0.5, 0.25, 0.5 / 3]
+    plot_run(run, tmp_path / "end.png")
+    assert len(saved[-1].axes) == 1
