@@ -433,15 +433,22 @@ def _rule(rows: list[dict]) -> str:
     return verdict_rule.RULE.replace(f"{verdict_rule.REPLAYS} replays", f"{n} replays")
 
 
+# summary.csv's columns of a run's group settings (evolve/runs/groups.py; `generations` there is
+# the planned count, the `generations` column the count run)
+SETTING_COLUMNS = ("shape", "pop", "steps", "evaluation", "selection", "precision", "arch", "start")
+
+
 def write_summary_csv(rows: list[dict], path: Path) -> None:
-    """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order:
-    missing values empty, other keys dropped."""
-    columns = summary_columns(_levels(rows))
+    """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
+    then the settings of each run's group (SETTING_COLUMNS, where the rows have them): missing
+    values empty, other keys dropped."""
+    setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
+    columns = summary_columns(_levels(rows)) + list(setting)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
     for r in rows:
-        w.writerow({k: r.get(k, "") for k in columns})
+        w.writerow({k: r.get(k, r.get("settings", {}).get(k, "")) for k in columns})
     atomic_write(path, buf.getvalue().encode())
 
 

@@ -67,9 +67,9 @@ def test_runs_of_different_populations_precisions_or_arches_are_separate_rows(tm
     assert "differ in pop (`--pool pop` averages them)" in text
     assert "| sgr (pop 16) | Walker-v0 | 5x5 | 16 | 1 |" in text  # the groups table: settings and runs
     assert any(line.startswith("  sgr (pop 16) / Walker-v0: 2 runs (big-0, big-1)") for line in lines)
-    summary = {r["run"]: r["method"] for r in csv.DictReader((runs / "summary.csv").open())}
-    assert summary == {"small-0": "sgr (pop 8)", "small-1": "sgr (pop 8)", "big-0": "sgr (pop 16)",
-                       "big-1": "sgr (pop 16)"}
+    summary = {r["run"]: (r["method"], r["pop"]) for r in csv.DictReader((runs / "summary.csv").open())}
+    assert summary == {"small-0": ("sgr (pop 8)", "8"), "small-1": ("sgr (pop 8)", "8"),
+                       "big-0": ("sgr (pop 16)", "16"), "big-1": ("sgr (pop 16)", "16")}
 
     pooled, _ = report(runs, pool=("pop",))
     assert list(table_rows(pooled)) == ["sgr / Walker-v0"]
