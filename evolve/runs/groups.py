@@ -13,7 +13,6 @@ Reading a folder never runs code: config.yaml is read with yaml.safe_load.
 
 from __future__ import annotations
 
-import os
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -265,8 +264,3 @@ def group_runs(run_dirs: Sequence[Path], pool: Sequence[str] = ()) -> list[Group
 def group_of_each_run(run_dirs: Sequence[Path], pool: Sequence[str] = ()) -> dict[Path, Group]:
     """Each run's group (`group_runs`)."""
     return {d: g for g in group_runs(run_dirs, pool) for d in g.runs}
-
-
-def common_folder(run_dirs: Sequence[Path]) -> Path:
-    """The deepest folder holding every run."""
-    return Path(os.path.commonpath([Path(d).resolve() for d in run_dirs]))

@@ -487,7 +487,9 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     n_cols = 1 + len(extra)
     fig = Figure(figsize=(6 * n_cols, 3.8 * len(tasks)))
     FigureCanvasAgg(fig)
-    cycle = plt_colors()
+    from evolve.runs.plots import matplotlib_colors
+
+    cycle = matplotlib_colors()
     color = {label: cycle[i] for i, label in enumerate(sorted({m for t in by_task.values() for m in t}))}
     for i, task in enumerate(tasks):
         ax = fig.add_subplot(len(tasks), n_cols, i * n_cols + 1)
@@ -520,13 +522,6 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
                 a.legend(fontsize="small")
     fig.tight_layout()
     return save_png(fig, path, dpi=110)
-
-
-def plt_colors() -> list[str]:
-    """matplotlib's default colour cycle, repeated."""
-    from evolve.runs.plots import matplotlib_colors
-
-    return matplotlib_colors()
 
 
 def _band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
