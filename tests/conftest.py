@@ -87,11 +87,14 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/methods/test_baselines.py": ALL,
         "tests/evolve/runs/test_checkpoint.py": (
             "test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_exactly",),
+        "tests/evolve/runs/test_diversity.py": ("test_every_method_with_bodies_records_it",),
         "tests/evolve/runs/test_every_task.py": ALL,
         "tests/evolve/runs/test_experiment.py": ("test_killed_run_resumes_with_identical_fitness_columns",
                                                  "test_a_run_directory_is_not_overwritten",
                                                  "test_evolve_task_and_method_run_the_packaged_config_in_a"
                                                  "_named_folder"),
+        "tests/evolve/runs/test_report_groups.py": (
+            "test_sgr_plot_runs_star_works_after_plot_report_and_decode_wrote_there",),
         "tests/evolve/runs/test_resume.py": (
             "test_a_finished_run_is_extended_exactly_by_resume_with_more_generations",
             "test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly"),

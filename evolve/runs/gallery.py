@@ -12,7 +12,7 @@ import base64
 import html
 import math
 import re
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -36,10 +36,11 @@ def body_image(body: np.ndarray, cell: int = 20) -> np.ndarray:
     return out
 
 
-def gallery_entries(rows: Sequence[dict], runs: Sequence[Path]) -> list[dict]:
-    """Per (method, task), the summary row and run directory of the seed with the best recorded
-    champion fitness (ties: the lower seed), sorted by method and task."""
-    by_name = {d.name: d for d in runs}
+def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Path]) -> list[dict]:
+    """Per (method, task) (the report's groups), the summary row and run directory of the seed with
+    the best recorded champion fitness (ties: the lower seed), sorted by method and task; `runs`
+    by the rows' `run` names (a list: by folder name)."""
+    by_name = dict(runs) if isinstance(runs, Mapping) else {d.name: d for d in runs}
     best: dict[tuple[str, str], dict] = {}
     for r in rows:
         f = r.get("champion_fitness")
@@ -65,7 +66,7 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
     folder.mkdir(parents=True, exist_ok=True)
     out = []
     for e in entries:
-        name = e["run"].name
+        name = str(e["row"].get("run") or e["run"].name).replace("/", "-")  # unique among the report's runs
         gif = champion_gif(e["run"], folder / f"{name}.gif", width=width, height=height, fps=fps,
                            every=every)
         _, body, _ = read_champion(e["run"])

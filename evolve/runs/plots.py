@@ -1,8 +1,11 @@
 """Fitness plots of run directories (PNG, matplotlib's Agg canvas: no display needed).
 
-`plot_runs` compares methods: runs are grouped by (method, task) from their config.yaml, and each
-group becomes one curve, the mean over seeds of the best fitness per generation, with a min..max
-band over seeds, so the spread between seeds is visible rather than hidden in a mean.
+`plot_runs` compares methods: runs are grouped by every setting that makes them comparable
+(evolve/runs/groups.py: runs that differ in their seed alone), and each group becomes one curve,
+the mean over seeds of the best fitness per generation, with a min..max band over seeds, so the
+spread between seeds is visible rather than hidden in a mean. Each task gets its own row of
+panels (tasks never share a y axis), with the species count and the body diversity (generations.csv's
+n_species and body_diversity) beside the fitness where the runs record them.
 `plot_runs(..., per_run=True)` draws one line per run instead. `plot_run` shows one run's best, mean
 and median fitness. Generations are counted from 1 and the ticks are whole generations.
 """
@@ -107,38 +110,67 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     return method, str(cfg.get("task") or UNKNOWN)
 
 
-def summarize_runs(run_dirs: Sequence[str | Path]) -> dict[tuple[str, str], Curve]:
-    """Group runs by (method, task) and aggregate their best fitness per generation across runs.
+def summarize_runs(run_dirs: Sequence[str | Path], column: str = "best",
+                   pool: Sequence[str] = ()) -> dict[tuple[str, str], Curve]:
+    """Group runs (evolve/runs/groups.py: by every setting that makes them comparable, but those
+    in `pool`), keyed (group label, task), and aggregate `column` per generation across runs.
 
     Runs may have different lengths (e.g. still running): each generation is aggregated over the
-    runs that reached it. Runs with no rows are skipped.
+    runs that reached it. Runs with no rows, or without the column, are skipped.
     """
+    from evolve.runs.groups import group_of_each_run
+
+    group_of = group_of_each_run([Path(d) for d in run_dirs], pool)
     groups: dict[tuple[str, str], list[dict[str, float]]] = {}
     for d in run_dirs:
         cols = read_generations(d)
-        if not cols or "best" not in cols or "generation" not in cols:
+        if not cols or column not in cols or "generation" not in cols:
             continue
-        best_by_gen = {int(g): b for g, b in zip(cols["generation"], cols["best"], strict=True)
-                       if np.isfinite(g)}
-        groups.setdefault(run_labels(d), []).append(best_by_gen)
+        by_gen = {int(g): b for g, b in zip(cols["generation"], cols[column], strict=True)
+                  if np.isfinite(g)}
+        g = group_of[Path(d)]
+        groups.setdefault((g.label, g.task), []).append(by_gen)
     curves = {}
     for (method, task), runs in sorted(groups.items()):
         gens = np.array(sorted(set().union(*runs)), dtype=np.int64)
         table = np.array([[r.get(int(g), np.nan) for g in gens] for r in runs])  # (runs, G)
         table = np.where(np.isfinite(table), table, np.nan)  # +-inf (no valid robot) counts as missing
         keep = ~np.all(np.isnan(table), axis=0)
+        if not keep.any():  # an older run without the column's values
+            continue
         t = table[:, keep]
         mean, low, high = np.nanmean(t, axis=0), np.nanmin(t, axis=0), np.nanmax(t, axis=0)
         curves[(method, task)] = Curve(method, task, gens[keep], mean, low, high, len(runs))
     return curves
 
 
-def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve]) -> list[Line2D]:
-    """One line (mean best fitness) and one min..max band per group; returns the lines in key order."""
+# generations.csv's columns of diversity, drawn beside fitness where any run records them
+DIVERSITY = {"n_species": "species",
+             "body_diversity": "body diversity\n(mean pairwise distance per cell)"}
+
+
+def diversity_columns(run_dirs: Sequence[str | Path]) -> list[str]:
+    """The DIVERSITY columns with a finite value in any of the runs (older runs lack
+    body_diversity; a method without bodies records NaN)."""
+    found = []
+    for column in DIVERSITY:
+        for d in run_dirs:
+            values = read_generations(d).get(column)
+            if values is not None and np.isfinite(values).any():
+                found.append(column)
+                break
+    return found
+
+
+def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve],
+                colors: dict[str, str] | None = None) -> list[Line2D]:
+    """One line (mean best fitness) and one min..max band per group (in its colour of `colors`,
+    by label, if given); returns the lines in key order."""
     lines = []
     for (method, task), c in curves.items():
         seeds = f"{c.n_runs} run{'s' if c.n_runs != 1 else ''}"
-        (line,) = ax.plot(c.generation, c.mean, label=f"{method} / {task} (mean of {seeds}; band min-max)")
+        (line,) = ax.plot(c.generation, c.mean, label=f"{method} / {task} (mean of {seeds}; band min-max)",
+                          **({"color": colors[method]} if colors and method in colors else {}))
         ax.fill_between(c.generation, c.low, c.high, color=line.get_color(), alpha=0.2, linewidth=0)
         lines.append(line)
     return lines
@@ -155,37 +187,70 @@ def save_png(fig: Figure, out: str | Path, dpi: int = 120) -> Path:
     return out
 
 
-def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = False) -> Path:
-    """PNG comparing (method, task) groups of runs: mean best fitness per generation with a min..max
-    band over seeds (`summarize_runs` gives the groups), or with `per_run` one line per run, in
-    its group's colour. Returns the PNG path."""
-    curves = summarize_runs(run_dirs)
+def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = False,
+              pool: Sequence[str] = ()) -> Path:
+    """PNG comparing groups of runs (`summarize_runs`), one row of panels per task (tasks never
+    share a y axis): the mean best fitness per generation with a min..max band over seeds, or with
+    `per_run` one line per run in its group's colour; beside it, where the runs record them,
+    species and body diversity drawn the same way. Returns the PNG path."""
+    from evolve.runs.groups import run_settings
+
+    curves = summarize_runs(run_dirs, pool=pool)
     if not curves:
         raise SgrError("no run with generations to plot among " + ", ".join(map(str, run_dirs)))
-    fig = Figure(figsize=(8, 4.5))
-    ax = fig.add_subplot()
-    if per_run:
-        draw_runs(ax, run_dirs)
-    else:
-        draw_curves(ax, curves)
     tasks = sorted({t for _, t in curves})
-    return _finish(fig, ax, f"Best fitness per generation: {', '.join(tasks)}", "best fitness", out)
+    extra = diversity_columns(run_dirs)
+    side_curves = {column: summarize_runs(run_dirs, column, pool) for column in extra}
+    task_of = {Path(d): run_settings(Path(d))["task"] for d in run_dirs}
+    colors = _group_colors(curves)
+    fig = Figure(figsize=(8 + 4.5 * len(extra), 4.5 * len(tasks)))
+    first = None
+    for i, task in enumerate(tasks):
+        ax = fig.add_subplot(len(tasks), 1 + len(extra), i * (1 + len(extra)) + 1)
+        mine = [d for d in run_dirs if task_of[Path(d)] == task]
+        if per_run:
+            draw_runs(ax, mine, pool=pool, colors=colors)
+        else:
+            draw_curves(ax, {k: c for k, c in curves.items() if k[1] == task}, colors=colors)
+        for j, column in enumerate(extra):
+            side = fig.add_subplot(len(tasks), 1 + len(extra), i * (1 + len(extra)) + 2 + j)
+            if per_run:
+                draw_runs(side, mine, column, pool, colors)
+            else:
+                draw_curves(side, {k: c for k, c in side_curves[column].items() if k[1] == task},
+                            colors=colors)
+            _style(side, f"{task}: {DIVERSITY[column].splitlines()[0]}", DIVERSITY[column])
+        if first is None:
+            first = (ax, f"Best fitness per generation: {task}")
+        else:
+            _style(ax, f"Best fitness per generation: {task}", "best fitness")
+    return _finish(fig, first[0], first[1], "best fitness", out)
 
 
-def draw_runs(ax: Axes, run_dirs: Sequence[str | Path]) -> None:
-    """One line per run (best fitness per generation), one colour per (method, task) group."""
-    colors: dict[tuple[str, str], str] = {}
+def _group_colors(curves: dict[tuple[str, str], Curve]) -> dict[str, str]:
+    """One colour per group label, the same in every panel."""
+    cycle = iter(matplotlib_colors())
+    return {label: next(cycle) for label in sorted({m for m, _ in curves})}
+
+
+def draw_runs(ax: Axes, run_dirs: Sequence[str | Path], column: str = "best", pool: Sequence[str] = (),
+              colors: dict[str, str] | None = None) -> None:
+    """One line per run (`column` per generation), one colour per group."""
+    from evolve.runs.groups import group_of_each_run
+
+    group_of = group_of_each_run([Path(d) for d in run_dirs], pool)
+    colors = dict(colors or {})
     cycle = iter(matplotlib_colors())
     for d in run_dirs:
         cols = read_generations(d)
-        if not cols or "best" not in cols or "generation" not in cols:
+        if not cols or column not in cols or "generation" not in cols:
             continue
-        group = run_labels(d)
-        if group not in colors:
-            colors[group] = next(cycle)
-        best = np.where(np.isfinite(cols["best"]), cols["best"], np.nan)
-        ax.plot(cols["generation"], best, color=colors[group], alpha=0.85,
-                label=f"{group[0]} / {group[1]}: {Path(d).name}")
+        g = group_of[Path(d)]
+        if g.label not in colors:
+            colors[g.label] = next(cycle)
+        values = np.where(np.isfinite(cols[column]), cols[column], np.nan)
+        ax.plot(cols["generation"], values, color=colors[g.label], alpha=0.85,
+                label=f"{g.label} / {g.task}: {Path(d).name}")
 
 
 def matplotlib_colors() -> list[str]:
@@ -206,15 +271,20 @@ def runs_plot_path(run_dirs: Sequence[str | Path]) -> Path:
     return common / "fitness.png"
 
 
-def plot_run(run_dir: str | Path, out: str | Path) -> Path:
+def plot_run(run_dir: str | Path, out: str | Path, diversity: bool = False) -> Path:
     """PNG of one run's best, mean and median fitness per generation, and its champion (of
-    champion.json) as a star; returns the PNG path."""
+    champion.json) as a star; with `diversity` (`sgr plot RUN`), beside it, where the run records
+    them, its species count and body diversity (the run's own end file, fitness.png, keeps to
+    fitness: its size is what the run's end budgets for). Returns the PNG path."""
     cols = read_generations(run_dir)
     if "generation" not in cols:
         raise SgrError(f"{run_dir}/generations.csv has no rows")
     method, task = run_labels(run_dir)
-    fig = Figure(figsize=(8, 4.5))
-    ax = fig.add_subplot()
+    extra = diversity_columns([run_dir]) if diversity else []
+    # the diversity panels stacked small at the right: the PNG stays about the size it was
+    fig = Figure(figsize=(8 + 2.5 * bool(extra), 4.5))
+    grid = fig.add_gridspec(max(1, len(extra)), 2 if extra else 1, width_ratios=[2.4, 1] if extra else None)
+    ax = fig.add_subplot(grid[:, 0])
     for name in ("best", "mean", "median"):
         if name in cols:
             ax.plot(cols["generation"], cols[name], label=name)
@@ -222,6 +292,12 @@ def plot_run(run_dir: str | Path, out: str | Path) -> Path:
     if champ is not None:  # the champion of champion.json (re-chosen by select-champion: redrawn)
         ax.plot([champ[0]], [champ[1]], "k*", markersize=11,
                 label=f"champion: {champ[1]:.3f} (generation {champ[0]})")
+    for j, column in enumerate(extra):
+        side = fig.add_subplot(grid[j, 1])
+        side.plot(cols["generation"], np.where(np.isfinite(cols[column]), cols[column], np.nan))
+        _style(side, DIVERSITY[column].splitlines()[0], "")
+        if j < len(extra) - 1:
+            side.set_xlabel("")
     return _finish(fig, ax, f"{method} / {task}: {Path(run_dir).name}", "fitness", out)
 
 
@@ -234,12 +310,17 @@ def _champion(run_dir: str | Path) -> tuple[int, float] | None:
         return None
 
 
-def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
+def _style(ax: Axes, title: str, ylabel: str) -> None:
     ax.set_title(title)
     ax.set_xlabel("generation")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # whole generations, never 2.5
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize="small")
+    if any(not line.get_label().startswith("_") for line in ax.get_lines()):
+        ax.legend(fontsize="small")
+
+
+def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> Path:
+    _style(ax, title, ylabel)
     fig.tight_layout()
     return save_png(fig, out)

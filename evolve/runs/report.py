@@ -1,9 +1,13 @@
 """A sweep's results as a table, a CSV and a figure, with the SGR authors' figures beside ours.
 
-`sgr report DIR` reads every run directory under DIR (a sweep's `runs/` or any folder of runs) and
-writes report.md, summary.csv and curves.png. "Best at generation g" is the best fitness found in
-generations 1..g (1-based; generation 1 is the first evaluated population), the quantity the
-paper's curves plot.
+`sgr report DIR` reads every run directory at any depth below DIR (a sweep, a folder of runs or of
+sweeps) and writes report.md, summary.csv and curves.png; what it passes over (files, a decoded
+champion, half a run) it names, with why. Runs are averaged only when they differ in their seed
+alone (evolve/runs/groups.py; `--pool` averages across the settings it names), and report.md lists
+the groups with their settings and runs. Between methods on a task (every other setting equal), a
+two-sided Mann-Whitney U test on the runs' champion fitness gives a p-value and the Vargha-Delaney
+A12. "Best at generation g" is the best fitness found in generations 1..g (1-based; generation 1 is
+the first evaluated population), the quantity the paper's curves plot.
 
 Robustness: evolution in a chaotic simulator can select a lucky trajectory, so each champion is
 replayed from its champion.json at each noise level eps (default 1e-9, rounding, and 1e-3, a
@@ -19,10 +23,13 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
+import json
 import math
+import os
 import statistics
 from collections import defaultdict
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -30,7 +37,7 @@ import yaml
 
 from evolve.runs import verdict as verdict_rule
 from evolve.runs.files import atomic_write
-from evolve.runs.plots import read_generations, run_labels, save_png
+from evolve.runs.plots import read_generations, save_png
 from tsim.errors import SgrError
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
@@ -91,23 +98,27 @@ def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
     return SUMMARY_COLUMNS[:-2] + noise + SUMMARY_COLUMNS[-2:]
 
 
-def run_dirs_under(folder: str | Path | Sequence[str | Path]) -> list[Path]:
-    """Run directories (with config.yaml and generations.csv): folder itself when it is one (as
-    `sgr render RUN` takes it), else those in folder/runs or in folder; of each folder when given
-    several."""
-    if not isinstance(folder, str | Path):
-        return [d for f in folder for d in run_dirs_under(f)]
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise SgrError(f"not a folder: {folder}")
-    if (folder / "config.yaml").is_file() and (folder / "generations.csv").is_file():
-        return [folder]
-    base = folder / "runs" if (folder / "runs").is_dir() else folder
-    runs = sorted(d for d in base.iterdir()
-                  if (d / "config.yaml").is_file() and (d / "generations.csv").is_file())
+def find_report_runs(folders: Sequence[str | Path]) -> tuple[list[Path], list]:
+    """The run folders (config.yaml and generations.csv) at any depth below `folders` (each may
+    be a run itself, as `sgr render RUN` takes it) and what was skipped, with why
+    (evolve/runs/groups.py); SgrError when there is no run at all."""
+    from evolve.runs.groups import find_runs
+
+    runs, skipped = find_runs(folders)
     if not runs:
-        raise SgrError(f"{folder} holds no run directories (folders with config.yaml and generations.csv)")
-    return runs
+        raise SgrError(f"{', '.join(map(str, folders))} holds no run directories (folders with config.yaml "
+                       "and generations.csv)" + "".join(f"; {s.line()}" for s in skipped[:5]))
+    return runs, skipped
+
+
+def run_names(runs: Sequence[Path]) -> dict[Path, str]:
+    """Each run's name in the report: its path below the folder that holds them all (the folder's
+    name for runs side by side, as sweeps lay them out; a longer path where runs sit at several
+    depths or in several folders, so that no two share a name)."""
+    if not runs:
+        return {}
+    base = Path(os.path.commonpath([Path(d).resolve().parent for d in runs]))
+    return {d: Path(d).resolve().relative_to(base).as_posix() for d in runs}
 
 
 def best_so_far(run_dir: Path) -> np.ndarray:
@@ -142,18 +153,28 @@ def champion_robustness(run_dir: Path, replays: int = 10,
 
 
 def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS,
-              replays: int = 10) -> list[dict]:
-    """One row per run (`summary_columns`): best so far at generations 1, 30, 100 and the end (NaN
-    when not reached); `robustness` also replays each champion (`champion_robustness`)."""
+              replays: int = 10, pool: Sequence[str] = ()) -> list[dict]:
+    """One row per run (`summary_columns`): its group's label as `method` (evolve/runs/groups.py:
+    runs that differ in their seed alone, or in the settings in `pool`) and its `settings`; best
+    so far at generations 1, 30, 100 and the end (NaN when not reached); the champion's recorded
+    fitness; `robustness` also replays each champion (`champion_robustness`)."""
+    from evolve.runs.groups import group_of_each_run
+
+    group_of = group_of_each_run(runs, pool)
+    names = run_names(runs)
     rows = []
     for d in runs:
-        method, task = run_labels(d)
-        cfg = yaml.safe_load((d / "config.yaml").read_text())
+        g = group_of[d]
+        cfg = yaml.safe_load((d / "config.yaml").read_text()) or {}
         best = best_so_far(d)
         cols = read_generations(d)
-        row = {"method": method, "task": task, "seed": cfg.get("seed"), "generations": len(best),
-               "run": d.name, "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
-               "episode_steps": episode_length(cfg, task)}
+        row = {"method": g.label, "task": g.task, "seed": cfg.get("seed"), "generations": len(best),
+               "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
+               "episode_steps": episode_length(cfg, g.task), "settings": g.settings, "classic": g.classic,
+               "path": d}
+        fitness = _recorded_fitness(d)
+        if fitness is not None:
+            row["champion_fitness"] = fitness
         for g in CHECKPOINTS:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
@@ -163,6 +184,14 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
                 row["verdict"] = _verdict(row).label
         rows.append(row)
     return rows
+
+
+def _recorded_fitness(run_dir: Path) -> float | None:
+    """champion.json's fitness, None without a readable one."""
+    try:
+        return float(json.loads((run_dir / "champion.json").read_text())["fitness"])
+    except (OSError, ValueError, KeyError, TypeError):
+        return None
 
 
 def _levels(rows: list[dict]) -> list[float]:
@@ -189,9 +218,11 @@ def _fmt(x: float | str | None) -> str:
     return "-" if x is None else x if isinstance(x, str) else f"{x:.2f}"
 
 
-def report_markdown(rows: list[dict]) -> str:
-    """report.md's text: `summarize` rows grouped by (method, task), mean +- sd over seeds, with the
-    authors' figures beside; then each champion under noise, run by run."""
+def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str] = ()) -> str:
+    """report.md's text: `summarize` rows grouped by (method, task) (`method` is the group's label:
+    evolve/runs/groups.py), mean +- sd over seeds, with the authors' figures beside; the groups and
+    their settings; Mann-Whitney U tests between methods (`method_tests`); each champion under
+    noise, run by run; the paths `skipped` (evolve/runs/groups.py's Skipped), with why."""
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in rows:
         groups[(r["method"], r["task"])].append(r)
@@ -216,7 +247,7 @@ def report_markdown(rows: list[dict]) -> str:
     out.write("|---" * (11 + 2 * len(levels) + judged) + "|\n")
     for (method, task), rs in sorted(groups.items()):
         gens = sorted({r["generations"] for r in rs})
-        authors = AUTHORS.get((method, task))
+        authors = AUTHORS.get((rs[0].get("classic", method), task))
         a = " / ".join(_fmt(x) for x in authors) if authors else "-"
         why = authors_not_comparable(task, [r.get("episode_steps") for r in rs]) if authors else None
         if why:  # another episode length: their figures measure something else
@@ -244,6 +275,13 @@ def report_markdown(rows: list[dict]) -> str:
                   "their recorded fitness** from champion.json (> 1e-9): "
                   + "; ".join(f"{r['run']} {r['champion_fitness']:.6g} -> {r['replay']:.6g}"
                               for r in off) + ".\n")
+    out.write(groups_markdown(rows, pool))
+    out.write(tests_markdown(rows))
+    if skipped:
+        many = len(skipped) != 1
+        out.write(f"\n## Skipped\n\n{len(skipped)} path{'s' if many else ''} given or found "
+                  f"that {'are' if many else 'is'} not a run:\n\n"
+                  + "".join(f"- {s.line()}\n" for s in skipped))
     rob = [r for r in rows if "nominal" in r]
     if rob and levels:
         out.write("\n## Each champion under noise\n\nmean / worst of the replays at each level, and "
@@ -274,6 +312,114 @@ def report_markdown(rows: list[dict]) -> str:
     return out.getvalue()
 
 
+GROUP_HEAD = {"method": "method", "task": "task", "shape": "shape", "pop": "pop",
+              "generations": "generations", "steps": "steps", "evaluation": "evaluation",
+              "selection": "final selection",
+              "precision": "precision", "arch": "arch", "start": "origin"}
+
+
+def _groups(rows: list[dict]) -> dict[tuple[str, str], list[dict]]:
+    """The rows of each (label, task), in sorted order."""
+    groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
+    for r in rows:
+        groups[(r["method"], r["task"])].append(r)
+    return dict(sorted(groups.items()))
+
+
+def groups_markdown(rows: list[dict], pool: Sequence[str] = ()) -> str:
+    """The groups the table averages over, each with its settings and runs, and which groups of a
+    task were kept apart and by what (rows from `summarize`; "" for rows without settings)."""
+    from evolve.runs.groups import SETTINGS
+
+    groups = {k: rs for k, rs in _groups(rows).items() if "settings" in rs[0]}
+    if not groups:
+        return ""
+    out = io.StringIO()
+    out.write("\n## Groups\n\nEach row of the table averages the runs of one group: runs that differ "
+              "in their seed alone" + (f" or in {', '.join(pool)} (`--pool`)" if pool else "") + ".\n\n")
+    out.write("| " + " | ".join([*GROUP_HEAD.values(), "runs"]) + " |\n"
+              + "|---" * (len(SETTINGS) + 1) + "|\n")
+    for (label, _), rs in groups.items():
+        st = rs[0]["settings"]
+        out.write(f"| {label} | " + " | ".join(st[k] for k in SETTINGS[1:]) + " | "
+                  + ", ".join(r["run"] for r in rs) + " |\n")
+    apart: dict[tuple[str, str], list[dict]] = defaultdict(list)
+    for rs in groups.values():
+        apart[(rs[0].get("classic", rs[0]["method"]), rs[0]["task"])].append(rs[0]["settings"])
+    notes = []
+    for (classic, task), settings in sorted(apart.items()):
+        differ = [k for k in SETTINGS[2:] if len({st[k] for st in settings}) > 1]
+        if len(settings) > 1 and differ:
+            notes.append(f"{classic} on {task}: {len(settings)} groups, which differ in "
+                         f"{', '.join(differ)} (`--pool {','.join(differ)}` averages them)")
+    if notes:
+        out.write("\n**Not averaged together:** " + "; ".join(notes) + ".\n")
+    return out.getvalue()
+
+
+NA = "n/a (need >= 2 runs per method)"
+
+
+def mann_whitney(a: Sequence[float], b: Sequence[float]) -> dict | None:
+    """The two-sided Mann-Whitney U test of samples a and b (scipy.stats.mannwhitneyu, its default
+    method: exact for small samples without ties, else the normal approximation) with the
+    Vargha-Delaney effect size A12 = U / (n_a n_b), the probability that a value of a exceeds one of
+    b (ties count half): 0.5 no difference; NaNs dropped; None with fewer than 2 values a side."""
+    from scipy.stats import mannwhitneyu
+
+    a = [float(x) for x in a if not math.isnan(x)]
+    b = [float(x) for x in b if not math.isnan(x)]
+    if len(a) < 2 or len(b) < 2:
+        return None
+    res = mannwhitneyu(a, b, alternative="two-sided")
+    u = float(res.statistic)
+    return {"u": u, "p": float(res.pvalue), "a12": u / (len(a) * len(b)), "n": (len(a), len(b))}
+
+
+def method_tests(rows: list[dict]) -> list[dict]:
+    """A Mann-Whitney U test (`mann_whitney`) for each pair of groups of one task that differ in
+    their method alone, on each run's champion fitness (champion.json), or where a run of the two
+    has none, on the best fitness it found (`end`)."""
+    from evolve.runs.groups import SETTINGS
+
+    alike: dict[tuple, list[tuple[str, list[dict]]]] = defaultdict(list)
+    for (label, _), rs in _groups(rows).items():
+        if "settings" in rs[0]:
+            alike[tuple(rs[0]["settings"][k] for k in SETTINGS if k != "method")].append((label, rs))
+    out = []
+    for others, groups in alike.items():
+        for (la, ra), (lb, rb) in itertools.combinations(groups, 2):
+            both = ra + rb
+            on = ("champion" if all(math.isfinite(r.get("champion_fitness", math.nan)) for r in both)
+                  else "end")
+            key = "champion_fitness" if on == "champion" else "best_final"
+            test = mann_whitney([r[key] for r in ra], [r[key] for r in rb])
+            out.append({"task": others[0], "a": la, "b": lb, "on": on, "n": (len(ra), len(rb)),
+                        "test": test})
+    return out
+
+
+def tests_markdown(rows: list[dict]) -> str:
+    """report.md's section of `method_tests` ("" when no two methods are comparable)."""
+    tests = method_tests(rows)
+    if not tests:
+        return ""
+    out = io.StringIO()
+    out.write("\n## Between methods\n\nA two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu) for each "
+              "pair of groups of a task that differ in their method alone, on each run's *champion* "
+              "fitness (champion.json; *end*: the best fitness found, where a run has no champion). U is "
+              "A's statistic; A12 (Vargha-Delaney) = U / (n_A n_B), the probability that a run of A "
+              "scores above a run of B, ties counting half: 0.5 is no difference, above 0.71 or below "
+              "0.29 a large effect. The p-values are not corrected for the number of tests.\n\n")
+    out.write("| task | A | B | on | runs A / B | U | p | A12 |\n" + "|---" * 8 + "|\n")
+    for t in tests:
+        r = t["test"]
+        cells = (["-", NA, "-"] if r is None else [f"{r['u']:g}", f"{r['p']:.3g}", f"{r['a12']:.2f}"])
+        out.write(f"| {t['task']} | {t['a']} | {t['b']} | {t['on']} | {t['n'][0]} / {t['n'][1]} | "
+                  + " | ".join(cells) + " |\n")
+    return out.getvalue()
+
+
 def _verdict(row: dict) -> verdict_rule.Verdict:
     """A summary row's verdict (evolve/runs/verdict.py) from its replays at the rule's noise level."""
     return verdict_rule.Verdict(row["nominal"], row[noise_column(verdict_rule.EPS, "mean")],
@@ -287,90 +433,146 @@ def _rule(rows: list[dict]) -> str:
     return verdict_rule.RULE.replace(f"{verdict_rule.REPLAYS} replays", f"{n} replays")
 
 
+# summary.csv's columns of a run's group settings (evolve/runs/groups.py; `generations` there is
+# the planned count, the `generations` column the count run)
+SETTING_COLUMNS = ("shape", "pop", "steps", "evaluation", "selection", "precision", "arch", "start")
+
+
 def write_summary_csv(rows: list[dict], path: Path) -> None:
-    """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order:
-    missing values empty, other keys dropped."""
-    columns = summary_columns(_levels(rows))
+    """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
+    then the settings of each run's group (SETTING_COLUMNS, where the rows have them): missing
+    values empty, other keys dropped."""
+    setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
+    columns = summary_columns(_levels(rows)) + list(setting)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
     for r in rows:
-        w.writerow({k: r.get(k, "") for k in columns})
+        w.writerow({k: r.get(k, r.get("settings", {}).get(k, "")) for k in columns})
     atomic_write(path, buf.getvalue().encode())
 
 
-def plot_curves(runs: list[Path], path: Path) -> Path:
-    """One panel per task: mean best-so-far fitness per method with a ± sd band over seeds, over the
-    runs' generations; the authors' SGR figures as markers at the generations the runs reached, only
-    where the runs used the paper's episode lengths (as the authors did)."""
+def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
+    """One row of panels per task (tasks never share a y axis): mean best-so-far fitness per group
+    (evolve/runs/groups.py) with a ± sd band over seeds, over the runs' generations, and the
+    authors' SGR figures as markers at the generations the runs reached, only where the runs used
+    the paper's episode lengths (as the authors did); beside it, where the runs record them, the
+    mean species count and body diversity per generation, drawn the same way."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
-    by_task: dict[str, dict[str, list[np.ndarray]]] = defaultdict(lambda: defaultdict(list))
+    from evolve.runs.groups import group_of_each_run
+    from evolve.runs.plots import DIVERSITY, diversity_columns
+
+    group_of = group_of_each_run(runs, pool)
+    extra = diversity_columns(runs)
+    by_task: dict[str, dict[str, dict[str, list[np.ndarray]]]] = defaultdict(
+        lambda: defaultdict(lambda: defaultdict(list)))
     steps: dict[tuple[str, str], list] = defaultdict(list)
+    classic: dict[str, str] = {}
     for d in runs:
-        method, task = run_labels(d)
-        steps[(method, task)].append(episode_length(yaml.safe_load((d / "config.yaml").read_text()) or {},
-                                                    task))
+        g = group_of[d]
+        classic[g.label] = g.classic
+        steps[(g.label, g.task)].append(episode_length(yaml.safe_load((d / "config.yaml").read_text()) or {},
+                                                       g.task))
         b = best_so_far(d)
         if len(b):
-            by_task[task][method].append(b)
+            by_task[g.task][g.label]["best"].append(b)
+            cols = read_generations(d)
+            for column in extra:
+                if column in cols:
+                    by_task[g.task][g.label][column].append(cols[column])
     tasks = sorted(by_task)
-    cols = min(2, len(tasks))
-    rows_n = math.ceil(len(tasks) / cols)
-    fig = Figure(figsize=(6 * cols, 3.8 * rows_n))
+    n_cols = 1 + len(extra)
+    fig = Figure(figsize=(6 * n_cols, 3.8 * len(tasks)))
     FigureCanvasAgg(fig)
+    from evolve.runs.plots import matplotlib_colors
+
+    cycle = matplotlib_colors()
+    color = {label: cycle[i] for i, label in enumerate(sorted({m for t in by_task.values() for m in t}))}
     for i, task in enumerate(tasks):
-        ax = fig.add_subplot(rows_n, cols, i + 1)
-        for method, curves in sorted(by_task[task].items()):
-            n = max(len(c) for c in curves)
-            table = np.full((len(curves), n), np.nan)
-            for j, c in enumerate(curves):
-                table[j, :len(c)] = np.where(np.isfinite(c), c, np.nan)
-            mean = np.nanmean(table, axis=0)
-            sd = np.nanstd(table, axis=0)
-            g = np.arange(1, n + 1)
-            (line,) = ax.plot(g, mean, label=f"{method} ({len(curves)} seeds)")
-            ax.fill_between(g, mean - sd, mean + sd, color=line.get_color(), alpha=0.2, linewidth=0)
-        last = max(len(c) for curves in by_task[task].values() for c in curves)
+        ax = fig.add_subplot(len(tasks), n_cols, i * n_cols + 1)
+        sides = [fig.add_subplot(len(tasks), n_cols, i * n_cols + 2 + j) for j in range(len(extra))]
+        for method, series in sorted(by_task[task].items()):
+            curves = series["best"]
+            _band(ax, curves, color[method], f"{method} ({len(curves)} seeds)")
+            for side, column in zip(sides, extra, strict=True):
+                if series[column]:
+                    _band(side, series[column], color[method], method)
+        last = max(len(c) for m in by_task[task].values() for c in m["best"])
         for method in sorted(by_task[task]):  # the authors' figures at generations 1, 30, 100
-            known = [(g, v) for g, v in zip(CHECKPOINTS, AUTHORS.get((method, task), ())[:3], strict=False)
+            known = [(g, v) for g, v in zip(CHECKPOINTS, AUTHORS.get((classic[method], task), ())[:3],
+                                            strict=False)
                      if isinstance(v, float) and g <= last]  # the x-axis stays the runs'
             if authors_not_comparable(task, steps[(method, task)]):
                 continue  # other episode lengths: no marker (report.md says why)
-            if known and method == "sgr":  # their other methods' logs are doubtful (docs/RESULTS.md)
+            if known and classic[method] == "sgr":  # their other methods' logs are doubtful (docs/RESULTS.md)
                 ax.plot(*zip(*known, strict=True), "kx", label="sgr, authors' logs")
-        ax.set_title(task)
-        ax.set_xlabel("generation")
-        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
-        ax.set_xlim(0.5, last + 0.5)
-        ax.set_ylabel("best fitness")
-        ax.grid(alpha=0.3)
-        ax.legend(fontsize="small")
+        for a, title, ylabel in [(ax, task, "best fitness"),
+                                 *((side, f"{task}: {DIVERSITY[c].splitlines()[0]}", DIVERSITY[c])
+                                   for side, c in zip(sides, extra, strict=True))]:
+            a.set_title(title)
+            a.set_xlabel("generation")
+            a.xaxis.set_major_locator(MaxNLocator(integer=True))
+            a.set_xlim(0.5, last + 0.5)
+            a.set_ylabel(ylabel)
+            a.grid(alpha=0.3)
+            if a.get_lines():
+                a.legend(fontsize="small")
     fig.tight_layout()
     return save_png(fig, path, dpi=110)
 
 
+def _band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
+    """The mean over runs per generation (each run's values from generation 1) with a ± sd band;
+    non-finite values count as missing."""
+    n = max(len(c) for c in curves)
+    table = np.full((len(curves), n), np.nan)
+    for j, c in enumerate(curves):
+        table[j, :len(c)] = np.where(np.isfinite(c), c, np.nan)
+    seen = ~np.all(np.isnan(table), axis=0)
+    if not seen.any():
+        return
+    g = np.arange(1, n + 1)[seen]
+    t = table[:, seen]
+    mean, sd = np.nanmean(t, axis=0), np.nanstd(t, axis=0)
+    ax.plot(g, mean, color=color, label=label)
+    ax.fill_between(g, mean - sd, mean + sd, color=color, alpha=0.2, linewidth=0)
+
+
 def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
                  robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS, replays: int = 10,
-                 gallery: bool = True) -> Path:
+                 gallery: bool = True, pool: Sequence[str] = (),
+                 say: Callable[[str], None] | None = None) -> Path:
     """report.md (at `out`, default <first folder>/report.md), summary.csv, curves.png and
-    report.html beside it, the runs of one folder or several (e.g. a sweep and its robust twin);
+    report.html beside it, of the runs at any depth below one folder or several (e.g. a sweep and
+    its robust twin), grouped by the settings that make them comparable (but those in `pool`);
     each champion replayed `replays` times at each noise level in `levels`; `gallery`: the best
-    seed's champion per method and task as a GIF and a body picture in gallery/, inlined in
-    report.html."""
+    seed's champion per group as a GIF and a body picture in gallery/, inlined in report.html.
+    `say` gets one line per path skipped and per group."""
     from evolve.runs.gallery import gallery_entries, report_html, write_gallery
 
     folders = [folder] if isinstance(folder, str | Path) else list(folder)
-    runs = run_dirs_under(folders)
+    runs, skipped = find_report_runs(folders)
     out = Path(out) if out else Path(folders[0]) / "report.md"
     out.parent.mkdir(parents=True, exist_ok=True)
-    rows = summarize(runs, robustness, levels, replays)
-    text = report_markdown(rows)
+    rows = summarize(runs, robustness, levels, replays, pool)
+    if say is not None:
+        for s in skipped:
+            say(f"skipped {s.line()}")
+        groups = _groups(rows)
+        say(f"{len(runs)} run{'s' if len(runs) != 1 else ''} in {len(groups)} group"
+            f"{'s' if len(groups) != 1 else ''} (runs that differ in their seed alone"
+            + (f" or in {', '.join(pool)}" if pool else "") + "):")
+        for (label, task), rs in groups.items():
+            say(f"  {label} / {task}: {len(rs)} run{'s' if len(rs) != 1 else ''} "
+                f"({', '.join(r['run'] for r in rs)})")
+    text = report_markdown(rows, skipped, pool)
     atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
-    curves = plot_curves(runs, out.parent / "curves.png")
-    shown = write_gallery(gallery_entries(rows, runs), out.parent / "gallery") if gallery else []
+    curves = plot_curves(runs, out.parent / "curves.png", pool)
+    shown = (write_gallery(gallery_entries(rows, {r["run"]: r["path"] for r in rows}), out.parent / "gallery")
+             if gallery else [])
     atomic_write(out.parent / "report.html", report_html(text, curves, shown).encode())
     return out

@@ -36,7 +36,7 @@ from evolve.runs.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
-           "build_s", "sim_s", "neat_s", "total_s"]
+           "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
 KEEP_CHECKPOINTS = 2
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
@@ -223,15 +223,25 @@ class RunDir:
         w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
         w.writeheader()
         for r in rows:
-            w.writerow({k: r[k] for k in COLUMNS})
+            w.writerow({k: r.get(k, "") for k in COLUMNS})  # a column a run's older rows lack: empty
         atomic_write(self.path / "generations.csv", buf.getvalue().encode())
+        self._header_ok = True
+
+    def _header_is_ours(self, path: Path) -> bool:
+        """Whether generations.csv's header is COLUMNS (read once per RunDir): a run made before a
+        column was added has its file rewritten with the new header by the next append."""
+        if not getattr(self, "_header_ok", False):
+            with path.open() as f:
+                self._header_ok = f.readline().rstrip("\n") == ",".join(COLUMNS)
+        return self._header_ok
 
     def append_row(self, row: dict) -> None:
         """Append one generation's row (keys COLUMNS, floats written with repr so they read back
         exactly), fsynced; a last line cut short is dropped by rewriting the file."""
         row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
         path = self.path / "generations.csv"
-        if not _ends_a_line(path):  # no file, or a line cut short: rewrite it whole
+        if not _ends_a_line(path) or not self._header_is_ours(path):  # no file, a line cut short,
+            # or an older header: rewrite it whole
             self._write_rows([*self.rows(), row])
             return
         buf = io.StringIO()

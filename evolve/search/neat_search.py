@@ -28,6 +28,7 @@ from typing import Any
 import numpy as np
 from neat.reporting import ReporterSet
 
+from evolve.search.body_distance import mean_pairwise_body_distance
 from evolve.search.genome import peek
 
 Decode = Callable[[Any], Any]  # genome -> phenotype with .valid and .body
@@ -257,7 +258,16 @@ class NeatSearch:
                 "mean": statistics.fmean(f) if f else float("nan"),
                 "median": statistics.median(f) if f else float("nan"),
                 "n_species": len(self.species.species), "n_valid": len(valid),
-                "n_invalid": n_invalid, "episodes": episodes}
+                "n_invalid": n_invalid, "episodes": episodes,
+                "body_diversity": self._body_diversity(valid)}
+
+    def _body_diversity(self, valid: dict) -> float:
+        """The mean pairwise body distance of the generation's valid genomes (eq. 2 per cell,
+        `mean_pairwise_body_distance`), NaN where phenotypes have no body; reads nothing random."""
+        bodies = [getattr(self.phenotypes[k], "body", None) for k in valid]
+        if any(b is None for b in bodies):
+            return float("nan")
+        return mean_pairwise_body_distance(bodies)
 
     def _track_best(self, valid: dict) -> None:
         if not valid:
