@@ -50,6 +50,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_ray_nodes.py": ALL,
         "tests/evolve/runs/test_resume.py": ("test_sigkilled_run_resumes_in_a_new_process_to_the_same_run",
                                              "test_no_usable_checkpoint_is_one_error_line"),
+        "tests/evolve/runs/test_stops.py": ALL,
         "tests/evolve/runs/test_sweep.py": ("test_a_killed_sweep_resumes_to_the_same_runs",),
         "tests/evolve/runs/test_script_task.py": ALL,
         "tests/evolve/test_cli_precision.py": ALL,

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from pathlib import Path
@@ -138,21 +139,26 @@ def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
 
 
 def run_experiment(exp) -> int:
-    """Run `exp` to its end; a stop (Ctrl-C, a dead worker, a full disk) says how to resume."""
+    """Run `exp` to its end; a stop (Ctrl-C, SIGTERM, a dead worker, a full disk) says how to resume.
+    A stop by a signal exits 128 + its number: 130 for Ctrl-C, 143 for SIGTERM (evolve/runs/stops.py)."""
     from evolve.rollout.pool import WorkerDied
+    from evolve.runs.stops import exit_code
 
     try:
         with exp:
             exp.run_all()
             exp.finish()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         done, want = exp.search.generation, exp.cfg["generations"]
         ckpt = exp.run.last_checkpoint_generation()
         where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
                  f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
                  f"generation {ckpt}")
-        print(f"\nsgr: {where}; continue with: sgr evolve --resume {exp.run.path}", file=sys.stderr)
-        return 130
+        code = exit_code(exc)
+        by = "" if code == 130 else f"{signal.Signals(code - 128).name}: "  # (Ctrl-C's words as ever)
+        print(f"\nsgr: {by}{where}; continue with: sgr evolve --resume {exp.run.path}",
+              file=sys.stderr)
+        return code
     except WorkerDied as exc:
         print(f"sgr: error: {exc}; the run stopped during generation {exp.search.generation + 1} and "
               f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)
