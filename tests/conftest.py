@@ -89,6 +89,8 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_checkpoint.py": (
             "test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_exactly",),
         "tests/evolve/runs/test_every_task.py": ALL,
+        "tests/evolve/runs/test_reporters.py": (
+            "test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_says_how_to_install",),
         "tests/evolve/runs/test_experiment.py": ("test_killed_run_resumes_with_identical_fitness_columns",
                                                  "test_a_run_directory_is_not_overwritten",
                                                  "test_evolve_task_and_method_run_the_packaged_config_in_a"

@@ -39,6 +39,10 @@ def register(sub) -> argparse.ArgumentParser:
     e.add_argument("--precision", choices=PRECISIONS,
                    help="the simulator's real type: f64 (evogym's bits) or f32; default: the config's, "
                         "else $SGR_PRECISION, else f64")
+    e.add_argument("--tensorboard", action="store_true", default=None,
+                   help="TensorBoard events of each generation's scalars in RUN/tensorboard (config key "
+                        "tensorboard: true; needs pip install 'sgr[tensorboard]'); with --resume: for "
+                        "this resumed part of the run")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=run)
     return e
@@ -94,9 +98,13 @@ def run(args: argparse.Namespace) -> int:
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
+        if args.tensorboard and not exp.cfg.get("tensorboard"):
+            from evolve.runs.reporters import configured_reporters
+            for reporter in configured_reporters({"tensorboard": True}, exp.run.path):
+                exp.add_reporter(reporter)
     else:
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                 "workers": args.workers, "precision": args.precision,
+                 "workers": args.workers, "precision": args.precision, "tensorboard": args.tensorboard,
                  "robot_shape": list(shape) if shape else None}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         if args.start_from:

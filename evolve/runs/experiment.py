@@ -23,6 +23,7 @@ from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
+from evolve.runs.reporters import ReporterSet, configured_reporters
 from evolve.runs.rundir import RunDir
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
@@ -56,6 +57,7 @@ class Experiment:
         cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self._warned_population = False  # `_warn_if_population_grew`
+        self.reporters = ReporterSet(configured_reporters(cfg, run.path))  # evolve/runs/reporters.py
         # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
         runtime.use_precision(cfg.get("precision"))
         self.neat_config = load_neat_config(run.path / "neat.ini")
@@ -136,6 +138,11 @@ class Experiment:
         (evolve/runs/checkpoint.py)."""
         return checkpoint_data(self.search, self.problem)
 
+    def add_reporter(self, reporter) -> None:
+        """Watch the generation loop with `reporter`: an object with any of the methods start(exp),
+        generation(exp, row), end(exp) (evolve/runs/reporters.py)."""
+        self.reporters.add(reporter)
+
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
         """Run to the configured number of generations; `after_generation(self)` is called once
         each generation's row, champion and checkpoint are written (bench/soak.py measures there).
@@ -143,7 +150,7 @@ class Experiment:
         `Interrupted` (a KeyboardInterrupt); a second one raises it at once."""
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
-        with stop_after_generation() as stop:
+        with stop_after_generation() as stop, self.reporters.running(self):
             while search.generation < cfg["generations"]:
                 row = search.step()
                 final = self.selection is not None and search.generation == cfg["generations"]
@@ -157,6 +164,7 @@ class Experiment:
                     self.run.save_checkpoint(search.generation, self.state())
                 self._progress(row, time.perf_counter() - t_start)
                 self._warn_if_population_grew(row)
+                self.reporters.generation(self, {**row, "generation": row["generation"] + 1})
                 if final and not self.quiet:
                     print(chosen, flush=True)
                 if after_generation is not None:
