@@ -91,8 +91,11 @@ class TensorBoardReporter:
         self.writer = None
 
     def start(self, exp: Any) -> None:
-        """Open a writer; events of later generations than the run's are purged."""
-        self.writer = self._writer_class(str(self.folder), purge_step=exp.search.generation + 1)
+        """Open a writer (an events file of its own); on resume, TensorBoard is told to drop the
+        events an earlier process wrote for the generations after the checkpoint."""
+        done = exp.search.generation
+        self.writer = self._writer_class(str(self.folder), purge_step=done + 1 if done else None,
+                                         filename_suffix=f".after{done}")
 
     def generation(self, exp: Any, row: dict) -> None:
         """The generation's scalars, flushed: TensorBoard shows them at once."""

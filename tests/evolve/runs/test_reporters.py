@@ -145,3 +145,32 @@ def test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_say
                    "logging"]
     assert not (tmp_path / "off" / "tensorboard").exists()
     assert len(RunDir(tmp_path / "off").rows()) == 1
+
+
+def test_a_resumed_run_tells_tensorboard_to_drop_the_generations_it_computes_again(tmp_path):
+    """Stopped after generation 3 with its newest checkpoint at 2: the resumed process computes
+    generation 3 again, and its events file starts with TensorBoard's purge marker (a SessionLog
+    START at step 3: earlier events of steps >= 3 are dropped), so each generation shows once; the
+    values read back, the newer file's winning, are generations.csv's."""
+    pytest.importorskip("tensorboardX", reason="the tensorboard extra: pip install 'sgr[tensorboard]'")
+    from tensorboardX.proto.event_pb2 import Event, SessionLog
+
+    cfg = {**TINY, "generations": 4, "checkpoint_every": 2, "tensorboard": True}
+
+    def stop(exp):
+        if exp.search.generation == 3:
+            raise KeyboardInterrupt
+
+    with Experiment.from_config(cfg, tmp_path / "run", quiet=True) as exp:
+        with pytest.raises(KeyboardInterrupt):
+            exp.run_all(after_generation=stop)
+    with Experiment.resume(tmp_path / "run", quiet=True) as exp:
+        exp.run_all()
+    files = sorted((tmp_path / "run" / "tensorboard").glob("events.out.tfevents.*"))
+    assert len(files) == 2
+    starts = [[ev.step for ev in map(Event.FromString, tfrecords(f))
+               if ev.HasField("session_log") and ev.session_log.status == SessionLog.START] for f in files]
+    assert starts == [[], [3]]
+    rows = RunDir(tmp_path / "run").rows()
+    assert scalars(files[0].parent)["fitness/best"] == {int(r["generation"]): np.float32(r["best"])
+                                                        for r in rows}
