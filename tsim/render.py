@@ -429,7 +429,7 @@ def video_available() -> bool:
 
 
 def write_mp4(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
-    """Write frames as an H.264 MP4 (one video frame per frame; a tenth of the GIF's size or less);
+    """Write frames as an H.264 MP4 (one video frame per frame; about a fifth of the GIF's size);
     returns the path. Written whole or not at all, the frames streamed to ffmpeg one by one. Frames
     as for `write_gif`; an odd width or height is padded with the background by one pixel (H.264's
     4:2:0 needs even sides). Raises SgrError without imageio's ffmpeg plugin (`video_available`)."""
