@@ -74,8 +74,9 @@ def stop_after_generation() -> Iterator[StopRequest]:
                 raise Interrupted(signum)
             stop.counted = True
         if stop.signum is None:
-            stop.signum = signum
             print(f"\n{_first_line(signum)}", file=sys.stderr, flush=True)
+        if stop.signum in (None, PASSED_ON):  # the stop is the signal's, not the sweep's passing it on
+            stop.signum = signum
 
     old = {s: signal.signal(s, handler) for s in (*STOPS, PASSED_ON)}
     try:
