@@ -94,7 +94,7 @@ def run(args: argparse.Namespace) -> int:
         if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
                 or args.precision or args.shape is not None or args.start_from):
             raise SgrError("--resume continues a run with its own config; only --generations "
-                           "(to extend it), --workers, --trust-imports and --quiet go with it")
+                           "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")

@@ -134,6 +134,12 @@ def test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_say
                  "--tensorboard"]) == 0
     assert RunDir(tmp_path / "on").config()["tensorboard"] is True  # a resume goes on logging
     assert scalars(tmp_path / "on" / "tensorboard")["fitness/best"].keys() == {1}
+    # a run made without it logs the part of it a --resume --tensorboard runs
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "later"), "--quiet"]) == 0
+    assert not (tmp_path / "later" / "tensorboard").exists()
+    assert main(["evolve", "--resume", str(tmp_path / "later"), "--generations", "2", "--quiet",
+                 "--tensorboard"]) == 0
+    assert scalars(tmp_path / "later" / "tensorboard")["fitness/best"].keys() == {2}
 
     monkeypatch.setitem(sys.modules, "tensorboardX", None)  # the extra not installed
     capsys.readouterr()
