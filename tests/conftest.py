@@ -50,6 +50,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_ray_nodes.py": ALL,
         "tests/evolve/runs/test_resume.py": ("test_sigkilled_run_resumes_in_a_new_process_to_the_same_run",
                                              "test_no_usable_checkpoint_is_one_error_line"),
+        "tests/evolve/runs/test_stops.py": ALL,
         "tests/evolve/runs/test_sweep.py": ("test_a_killed_sweep_resumes_to_the_same_runs",),
         "tests/evolve/runs/test_script_task.py": ALL,
         "tests/evolve/test_cli_precision.py": ALL,
@@ -89,6 +90,8 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
             "test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_exactly",),
         "tests/evolve/runs/test_diversity.py": ("test_every_method_with_bodies_records_it",),
         "tests/evolve/runs/test_every_task.py": ALL,
+        "tests/evolve/runs/test_reporters.py": (
+            "test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_says_how_to_install",),
         "tests/evolve/runs/test_experiment.py": ("test_killed_run_resumes_with_identical_fitness_columns",
                                                  "test_a_run_directory_is_not_overwritten",
                                                  "test_evolve_task_and_method_run_the_packaged_config_in_a"

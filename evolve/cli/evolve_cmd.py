@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
 import time
 from pathlib import Path
@@ -38,6 +39,10 @@ def register(sub) -> argparse.ArgumentParser:
     e.add_argument("--precision", choices=PRECISIONS,
                    help="the simulator's real type: f64 (evogym's bits) or f32; default: the config's, "
                         "else $SGR_PRECISION, else f64")
+    e.add_argument("--tensorboard", action="store_true", default=None,
+                   help="TensorBoard events of each generation's scalars in RUN/tensorboard (config key "
+                        "tensorboard: true; needs pip install 'sgr[tensorboard]'); with --resume: for "
+                        "this resumed part of the run")
     e.add_argument("--quiet", action="store_true")
     e.set_defaults(fn=run)
     return e
@@ -89,13 +94,17 @@ def run(args: argparse.Namespace) -> int:
         if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
                 or args.precision or args.shape is not None or args.start_from):
             raise SgrError("--resume continues a run with its own config; only --generations "
-                           "(to extend it), --workers, --trust-imports and --quiet go with it")
+                           "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
+        if args.tensorboard and not exp.cfg.get("tensorboard"):
+            from evolve.runs.reporters import configured_reporters
+            for reporter in configured_reporters({"tensorboard": True}, exp.run.path):
+                exp.add_reporter(reporter)
     else:
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
-                 "workers": args.workers, "precision": args.precision,
+                 "workers": args.workers, "precision": args.precision, "tensorboard": args.tensorboard,
                  "robot_shape": list(shape) if shape else None}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         if args.start_from:
@@ -138,21 +147,26 @@ def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
 
 
 def run_experiment(exp) -> int:
-    """Run `exp` to its end; a stop (Ctrl-C, a dead worker, a full disk) says how to resume."""
+    """Run `exp` to its end; a stop (Ctrl-C, SIGTERM, a dead worker, a full disk) says how to resume.
+    A stop by a signal exits 128 + its number: 130 for Ctrl-C, 143 for SIGTERM (evolve/runs/stops.py)."""
     from evolve.rollout.pool import WorkerDied
+    from evolve.runs.stops import exit_code
 
     try:
         with exp:
             exp.run_all()
             exp.finish()
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         done, want = exp.search.generation, exp.cfg["generations"]
         ckpt = exp.run.last_checkpoint_generation()
         where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
                  f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
                  f"generation {ckpt}")
-        print(f"\nsgr: {where}; continue with: sgr evolve --resume {exp.run.path}", file=sys.stderr)
-        return 130
+        code = exit_code(exc)
+        by = "" if code == 130 else f"{signal.Signals(code - 128).name}: "  # (Ctrl-C's words as ever)
+        print(f"\nsgr: {by}{where}; continue with: sgr evolve --resume {exp.run.path}",
+              file=sys.stderr)
+        return code
     except WorkerDied as exc:
         print(f"sgr: error: {exc}; the run stopped during generation {exp.search.generation + 1} and "
               f"keeps its last checkpoint: sgr evolve --resume {exp.run.path}", file=sys.stderr)

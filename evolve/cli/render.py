@@ -4,6 +4,7 @@ open-loop gait."""
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 import numpy as np
 
@@ -18,8 +19,9 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--task")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
     r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
-    r.add_argument("--out", help="GIF path (default RUN_DIR/champion.gif, with --replay I "
-                                 "RUN_DIR/champion-replayI.gif; with --body robot.gif)")
+    r.add_argument("--out", help="GIF path, or .mp4 for an MP4 (needs pip install 'sgr[video]'); default "
+                                 "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), "
+                                 "with --replay I RUN_DIR/champion-replayI.gif; with --body robot.gif")
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
@@ -41,17 +43,21 @@ def run(args: argparse.Namespace) -> int:
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot
-    from tsim.render import write_gif
+    from tsim.render import VIDEO_EXTRA, video_available, write_animation
 
     if args.out:
         output_path(args.out)
+        if Path(args.out).suffix.lower() == ".mp4" and not video_available():  # before rendering
+            raise SgrError(f"--out {args.out}: writing an MP4 needs imageio's ffmpeg plugin: {VIDEO_EXTRA}")
     if args.run_dir:
         if args.task or args.body:
             raise SgrError("give either RUN_DIR or --task with --body, not both")
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
         line = replay_line(args.run_dir, args.replay, args.noise, args.noise_kind, args.offset)
-        print(f"wrote {out}: {line}")
+        mp4 = out.with_suffix(".mp4")
+        also = f" and {mp4}" if args.out is None and mp4.is_file() else ""  # written beside it just now
+        print(f"wrote {out}{also}: {line}")
         return 0
     else:
         if not (args.task and args.body):
@@ -62,6 +68,6 @@ def run(args: argparse.Namespace) -> int:
         n_act = int(np.count_nonzero((body == 3) | (body == 4)))
         frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
                                 args.width, args.height, indexed=True)
-        out = write_gif(frames, args.out or "robot.gif", fps=args.fps)
+        out = write_animation(frames, args.out or "robot.gif", fps=args.fps)
     print(f"wrote {out}")
     return 0

@@ -67,6 +67,7 @@ def run(args: argparse.Namespace) -> int:
         backend = LocalBackend(args.parallel)
     try:
         failed = run_sweep(sweep, backend, quiet=args.quiet)
-    except KeyboardInterrupt:
-        return 130
+    except KeyboardInterrupt as exc:  # 130 for Ctrl-C, 143 for SIGTERM
+        from evolve.runs.stops import exit_code
+        return exit_code(exc)
     return 1 if failed else 0

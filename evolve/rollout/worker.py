@@ -106,10 +106,12 @@ def read_frame(stream: BinaryIO) -> bytes:
 
 
 def main() -> None:
-    # Ctrl-C reaches the whole process group: the pool's owner handles it and closes our input
     """The worker loop: one reply per job until end of input; a job's exception is sent back, not
     raised, so the worker lives on. The real stdout carries only frames (prints go to stderr)."""
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    # Ctrl-C reaches the whole process group, a scheduler's SIGTERM every process of the job: the
+    # pool's owner handles them (its generation ends, with a checkpoint) and closes our input
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, signal.SIG_IGN)
     # the protocol owns the real stdout; anything printed (e.g. by a library) goes to stderr
     replies = os.fdopen(os.dup(sys.stdout.fileno()), "wb")
     os.dup2(sys.stderr.fileno(), sys.stdout.fileno())

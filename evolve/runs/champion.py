@@ -131,12 +131,15 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     """Render the champion's episode in its task (same episode length as its evaluation; a frame
     every `every` steps): the nominal episode, or with `replay` > 0 that perturbed replay of
     `replay_champion` (same arguments, same episode). Default `out`: the run's champion.gif, or
-    for a replay its own file (`replay_gif_name`), so champion.gif always shows the champion."""
+    for a replay its own file (`replay_gif_name`), so champion.gif always shows the champion; a
+    default `out` gets an MP4 of the same frames beside it where imageio's ffmpeg plugin is installed
+    (champion.mp4), an `out` ending in .mp4 is an MP4."""
     from tasks.render_episode import render_episode
-    from tsim.render import write_gif
+    from tsim.render import write_animation
 
     champ, body, ctrl = read_champion(run_dir)
     noise = _replay_noise(replay + 1, eps, kind, offset, seed).take([replay])
+    mp4_beside = out is None
     out = out or Path(run_dir) / replay_gif_name(replay)
     shift = noise.shifts()
 
@@ -147,7 +150,7 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
 
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
                             every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
-    return write_gif(frames, out, fps=fps)
+    return write_animation(frames, out, fps=fps, mp4_beside=mp4_beside)
 
 
 def replay_gif_name(replay: int) -> str:

@@ -3,19 +3,16 @@
 Generations are counted from 1 everywhere a person reads them: generations.csv, champion.json, the
 console and the messages of a stop ("after generation 3" = 3 generations evaluated, the state of
 checkpoint gen-00003). The NEAT search counts from 0 inside (neat-python's numbering).
-A first Ctrl-C lets the generation under way end, writes a checkpoint and stops (KeyboardInterrupt);
-a second stops at once, at the last checkpoint.
+A first Ctrl-C or SIGTERM lets the generation under way end, writes a checkpoint and stops
+(`Interrupted`, a KeyboardInterrupt); a second stops at once, at the last checkpoint (evolve/runs/stops.py).
 """
 
 from __future__ import annotations
 
 import math
-import signal
 import sys
-import threading
 import time
-from collections.abc import Callable, Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from pathlib import Path
 
 from evolve.methods import METHODS
@@ -26,7 +23,9 @@ from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, select_champion
+from evolve.runs.reporters import ReporterSet, configured_reporters
 from evolve.runs.rundir import RunDir
+from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.specs import BUILTIN
@@ -58,6 +57,7 @@ class Experiment:
         cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self._warned_population = False  # `_warn_if_population_grew`
+        self.reporters = ReporterSet(configured_reporters(cfg, run.path))  # evolve/runs/reporters.py
         # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
         runtime.use_precision(cfg.get("precision"))
         self.neat_config = load_neat_config(run.path / "neat.ini")
@@ -138,14 +138,19 @@ class Experiment:
         (evolve/runs/checkpoint.py)."""
         return checkpoint_data(self.search, self.problem)
 
+    def add_reporter(self, reporter) -> None:
+        """Watch the generation loop with `reporter`: an object with any of the methods start(exp),
+        generation(exp, row), end(exp) (evolve/runs/reporters.py)."""
+        self.reporters.add(reporter)
+
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
         """Run to the configured number of generations; `after_generation(self)` is called once
         each generation's row, champion and checkpoint are written (bench/soak.py measures there).
-        Ctrl-C (SIGINT): the generation under way ends, a checkpoint is written, then
-        KeyboardInterrupt; a second Ctrl-C raises it at once."""
+        Ctrl-C (SIGINT) or SIGTERM: the generation under way ends, a checkpoint is written, then
+        `Interrupted` (a KeyboardInterrupt); a second one raises it at once."""
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
-        with _interrupt_after_generation() as stop:
+        with stop_after_generation() as stop, self.reporters.running(self):
             while search.generation < cfg["generations"]:
                 row = search.step()
                 final = self.selection is not None and search.generation == cfg["generations"]
@@ -159,12 +164,13 @@ class Experiment:
                     self.run.save_checkpoint(search.generation, self.state())
                 self._progress(row, time.perf_counter() - t_start)
                 self._warn_if_population_grew(row)
+                self.reporters.generation(self, {**row, "generation": row["generation"] + 1})
                 if final and not self.quiet:
                     print(chosen, flush=True)
                 if after_generation is not None:
                     after_generation(self)
                 if stop.is_set() and search.generation < cfg["generations"]:
-                    raise KeyboardInterrupt
+                    raise Interrupted(stop.signum)
 
     def _write_champion(self) -> None:
         if self.search.best is not None:
@@ -252,29 +258,6 @@ def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:
     if champion and (cfg.get("render_champion", True) or (run.path / "champion.gif").exists()):
         champion_gif(run.path)
     run.end_files_written()
-
-
-@contextmanager
-def _interrupt_after_generation() -> Iterator[threading.Event]:
-    """While inside: the first SIGINT sets the event (the loop stops after its generation, with a
-    checkpoint) and the next one raises KeyboardInterrupt at once. Outside the main thread, where
-    signal handlers cannot be set, SIGINT keeps Python's default."""
-    stop = threading.Event()
-    if threading.current_thread() is not threading.main_thread():
-        yield stop
-        return
-
-    def first(signum, frame):
-        stop.set()
-        signal.signal(signal.SIGINT, signal.default_int_handler)
-        print("\nsgr: stopping after this generation, with a checkpoint (Ctrl-C again: stop now, "
-              "at the last checkpoint)", file=sys.stderr, flush=True)
-
-    old = signal.signal(signal.SIGINT, first)
-    try:
-        yield stop
-    finally:
-        signal.signal(signal.SIGINT, old)
 
 
 def select_finished_run(run_dir: str | Path, overrides: dict | None = None,

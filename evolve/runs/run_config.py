@@ -26,6 +26,7 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "neat_config": ((str, type(None)), None),
     "checkpoint_every": (int, 5),
     "render_champion": (bool, True),
+    "tensorboard": (bool, False),  # evolve/runs/reporters.py: each generation's scalars in RUN/tensorboard
     "workers": ((int, str), "auto"),
     "imports": (list, []),
     "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
@@ -55,6 +56,7 @@ class RunConfig(Mapping[str, Any]):
     neat_config: str | None
     checkpoint_every: int
     render_champion: bool
+    tensorboard: bool
     workers: int | str
     imports: tuple[str, ...]
     robust: Robust | None

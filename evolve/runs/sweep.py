@@ -278,12 +278,26 @@ class LocalBackend:
         return ended
 
     def stop(self) -> None:
-        """SIGINT every running run and wait: each stops as on Ctrl-C, keeping its last checkpoint."""
+        """Ask every running run to stop and wait: each ends its generation and writes a checkpoint,
+        as on its first Ctrl-C or SIGTERM. The ask (SIGUSR1, evolve/runs/stops.py) never counts as a
+        second signal, so a run that got Ctrl-C or a scheduler's SIGTERM itself still finishes its
+        generation. A second Ctrl-C or SIGTERM while waiting kills the runs: each keeps its last
+        checkpoint."""
+        from evolve.runs.stops import PASSED_ON
+
         for p in self.procs.values():
-            p.send_signal(signal.SIGINT)
-        for p in self.procs.values():
-            p.wait()
-        self.procs = {}
+            if p.poll() is None:
+                p.send_signal(PASSED_ON)
+        try:
+            for p in self.procs.values():
+                p.wait()
+        except KeyboardInterrupt:
+            for p in self.procs.values():
+                p.kill()
+                p.wait()
+            raise
+        finally:
+            self.procs = {}
 
 
 def _hms(seconds: float) -> str:
@@ -295,7 +309,16 @@ def _hms(seconds: float) -> str:
 
 
 def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: float = 30.0) -> int:
-    """Run every unfinished run; returns the number of runs that failed after their retries."""
+    """Run every unfinished run; returns the number of runs that failed after their retries. Ctrl-C
+    or SIGTERM (a cluster's scheduler) stops the runs (`backend.stop`) and raises KeyboardInterrupt
+    (`Interrupted` for SIGTERM)."""
+    from evolve.runs.stops import sigterm_interrupts
+
+    with sigterm_interrupts():  # and a second SIGTERM, while the runs stop, as a second Ctrl-C
+        return _run_sweep(sweep, backend, quiet, every)
+
+
+def _run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool, every: float) -> int:
     total = len(sweep.runs)
     queue = sweep.pending()
     failures: dict[SweepRun, int] = {}
@@ -330,9 +353,11 @@ def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: f
             if not quiet and time.monotonic() - last_report >= every:
                 last_report = time.monotonic()
                 say(_progress(sweep, backend, t0, gens_at_start))
-    except KeyboardInterrupt:
+    except KeyboardInterrupt as exc:
         backend.stop()
-        say(f"interrupted; continue with: sgr sweep --resume {sweep.path}")
+        signum = getattr(exc, "signum", signal.SIGINT)
+        by = f" by {signal.Signals(signum).name}" if signum != signal.SIGINT else ""  # (Ctrl-C: as ever)
+        say(f"interrupted{by}; continue with: sgr sweep --resume {sweep.path}")
         raise
     except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
         backend.stop()

@@ -1,0 +1,105 @@
+"""Stops asked for by signals: Ctrl-C (SIGINT) at a terminal, SIGTERM from a cluster's scheduler
+(Slurm, PBS, Kubernetes send it before SIGKILL) or from `kill`.
+
+The first SIGINT or SIGTERM lets the generation under way end, writes a checkpoint and stops; a
+second stops at once, at the last checkpoint. SIGUSR1 is how a sweep passes a stop on to its runs:
+it asks the same as a first signal but never counts as one, so a run that got the scheduler's
+SIGTERM itself (Slurm signals every process of a job) and its sweep's SIGUSR1 still finishes its
+generation. The exit code of a stop is 128 + the signal's number, the shell's convention: 130 for
+SIGINT, 143 for SIGTERM.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+import threading
+from collections.abc import Iterator
+from contextlib import contextmanager
+
+STOPS = (signal.SIGINT, signal.SIGTERM)  # a second one stops at once
+PASSED_ON = signal.SIGUSR1  # a sweep's stop, passed on to its runs: never a second signal
+
+
+class Interrupted(KeyboardInterrupt):
+    """A stop asked for by a signal; `signum` says which (a KeyboardInterrupt, so that code that
+    handles Ctrl-C handles a SIGTERM alike)."""
+
+    def __init__(self, signum: int = signal.SIGINT):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = int(signum)
+
+
+def exit_code(exc: BaseException) -> int:
+    """128 + the number of the signal that stopped the process: 130 for Ctrl-C (a plain
+    KeyboardInterrupt), 143 for SIGTERM."""
+    return 128 + getattr(exc, "signum", int(signal.SIGINT))
+
+
+class StopRequest:
+    """Whether, and by which signal, the loop was asked to stop after the generation under way."""
+
+    def __init__(self) -> None:
+        self.signum: int | None = None  # the first signal that asked
+        self.counted = False  # a SIGINT or SIGTERM came: the next one stops at once
+
+    def is_set(self) -> bool:
+        """Asked to stop after this generation."""
+        return self.signum is not None
+
+
+def _first_line(signum: int) -> str:
+    if signum == signal.SIGINT:  # (the words the Ctrl-C path has always printed)
+        return ("sgr: stopping after this generation, with a checkpoint (Ctrl-C again: stop now, "
+                "at the last checkpoint)")
+    name = "asked by the sweep" if signum == PASSED_ON else signal.Signals(signum).name
+    return (f"sgr: {name}: stopping after this generation, with a checkpoint (SIGTERM or Ctrl-C "
+            "again: stop now, at the last checkpoint)")
+
+
+@contextmanager
+def stop_after_generation() -> Iterator[StopRequest]:
+    """While inside: the first SIGINT or SIGTERM (or a sweep's SIGUSR1) marks the request (the loop
+    stops after its generation, with a checkpoint) and the next SIGINT or SIGTERM raises
+    `Interrupted` at once. Outside the main thread, where signal handlers cannot be set, the
+    signals keep their handlers."""
+    stop = StopRequest()
+    if threading.current_thread() is not threading.main_thread():
+        yield stop
+        return
+
+    def handler(signum, frame):
+        if signum != PASSED_ON:
+            if stop.counted:
+                raise Interrupted(signum)
+            stop.counted = True
+        if stop.signum is None:
+            print(f"\n{_first_line(signum)}", file=sys.stderr, flush=True)
+        if stop.signum in (None, PASSED_ON):  # the stop is the signal's, not the sweep's passing it on
+            stop.signum = signum
+
+    old = {s: signal.signal(s, handler) for s in (*STOPS, PASSED_ON)}
+    try:
+        yield stop
+    finally:
+        for s, h in old.items():
+            signal.signal(s, h)
+
+
+@contextmanager
+def sigterm_interrupts() -> Iterator[None]:
+    """While inside: SIGTERM raises `Interrupted` as Ctrl-C raises KeyboardInterrupt (a process
+    with nothing of its own to checkpoint, such as a sweep that then stops its runs). Outside the
+    main thread: nothing changes."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def handler(signum, frame):
+        raise Interrupted(signum)
+
+    old = signal.signal(signal.SIGTERM, handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, old)

@@ -1,0 +1,182 @@
+"""Reporters watch the generation loop (start, each generation's row, end) without editing it, and
+the TensorBoard reporter writes each generation's scalars as generations.csv has them."""
+
+from __future__ import annotations
+
+import struct
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evolve.cli import main
+from evolve.runs.experiment import Experiment
+from evolve.runs.rundir import RunDir
+
+TINY = {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 8, "seed": 11,
+        "episode_steps": 12, "workers": 1, "render_champion": False,
+        "robust": None, "final_selection": None}  # one exact episode: the best-ever is the best row's
+
+
+class Recorder:
+    """Every hook call, with what the run had done at that moment."""
+
+    def __init__(self):
+        self.calls = []
+
+    def start(self, exp):
+        self.calls.append(("start", exp.search.generation))
+
+    def generation(self, exp, row):
+        # the row, the champion and (when due) the checkpoint are written before the reporters
+        self.calls.append(("generation", dict(row), len(exp.run.rows())))
+
+    def end(self, exp):
+        self.calls.append(("end", exp.search.generation))
+
+
+def test_a_reporter_sees_the_start_each_generations_csv_row_once_written_and_the_end(tmp_path):
+    rec = Recorder()
+    only_rows = []
+
+    class OnlyRows:  # a reporter with one hook of three
+        def generation(self, exp, row):
+            only_rows.append(row["generation"])
+
+    with Experiment.from_config(TINY, tmp_path / "run", quiet=True) as exp:
+        exp.add_reporter(rec)
+        exp.add_reporter(OnlyRows())
+        exp.run_all()
+    rows = RunDir(tmp_path / "run").rows()
+    assert [c[0] for c in rec.calls] == ["start", "generation", "generation", "generation", "end"]
+    assert rec.calls[0] == ("start", 0) and rec.calls[-1] == ("end", 3)
+    for i, (_, row, written) in enumerate(rec.calls[1:-1]):
+        assert written == i + 1  # its row is in generations.csv already
+        assert {k: str(v) if isinstance(v, int) else repr(float(v)) for k, v in row.items()} == rows[i]
+    assert only_rows == [1, 2, 3]
+
+
+def test_a_reporter_hears_the_end_of_a_stopped_loop_and_one_without_hooks_is_refused(tmp_path):
+    rec = Recorder()
+
+    def stop(exp):
+        raise KeyboardInterrupt
+
+    with Experiment.from_config(TINY, tmp_path / "run", quiet=True) as exp:
+        with pytest.raises(TypeError, match="a reporter needs one of the methods start, generation, end"):
+            exp.add_reporter(object())
+        exp.add_reporter(rec)
+        with pytest.raises(KeyboardInterrupt):
+            exp.run_all(after_generation=stop)
+    assert [c[0] for c in rec.calls] == ["start", "generation", "end"]
+
+
+def tfrecords(path: Path) -> list[bytes]:
+    """The records of a TFRecord file (TensorBoard's event files): length, its CRC, data, its CRC."""
+    data, out, i = path.read_bytes(), [], 0
+    while i < len(data):
+        (n,) = struct.unpack("<Q", data[i:i + 8])
+        out.append(data[i + 12:i + 12 + n])
+        i += 12 + n + 4
+    return out
+
+
+def scalars(folder: Path) -> dict[str, dict[int, float]]:
+    """tag -> step -> value of every scalar in the event files under `folder` (a later file's value
+    for a step replaces an earlier one's)."""
+    from tensorboardX.proto.event_pb2 import Event
+
+    out: dict[str, dict[int, float]] = {}
+    for f in sorted(folder.glob("events.out.tfevents.*")):
+        for rec in tfrecords(f):
+            ev = Event.FromString(rec)
+            for v in ev.summary.value:
+                out.setdefault(v.tag, {})[ev.step] = v.simple_value
+    return out
+
+
+def test_tensorboard_events_hold_each_generations_scalars_as_generations_csv_has_them(tmp_path):
+    pytest.importorskip("tensorboardX", reason="the tensorboard extra: pip install 'sgr[tensorboard]'")
+    with Experiment.from_config({**TINY, "tensorboard": True}, tmp_path / "run", quiet=True) as exp:
+        exp.run_all()
+    run = RunDir(tmp_path / "run")
+    got = scalars(run.path / "tensorboard")
+    rows = run.rows()
+    f32 = np.float32  # TensorBoard keeps a scalar as a float32
+
+    def column(name, of=float):
+        return {int(r["generation"]): f32(of(r[name]) if callable(of) else r[name]) for r in rows}
+
+    for tag, col in [("fitness/best", "best"), ("fitness/mean", "mean"), ("fitness/median", "median"),
+                     ("population/species", "n_species"), ("population/episodes", "episodes"),
+                     ("seconds/build", "build_s"), ("seconds/sim", "sim_s"), ("seconds/neat", "neat_s"),
+                     ("seconds/total", "total_s")]:
+        assert got[tag] == column(col), tag
+    genomes = {int(r["generation"]): int(r["n_valid"]) + int(r["n_invalid"]) for r in rows}
+    assert got["population/genomes"] == {g: f32(n) for g, n in genomes.items()}
+    assert got["population/valid_fraction"] == {
+        int(r["generation"]): f32(int(r["n_valid"]) / genomes[int(r["generation"])]) for r in rows}
+    bests = [float(r["best"]) for r in rows]
+    assert got["fitness/best_ever"] == {g: f32(max(bests[:g])) for g in range(1, len(rows) + 1)}
+    assert got["fitness/best_ever"][3] == f32(run.champion()["fitness"])
+
+
+def test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_says_how_to_install(
+        tmp_path, repo_root, capsys, monkeypatch):
+    import yaml
+
+    pytest.importorskip("tensorboardX", reason="the tensorboard extra: pip install 'sgr[tensorboard]'")
+    cfg = tmp_path / "cfg.yaml"
+    cfg.write_text(yaml.safe_dump({**TINY, "generations": 1,
+                                   "neat_config": str(repo_root / "configs/neat/sgr.ini")}))
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "on"), "--quiet",
+                 "--tensorboard"]) == 0
+    assert RunDir(tmp_path / "on").config()["tensorboard"] is True  # a resume goes on logging
+    assert scalars(tmp_path / "on" / "tensorboard")["fitness/best"].keys() == {1}
+    # a run made without it logs the part of it a --resume --tensorboard runs
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "later"), "--quiet"]) == 0
+    assert not (tmp_path / "later" / "tensorboard").exists()
+    assert main(["evolve", "--resume", str(tmp_path / "later"), "--generations", "2", "--quiet",
+                 "--tensorboard"]) == 0
+    assert scalars(tmp_path / "later" / "tensorboard")["fitness/best"].keys() == {2}
+
+    monkeypatch.setitem(sys.modules, "tensorboardX", None)  # the extra not installed
+    capsys.readouterr()
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "off"), "--quiet",
+                 "--tensorboard"]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert err == ["sgr: warning: tensorboard: true, but tensorboardX is not installed: pip install "
+                   "'sgr[tensorboard]' (or: pip install tensorboardX); the run goes on without TensorBoard "
+                   "logging"]
+    assert not (tmp_path / "off" / "tensorboard").exists()
+    assert len(RunDir(tmp_path / "off").rows()) == 1
+
+
+def test_a_resumed_run_tells_tensorboard_to_drop_the_generations_it_computes_again(tmp_path):
+    """Stopped after generation 3 with its newest checkpoint at 2: the resumed process computes
+    generation 3 again, and its events file starts with TensorBoard's purge marker (a SessionLog
+    START at step 3: earlier events of steps >= 3 are dropped), so each generation shows once; the
+    values read back, the newer file's winning, are generations.csv's."""
+    pytest.importorskip("tensorboardX", reason="the tensorboard extra: pip install 'sgr[tensorboard]'")
+    from tensorboardX.proto.event_pb2 import Event, SessionLog
+
+    cfg = {**TINY, "generations": 4, "checkpoint_every": 2, "tensorboard": True}
+
+    def stop(exp):
+        if exp.search.generation == 3:
+            raise KeyboardInterrupt
+
+    with Experiment.from_config(cfg, tmp_path / "run", quiet=True) as exp:
+        with pytest.raises(KeyboardInterrupt):
+            exp.run_all(after_generation=stop)
+    with Experiment.resume(tmp_path / "run", quiet=True) as exp:
+        exp.run_all()
+    files = sorted((tmp_path / "run" / "tensorboard").glob("events.out.tfevents.*"))
+    assert len(files) == 2
+    starts = [[ev.step for ev in map(Event.FromString, tfrecords(f))
+               if ev.HasField("session_log") and ev.session_log.status == SessionLog.START] for f in files]
+    assert starts == [[], [3]]
+    rows = RunDir(tmp_path / "run").rows()
+    assert scalars(files[0].parent)["fitness/best"] == {int(r["generation"]): np.float32(r["best"])
+                                                        for r in rows}
