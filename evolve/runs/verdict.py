@@ -90,7 +90,7 @@ def from_returns(returns: np.ndarray, eps: float = EPS) -> Verdict:
 
 def median_replay(returns: np.ndarray) -> int:
     """The replay (1 to n) whose return is the median of the noisy ones, `returns[1:]` (for even n
-    the lower of the middle two; equal returns: the earlier replay): the typical perturbed
+    the lower of the middle two; equal returns keep the replays' order): the typical perturbed
     episode that champion.gif shows."""
     noisy = np.asarray(returns, dtype=float)[1:]
     if len(noisy) == 0:
