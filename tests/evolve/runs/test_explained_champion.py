@@ -190,3 +190,28 @@ def test_a_selection_record_from_before_the_holdout_still_describes():
     rows = [{"key": 3, "score": 1.5, "nominal": 1.5, "holds": True}]
     old = record(rows, 3, 3, 2.0)
     assert re.search(r"score 1\.5000 \(mean of 32 perturbed episodes\), nominal 1\.5000", describe(old))
+
+
+def test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion(tmp_path):
+    """The sizes come from the config alone (generations x pop_size x robust episodes), so a run
+    killed while choosing, resumed, sizes and chooses exactly as the uninterrupted run did."""
+    from evolve.runs.experiment import Experiment
+    from evolve.runs.final_selection import BEST_EVER_FILE
+
+    cfg = {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 12, "seed": 2,
+           "episode_steps": 30, "workers": 1, "checkpoint_every": 1, "render_champion": False,
+           "robust": ROBUST, "final_selection": {"rank": "pooled", "confirm": "auto"}}
+    exp = Experiment.from_config(cfg, tmp_path / "whole", quiet=True)
+    exp.run_all()
+    exp.close()
+    whole = RunDir(tmp_path / "whole").champion()
+    assert whole["selection"]["sized"]["auto"] == ["candidates", "episodes", "confirm", "holdout"]
+    assert whole["selection"]["sized"]["run_episodes"] == 3 * 12 * 2
+    copy = tmp_path / "killed"
+    shutil.copytree(tmp_path / "whole", copy)
+    (copy / "checkpoints" / "gen-00003.json.gz").unlink()  # killed while choosing: no last checkpoint
+    (copy / BEST_EVER_FILE).unlink()
+    exp = Experiment.resume(copy, quiet=True)
+    exp.run_all()
+    exp.close()
+    assert (copy / "champion.json").read_bytes() == (tmp_path / "whole" / "champion.json").read_bytes()
