@@ -284,10 +284,12 @@ def describe(champ: dict) -> str:
         if confirm:
             scored += f", confirmed {champ['fitness']:.4f} by {confirm} fresh ones"
         scored += f", nominal {sel['nominal']:.4f}"
+    sized = sel.get("sized") or {}
+    cost = (f"; {sized['episodes']} episodes in all, sized for the run's {sized['run_episodes']}"
+            if sized.get("auto") else "")
     return (f"champion genome {champ['genome']['key']} of {n} candidates, {scored}"
             f"{'' if sel['holds'] else ' (no candidate held: each lost over tolerance x its nominal return)'}"
-            "; best-ever "
-            f"{sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")
+            f"{cost}; best-ever {sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")
 
 
 def _rank_key(sel: dict, row: dict) -> float:

@@ -207,6 +207,8 @@ def test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion(tm
     whole = RunDir(tmp_path / "whole").champion()
     assert whole["selection"]["sized"]["auto"] == ["candidates", "episodes", "confirm", "holdout"]
     assert whole["selection"]["sized"]["run_episodes"] == 3 * 12 * 2
+    from evolve.runs.final_selection import describe
+    assert "episodes in all, sized for the run's 72;" in describe(whole)
     copy = tmp_path / "killed"
     shutil.copytree(tmp_path / "whole", copy)
     (copy / "checkpoints" / "gen-00003.json.gz").unlink()  # killed while choosing: no last checkpoint
