@@ -85,7 +85,7 @@ def main() -> None:
     if args.select:
         for n in names:
             exp = exps[n]
-            champ = select_champion(exp, FinalSelection())
+            champ = select_champion(exp, FinalSelection(candidates=16, episodes=32))  # as measured
             exp.run.save_checkpoint(exp.search.generation, exp.state())
             total = replay_champion(exp.run.path, args.replays, 1e-3)
             nominal, noisy = float(total[0]), float(total[1:].mean())

@@ -92,6 +92,11 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_every_task.py": ALL,
         "tests/evolve/runs/test_reporters.py": (
             "test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_says_how_to_install",),
+        "tests/evolve/runs/test_explained_champion.py": (
+            "test_the_end_of_run_lines_say_what_chose_the_champion_and_why",
+            "test_the_headline_fitness_comes_from_episodes_that_did_not_choose",
+            "test_champion_gif_shows_the_median_replay_and_the_exact_episode_is_one_flag_away",
+            "test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion"),
         "tests/evolve/runs/test_experiment.py": ("test_killed_run_resumes_with_identical_fitness_columns",
                                                  "test_a_run_directory_is_not_overwritten",
                                                  "test_evolve_task_and_method_run_the_packaged_config_in_a"

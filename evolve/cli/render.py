@@ -1,4 +1,5 @@
-"""`sgr render`: a GIF of a run's champion (exact, or a perturbed replay), or of any body with an
+"""`sgr render`: a GIF of a run's champion (its typical perturbed episode, the median of the
+verdict's replays; its exact episode with --exact; or one perturbed replay), or of any body with an
 open-loop gait."""
 
 from __future__ import annotations
@@ -20,26 +21,29 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
     r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
     r.add_argument("--out", help="GIF path, or .mp4 for an MP4 (needs pip install 'sgr[video]'); default "
-                                 "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), "
-                                 "with --replay I RUN_DIR/champion-replayI.gif; with --body robot.gif")
+                                 "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), with "
+                                 "--exact RUN_DIR/champion-exact.gif, with --replay I RUN_DIR/champion-replayI.gif; "
+                                 "with --body robot.gif")
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
-    r.add_argument("--replay", type=nonnegative(int), default=0, metavar="I",
-                   help="the champion's perturbed replay I (as sgr report replays it; default 0: the "
-                        "exact episode)")
-    add_noise(r, several=False, default=1e-3, help="with --replay: action noise scale (default 1e-3)")
+    r.add_argument("--replay", type=nonnegative(int), metavar="I",
+                   help="the champion's perturbed replay I (as sgr report replays it; 0: the exact "
+                        "episode; default: the replay whose return is the median of the verdict's 20)")
+    r.add_argument("--exact", action="store_true",
+                   help="the champion's exact (noise-free) episode, to RUN_DIR/champion-exact.gif")
+    add_noise(r, several=False, default=1e-3, help="the replays' action noise scale (default 1e-3)")
     r.add_argument("--noise-kind", choices=("uniform", "gaussian"), default="uniform",
-                   help="with --replay: uniform(+-EPS) or gaussian(0, EPS) (default uniform)")
+                   help="the replays' noise: uniform(+-EPS) or gaussian(0, EPS) (default uniform)")
     r.add_argument("--offset", type=nonnegative(float), default=0.0,
-                   help="with --replay: start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
+                   help="the replays' start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
     r.set_defaults(fn=run)
     return r
 
 
 def run(args: argparse.Namespace) -> int:
     """`sgr render`."""
-    from evolve.runs.champion import champion_gif, replay_line
+    from evolve.runs.champion import MEDIAN, champion_gif, replay_line
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot
@@ -52,18 +56,22 @@ def run(args: argparse.Namespace) -> int:
     if args.run_dir:
         if args.task or args.body:
             raise SgrError("give either RUN_DIR or --task with --body, not both")
+        if args.exact and args.replay is not None:
+            raise SgrError("give either --exact or --replay I, not both")
+        replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
-                           replay=args.replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
-        line = replay_line(args.run_dir, args.replay, args.noise, args.noise_kind, args.offset)
+                           replay=replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
+        line = replay_line(args.run_dir, replay, args.noise, args.noise_kind, args.offset)
         mp4 = out.with_suffix(".mp4")
-        also = f" and {mp4}" if args.out is None and mp4.is_file() else ""  # written beside it just now
+        also = f" and {mp4}" if args.out is None and replay == MEDIAN and mp4.is_file() else ""
         print(f"wrote {out}{also}: {line}")
         return 0
     else:
         if not (args.task and args.body):
             raise SgrError("sgr render needs RUN_DIR, or --task and --body")
-        if args.replay:
-            raise SgrError("--replay renders a perturbed episode of a run's champion: give RUN_DIR")
+        if args.replay or args.exact:
+            raise SgrError(f"{'--exact' if args.exact else '--replay'} renders an episode of a run's "
+                           "champion: give RUN_DIR")
         body = check_robot(parse_body(args.body))
         n_act = int(np.count_nonzero((body == 3) | (body == 4)))
         frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,

@@ -125,21 +125,29 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     return champ, body, ctrl
 
 
+MEDIAN = "median"  # champion_gif's default replay: the verdict's typical perturbed episode
+
+
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
-                 height: int = 320, fps: float = 30.0, replay: int = 0, eps: float = 0.0,
-                 kind: str = "uniform", offset: float = 0.0, seed: int = 0, every: int = 1) -> Path:
-    """Render the champion's episode in its task (same episode length as its evaluation; a frame
-    every `every` steps): the nominal episode, or with `replay` > 0 that perturbed replay of
-    `replay_champion` (same arguments, same episode). Default `out`: the run's champion.gif, or
-    for a replay its own file (`replay_gif_name`), so champion.gif always shows the champion; a
-    default `out` gets an MP4 of the same frames beside it where imageio's ffmpeg plugin is installed
-    (champion.mp4), an `out` ending in .mp4 is an MP4."""
+                 height: int = 320, fps: float = 30.0, replay: int | str = MEDIAN,
+                 eps: float = verdict_rule.EPS, kind: str = "uniform", offset: float = 0.0, seed: int = 0,
+                 every: int = 1) -> Path:
+    """Render one of the champion's episodes in its task (same episode length as its evaluation; a
+    frame every `every` steps): by default ("median") its typical perturbed episode, the replay
+    whose return is the median of the verdict's `verdict.REPLAYS` replays under `kind` noise of
+    scale `eps` (`typical_replay`); `replay` 0 its exact episode; `replay` I > 0 that perturbed
+    replay of `replay_champion` (same arguments, same episode). Why the median: the exact episode is
+    one draw of a chaotic system, which may be far from what the robot usually does. Default `out`:
+    the run's champion.gif for the median, else its own file (`replay_gif_name`); champion.gif gets an
+    MP4 of the same frames beside it where imageio's ffmpeg plugin is installed (champion.mp4), and an
+    `out` ending in .mp4 is an MP4."""
     from tasks.render_episode import render_episode
     from tsim.render import write_animation
 
     champ, body, ctrl = read_champion(run_dir)
-    noise = _replay_noise(replay + 1, eps, kind, offset, seed).take([replay])
-    mp4_beside = out is None
+    index = typical_replay(run_dir, eps, kind, offset, seed)[0] if replay == MEDIAN else int(replay)
+    noise = _replay_noise(index + 1, eps, kind, offset, seed).take([index])
+    mp4_beside = out is None and replay == MEDIAN
     out = out or Path(run_dir) / replay_gif_name(replay)
     shift = noise.shifts()
 
@@ -153,20 +161,40 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     return write_animation(frames, out, fps=fps, mp4_beside=mp4_beside)
 
 
-def replay_gif_name(replay: int) -> str:
-    """The GIF of a run's champion (replay 0), or of its perturbed replay I: champion-replayI.gif."""
-    return "champion.gif" if replay == 0 else f"champion-replay{replay}.gif"
+def typical_replay(run_dir: str | Path, eps: float = verdict_rule.EPS, kind: str = "uniform",
+                   offset: float = 0.0, seed: int = 0,
+                   replays: int = verdict_rule.REPLAYS) -> tuple[int, np.ndarray]:
+    """The replay (1 to `replays`) whose return is the median of the champion's perturbed replays
+    (`verdict.median_replay`; with the defaults, the verdict's replays), and all the returns
+    (element 0 the exact episode)."""
+    returns = replay_champion(run_dir, replays, eps, seed, kind, offset)
+    return verdict_rule.median_replay(returns), returns
 
 
-def replay_line(run_dir: str | Path, replay: int = 0, eps: float = 0.0, kind: str = "uniform",
-                offset: float = 0.0, seed: int = 0) -> str:
+def replay_gif_name(replay: int | str) -> str:
+    """The GIF of a run's champion: champion.gif for its typical (median) replay, champion-exact.gif
+    for its exact episode (replay 0), champion-replayI.gif for its perturbed replay I."""
+    if replay == MEDIAN:
+        return "champion.gif"
+    return "champion-exact.gif" if replay == 0 else f"champion-replay{replay}.gif"
+
+
+def replay_line(run_dir: str | Path, replay: int | str = MEDIAN, eps: float = verdict_rule.EPS,
+                kind: str = "uniform", offset: float = 0.0, seed: int = 0) -> str:
     """What `sgr render` prints beside the GIF: the champion's nominal return and, for a perturbed
-    replay, that replay's return (the episode the GIF shows), to answer "does it hold?"."""
+    replay, that replay's return (the episode the GIF shows), to answer "does it hold?"; for the
+    median, which replay it is and what the replays return."""
+    noise = f"±{eps:g} {kind} action noise" + (f", start ±{offset:g}" if offset else "")
+    if replay == MEDIAN:
+        index, returns = typical_replay(run_dir, eps, kind, offset, seed)
+        noisy = returns[1:]
+        return (f"the median of {len(noisy)} replays ({noise}), replay {index}: return "
+                f"{returns[index]:.4f} (replays {noisy.min():.4f} to {noisy.max():.4f}), nominal "
+                f"return {returns[0]:.4f}; the exact episode: --exact")
     returns = replay_champion(run_dir, replay, eps, seed, kind, offset)
     nominal = f"nominal return {returns[0]:.4f}"
     if replay == 0:
-        return nominal
-    noise = f"±{eps:g} {kind} action noise" + (f", start ±{offset:g}" if offset else "")
+        return f"the exact episode: {nominal}"
     return f"replay {replay} ({noise}) return {returns[replay]:.4f}, {nominal}"
 
 

@@ -22,7 +22,7 @@ from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
 from evolve.runs.continuation import continued_state
-from evolve.runs.final_selection import FinalSelection, describe, select_champion
+from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
 from evolve.runs.reporters import ReporterSet, configured_reporters
 from evolve.runs.rundir import RunDir
 from evolve.runs.stops import Interrupted, stop_after_generation
@@ -178,10 +178,12 @@ class Experiment:
 
     def _select_champion(self) -> str:
         """The run's end with `final_selection`: the champion chosen afresh among the final elites
-        (evolve/runs/final_selection.py); returns the console's line on it."""
+        (evolve/runs/final_selection.py); returns the console's lines on it: what was chosen, in
+        how long, and why."""
         t0 = time.perf_counter()
         champ = select_champion(self, self.selection)
-        return f"final selection: {describe(champ)} ({time.perf_counter() - t0:.0f} s)"
+        return (f"final selection: {describe(champ)} ({time.perf_counter() - t0:.1f} s)\n"
+                f"final selection {explain(champ)}")
 
     def _warn_if_population_grew(self, row: dict) -> None:
         """One line on stderr, once per run, when the population outgrows pop_size by a quarter:
@@ -240,9 +242,18 @@ class Experiment:
             from evolve.runs.champion import judge
 
             best = self.run.champion()
-            print(f"champion: fitness {best['fitness']:.3f} (generation {best['generation']}) -> "
+            ev = best.get("evaluation") or {}
+            held = ev.get("tag", "").startswith("final-holdout/")  # final selection's held-out figure
+            how = (f"the {ev['robust']['statistic']} of {ev['robust']['episodes']} held-out perturbed "
+                   "episodes, " if held else "")
+            print(f"champion: fitness {best['fitness']:.3f} ({how}generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
-            print(f"champion {judge(self.run.path).line()}", flush=True)
+            verdict = judge(self.run.path)
+            if (self.run.path / "champion.gif").exists():
+                print(f"champion.gif: its typical episode, replay {verdict.median_replay} of "
+                      f"{verdict.replays} (the median, return {verdict.median:.3f}); the exact "
+                      f"episode: sgr render {self.run.path} --exact")
+            print(f"champion {verdict.line()}", flush=True)
 
 
 def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:

@@ -16,26 +16,50 @@ tag "final/<g>") and its nominal return; a candidate holds when its score is at 
 return minus `tolerance` x |nominal return|. The champion is the candidate that holds with the
 highest min(score, nominal return) (`rank: min`; `rank: score`, the highest score; `rank:
 pooled`, the highest mean of the score and the confirmation below, weighted by their episodes), or
-the highest of all when none holds (champion.json says so). Its `fitness` is its score.
+the highest of all when none holds (champion.json says so). Its `fitness` is the held-out
+score below.
 Why `pooled` in the packaged configs: a chaotic gait's exact episode is one draw from the noise's
 spread, so `min` mixes a one-episode estimate into the choice; on the robust-fast sweep `pooled`
 chose champions that return more under the noise they were evolved for (docs/RESULTS.md), at the
 price of exact episodes that may return less.
 
 `confirm: N` (0: off) judges the hold on episodes that did not choose: every candidate is scored
-again by N fresh perturbed episodes (tag "final-confirm/<g>"), a candidate holds only when both its
-score and this confirmation clear the tolerance, and the champion's `fitness` is its confirmation
-(evaluation tag "final-confirm/<g>", which `rescore_champion` reproduces). Why: the champion is the
-maximum over candidates of noisy scores, so its own score is biased upward (the winner's curse) and
-the hold test passes on luck. On the robust-fast sweep (docs/RESULTS.md) 4 of the 12 champions
-chosen without it kept under 90 % in 20 replays on other noise; 1 of 12 with it.
+again by N fresh perturbed episodes (tag "final-confirm/<g>"), and a candidate holds only when both
+its score and this confirmation clear the tolerance. Why: the champion is the maximum over
+candidates of noisy scores, so its own score is biased upward (the winner's curse) and the hold
+test passes on luck. On the robust-fast sweep (docs/RESULTS.md) 4 of the 12 champions chosen
+without it kept under 90 % in 20 replays on other noise; 1 of 12 with it.
+
+The headline (`holdout`): the champion's `fitness` (the figure the console, champion.json and `sgr
+report` show) is the `statistic` of `holdout` fresh perturbed episodes of the chosen genome alone
+(tag "final-holdout/<g>"), episodes that took no part in choosing it; `rescore_champion`
+reproduces it from champion.json. Why: with `rank: pooled` the confirmation also ranks, so it
+carries the winner's curse too: on the bigger-bodies study's Climber-v2 champions the recorded
+confirmation overstated 20 fresh noisy replays by 19-67 % on 6 of 9. The score and the
+confirmation stay in `selection` (`score`, `confirmed`).
+
+How many episodes (`sized`): `candidates`, `episodes`, `confirm` and `holdout` may be `auto` (the
+default of all but `confirm`, whose default 0 is off). An explicit number is used as it is. The
+`auto` ones scale with the run's length: the selection may simulate at most `SHARE` (a fifth) of
+the episodes the run itself asks for (generations x pop_size x the robust key's episodes, 1 for a
+nominal run), counted as (candidates + 1) x (episodes + 1 + confirm) + holdout (the +1s: the
+best-ever genome, the exact episode). Each `auto` count is its maximum (`MAXIMA`: 16 candidates,
+32 episodes, 32 confirm episodes; `holdout` follows `episodes`) times one common factor, the
+largest multiple of 1/64 that fits the budget, rounded down and never below its floor (`FLOORS`:
+2 candidates, 8 episodes), so a long run gets the maxima and a very short one the floors even
+past the budget. The packaged `quick` config (20 generations, pop 48, one episode each: 960)
+gets 6 candidates, 12 + 12 episodes and 12 held-out ones, 187 episodes. The sizes used are
+recorded in champion.json's `selection` (with `sized`: the budget and which keys were `auto`).
+Why: a fixed 16 x (32 + 32) took 43 of a 2-generation 10x10 run's 61 s.
 
 The candidates are read from the state after the last generation, which is the last checkpoint, so
 the choice made at a run's end and `sgr select-champion` on the finished run
 (`evolve.runs.experiment.select_finished_run`) are the same, and making it again changes nothing.
-champion.json then records the chosen genome, its score as `fitness` and an `evaluation` that
-`rescore_champion` reproduces exactly, plus a `selection` block (every candidate's score and
-nominal return); the best-ever record is kept as champion-best-ever.json.
+champion.json then records the chosen genome, its held-out score as `fitness` and an `evaluation`
+that `rescore_champion` reproduces exactly, plus a `selection` block (every candidate's score and
+nominal return); the best-ever record is kept as champion-best-ever.json. `describe` and `explain`
+are the console's lines: what was chosen, and why the champion is the one it is (why the
+best-ever genome was dropped or ranked below).
 """
 
 from __future__ import annotations
@@ -53,17 +77,24 @@ from tsim.errors import SgrError
 BEST_EVER_FILE = "champion-best-ever.json"
 TAG = "final"
 RANKS = ("min", "score", "pooled")
+AUTO = "auto"
+SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
+MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
+FLOORS = {"candidates": 2, "episodes": 8, "confirm": 8}  # ... and the least it shrinks to
+COUNTS = ("candidates", "episodes", "confirm", "holdout")
 
 
 @dataclass(frozen=True)
 class FinalSelection:
-    """The `final_selection` config key (null: the champion is the best-ever genome)."""
-    candidates: int = 16  # the top final elites by recorded fitness, plus the best-ever genome
-    episodes: int = 32
+    """The `final_selection` config key (null: the champion is the best-ever genome). The counts
+    may be "auto": sized by the run's length (`sized`, module docstring)."""
+    candidates: int | str = AUTO  # the top final elites by recorded fitness, plus the best-ever genome
+    episodes: int | str = AUTO
     statistic: str = "mean"
     tolerance: float = 0.05  # holds: score >= nominal return - tolerance x |nominal return|
     rank: str = "min"  # among those that hold: min(score, nominal return), "score" alone, or "pooled"
-    confirm: int = 0  # > 0: the hold judged again, and the fitness taken, on this many fresh episodes
+    confirm: int | str = 0  # > 0: the hold judged again on this many fresh episodes
+    holdout: int | str = AUTO  # fresh episodes of the champion alone that give its fitness
 
     def to_json(self) -> dict:
         """The config mapping (every key)."""
@@ -71,11 +102,29 @@ class FinalSelection:
 
     def robust(self, run_robust: dict | None, episodes: int | None = None) -> Robust:
         """How candidates are scored: the run's perturbation (uniform(+-1e-3) on a nominal run),
-        this selection's episodes (or `episodes`: the confirmation's) and statistic, no
-        re-evaluation."""
+        this selection's episodes (or `episodes`: the confirmation's, the holdout's) and
+        statistic, no re-evaluation."""
         base = Robust.from_config(run_robust) or Robust()
         return Robust(episodes or self.episodes, base.action_noise, base.action_scale, base.offset,
                       self.statistic)
+
+    def sized(self, run_episodes: int) -> FinalSelection:
+        """This selection with every "auto" count resolved for a run that asks for `run_episodes`
+        episodes (`run_episodes`): the maxima shrunk by one common factor until the selection's
+        episodes fit `SHARE` of them, never below the floors (module docstring)."""
+        budget = int(SHARE * run_episodes)
+        fixed = {k: getattr(self, k) for k in COUNTS if getattr(self, k) != AUTO}
+
+        def at(step: int) -> dict:
+            v = {k: fixed.get(k, max(FLOORS[k], MAXIMA[k] * step // 64)) for k in MAXIMA}
+            v["holdout"] = fixed.get("holdout", v["episodes"])
+            return v
+
+        for step in range(64, 0, -1):
+            counts = at(step)
+            if selection_episodes(counts) <= budget:
+                break
+        return FinalSelection(**{**self.to_json(), **counts})
 
     @classmethod
     def from_config(cls, raw: object, source: str = "config") -> FinalSelection | None:
@@ -84,12 +133,10 @@ class FinalSelection:
             return None
         name = f"{source}: key 'final_selection"
         sel = config_dataclass(cls, raw, name)
-        if not isinstance(sel.confirm, int) or isinstance(sel.confirm, bool) or sel.confirm < 0:
-            raise SgrError(f"{name}.confirm' must be an int >= 0, got {sel.confirm!r}")
-        for key in ("candidates", "episodes"):
+        for key, least in (("candidates", 1), ("episodes", 1), ("confirm", 0), ("holdout", 1)):
             v = getattr(sel, key)
-            if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-                raise SgrError(f"{name}.{key}' must be an int >= 1, got {v!r}")
+            if v != AUTO and (not isinstance(v, int) or isinstance(v, bool) or v < least):
+                raise SgrError(f"{name}.{key}' must be an int >= {least} or auto, got {v!r}")
         try:
             Robust.from_config({"statistic": sel.statistic}, source)
         except ValueError:
@@ -100,7 +147,21 @@ class FinalSelection:
             raise SgrError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
         if sel.rank not in RANKS:
             raise SgrError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
-        return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank, sel.confirm)
+        return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank, sel.confirm, sel.holdout)
+
+
+def run_episodes(cfg) -> int:
+    """The episodes a run asks for: generations x pop_size x its robust episodes (1 when nominal).
+    From the config alone, so a resumed run sizes its selection as the uninterrupted one did."""
+    robust = Robust.from_config(cfg.get("robust"))
+    return int(cfg["generations"]) * int(cfg["pop_size"]) * (robust.episodes if robust else 1)
+
+
+def selection_episodes(counts: dict) -> int:
+    """The episodes a selection of these counts simulates at most (+1s: the best-ever genome, the
+    exact episode)."""
+    return ((counts["candidates"] + 1) * (counts["episodes"] + 1 + counts["confirm"])
+            + counts["holdout"])
 
 
 def not_for(method: str) -> str:
@@ -151,12 +212,15 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
 
 def select_champion(exp, settings: FinalSelection) -> dict:
     """Score the candidates of `exp` (an `Experiment` at its run's end), write champion.json and
-    champion-best-ever.json, and return the new champion record."""
+    champion-best-ever.json, and return the new champion record. "auto" counts are sized by the
+    run's length first (`FinalSelection.sized`)."""
     cfg, search, problem = exp.cfg, exp.search, exp.problem
     if type(problem).reevaluate_elites:
         raise SgrError(f"final_selection {not_for(cfg['method'])}")
     if search.best is None:
         raise SgrError(f"{exp.run.path} has no champion to choose from yet")
+    asked = settings
+    settings = settings.sized(run_episodes(cfg))
     cands = candidates(search, settings.candidates)
     phenotypes = [search.decode(g) for _, g in cands]
     robust = settings.robust(cfg.get("robust"))
@@ -166,19 +230,22 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     with problem.scored_with(None):
         nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
     confirmed = None
-    fit_robust, fit_tags, fit = robust, tags, scores  # the champion's fitness and how it is scored again
     if settings.confirm:
-        fit_robust = settings.robust(cfg.get("robust"), settings.confirm)
-        fit_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
-        with problem.scored_with(fit_robust.to_json()):
-            fit = confirmed = np.asarray(problem.evaluate(phenotypes, fit_tags)[0], dtype=float)
+        confirm_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
+        with problem.scored_with(settings.robust(cfg.get("robust"), settings.confirm).to_json()):
+            confirmed = np.asarray(problem.evaluate(phenotypes, confirm_tags)[0], dtype=float)
     i, holds = choose(scores, nominal, settings.tolerance, settings.rank, confirmed,
                       (settings.episodes, settings.confirm))
+    # the headline: the chosen genome alone, on fresh episodes that took no part in the choice
+    fit_robust = settings.robust(cfg.get("robust"), settings.holdout)
+    fit_tag = f"{TAG}-holdout/{cands[i][0]}"
+    with problem.scored_with(fit_robust.to_json()):
+        fit = float(np.asarray(problem.evaluate([phenotypes[i]], [fit_tag])[0], dtype=float)[0])
     best = search.best
     best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]
-    champ = champion_record(cfg, problem, genome, phenotypes[i], float(fit[i]), search.generation,
-                            {"robust": fit_robust.to_json(), "seed": cfg["seed"], "tag": fit_tags[i]})
+    champ = champion_record(cfg, problem, genome, phenotypes[i], fit, search.generation,
+                            {"robust": fit_robust.to_json(), "seed": cfg["seed"], "tag": fit_tag})
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
              "score": float(s), "nominal": float(n), "holds": bool(h)}
             for (k, g), s, n, h in zip(cands, scores, nominal, holds, strict=True)]
@@ -188,6 +255,10 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     champ["selection"] = {
         **settings.to_json(), "holds": bool(holds[i]), "nominal": float(nominal[i]),
         "score": float(scores[i]),
+        **({"confirmed": float(confirmed[i])} if confirmed is not None else {}),
+        "sized": {"share": SHARE, "run_episodes": run_episodes(cfg),
+                  "auto": [k for k in COUNTS if getattr(asked, k) == AUTO],
+                  "episodes": selection_episodes(settings.to_json())},
         "best_ever": {"key": best["key"], "fitness": best["fitness"], "file": BEST_EVER_FILE},
         "candidates": rows}
     atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode())
@@ -196,15 +267,85 @@ def select_champion(exp, settings: FinalSelection) -> dict:
 
 
 def describe(champ: dict) -> str:
-    """One line on a chosen champion (the console's and `sgr select-champion`'s)."""
+    """One line on a chosen champion (the console's and `sgr select-champion`'s): what chose it
+    and what its fitness is."""
     sel = champ["selection"]
     confirm = sel.get("confirm", 0)
-    scored = (f"score {sel.get('score', champ['fitness']):.4f} ({sel['statistic']} of {sel['episodes']} "
-              "perturbed episodes)")
-    if confirm:
-        scored += f", confirmed {champ['fitness']:.4f} by {confirm} fresh ones"
-    return (f"champion genome {champ['genome']['key']} of {len(sel['candidates'])} candidates, "
-            f"{scored}, nominal {sel['nominal']:.4f}"
+    n = len(sel["candidates"])
+    if "holdout" in sel:  # the fitness is a held-out score (older records: the score or confirmation)
+        confirmed = f", confirmed {sel['confirmed']:.4f}" if "confirmed" in sel else ""
+        scored = (f"chosen by {sel['episodes']}{f' + {confirm}' if confirm else ''} perturbed episodes "
+                  f"each (score {sel['score']:.4f}{confirmed}, nominal {sel['nominal']:.4f}); fitness "
+                  f"{champ['fitness']:.4f}: the {sel['statistic']} of {sel['holdout']} fresh episodes "
+                  "that took no part in choosing it")
+    else:
+        scored = (f"score {sel.get('score', champ['fitness']):.4f} ({sel['statistic']} of "
+                  f"{sel['episodes']} perturbed episodes)")
+        if confirm:
+            scored += f", confirmed {champ['fitness']:.4f} by {confirm} fresh ones"
+        scored += f", nominal {sel['nominal']:.4f}"
+    sized = sel.get("sized") or {}
+    cost = (f"; {sized['episodes']} episodes in all, sized for the run's {sized['run_episodes']}"
+            if sized.get("auto") else "")
+    return (f"champion genome {champ['genome']['key']} of {n} candidates, {scored}"
             f"{'' if sel['holds'] else ' (no candidate held: each lost over tolerance x its nominal return)'}"
-            "; best-ever "
-            f"{sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")
+            f"{cost}; best-ever {sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")
+
+
+def _rank_key(sel: dict, row: dict) -> float:
+    """A candidate's value by the selection's rank (`choose`)."""
+    if sel.get("rank") == "min":
+        return row["score"] if math.isnan(row["nominal"]) else min(row["score"], row["nominal"])
+    if sel.get("rank") == "pooled" and "confirmed" in row:
+        w, c = sel["episodes"], sel["confirm"]
+        return (w * row["score"] + c * row["confirmed"]) / (w + c)
+    return row["score"]
+
+
+def _rank_name(sel: dict) -> str:
+    if sel.get("rank") == "min":
+        return "the worse of score and exact return"
+    if sel.get("rank") == "pooled" and sel.get("confirm"):
+        return "the mean of all its perturbed episodes"
+    return "score"
+
+
+def _misses(sel: dict, row: dict) -> str:
+    """Why a candidate does not hold, in words: which noisy figure falls outside the tolerance."""
+    tol, nominal = sel["tolerance"], row["nominal"]
+    floor = nominal - tol * abs(nominal)
+    for name, value in (("", row["score"]), (" (its confirmation)", row.get("confirmed"))):
+        if value is not None and not (value >= floor):
+            return (f"{value:.4g} under noise{name} is outside the {100 * tol:g} % tolerance of its "
+                    f"noise-free {nominal:.4g}")
+    return f"its noise-free return {nominal} is not finite"
+
+
+def explain(champ: dict) -> str:
+    """One line on why the champion is the one it is: whether it holds and ranks first, and what
+    became of the best-ever genome (dropped for not holding, or ranked below)."""
+    sel = champ["selection"]
+    rows = {r["key"]: r for r in sel["candidates"]}
+    key = champ["genome"]["key"]
+    me = rows[key]
+    held = [r for r in sel["candidates"] if r["holds"]]
+    how = _rank_name(sel)
+    if sel["holds"]:
+        why = (f"it holds and ranks first among the {len(held)} of {len(rows)} candidates that hold by "
+               f"{how} ({_rank_key(sel, me):.4g})")
+    else:
+        why = (f"no candidate holds, so it ranks first of all {len(rows)} by {how} "
+               f"({_rank_key(sel, me):.4g})")
+    b = sel["best_ever"]
+    if b["key"] == key:
+        return f"why: {why}; it is the best-ever genome (recorded {b['fitness']:.4g})"
+    row = rows.get(b["key"])
+    if row is None:
+        return f"why: {why}; best-ever {b['fitness']:.4g} was not a candidate"
+    if sel["holds"] and not row["holds"]:
+        fate = f"best-ever {b['fitness']:.4g} dropped: {_misses(sel, row)}"
+    else:
+        fate = f"best-ever {b['fitness']:.4g} ranks below: {_rank_key(sel, row):.4g} by {how}"
+        if not row["holds"]:
+            fate += f", and does not hold: {_misses(sel, row)}"
+    return f"why: {why}; {fate}"

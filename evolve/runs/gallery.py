@@ -56,7 +56,8 @@ def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Pa
 
 def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, height: int = 120,
                   every: int = 10, fps: float = 8.0) -> list[dict]:
-    """Write <run>.gif (every `every`-th step of the champion's episode) and <run>-body.png into
+    """Write <run>.gif (every `every`-th step of the champion's typical episode, the median of the
+    verdict's replays: `champion_gif`) and <run>-body.png into
     `folder` for each entry; returns the entries with `gif` and `body` paths added."""
     import imageio.v3 as iio
 
@@ -139,7 +140,8 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
     if gallery:
         parts.append("<h2>Champions</h2><p>Per method and task, the seed with the best champion: "
                      "its body (orange: horizontal actuator, blue: vertical, dark: rigid, grey: soft) "
-                     "and its episode.</p><div class='gallery'>")
+                     "and its typical episode (the median of 20 replays under ±0.001 action noise)."
+                     "</p><div class='gallery'>")
         for e in gallery:
             r, name = e["row"], html.escape(e["run"].name)
             parts.append(

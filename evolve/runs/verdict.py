@@ -10,6 +10,11 @@ end, `sgr report`, `load_champion`) says which kind it is, by one rule, `RULE`:
 - it *holds* when the mean of the noisy returns is at least its noise-free return less
   `TOLERANCE` of that return's size (>= 90 % of it for a positive return); otherwise it is
   *knife-edge*.
+
+`Verdict.line` leads with what the robot returns under that noise (mean, sd, worst replay) and puts
+the exact episode beside it: the exact episode is one draw of a chaotic system, so a share of it
+("592 % of its return 0.044") says more about that draw than about the robot. `median_replay` is the
+replay a typical perturbed episode is shown by (champion.gif, `sgr render`).
 """
 
 from __future__ import annotations
@@ -28,11 +33,17 @@ RULE = (f"holds: the mean return of {REPLAYS} replays with uniform(±{EPS:g}) ad
 
 @dataclass(frozen=True)
 class Verdict:
-    """A champion's noise-free return, the mean of its noisy replays, and what follows."""
+    """A champion's noise-free return, the mean of its noisy replays, and what follows; `sd`,
+    `worst` and `median_replay` (the replay, from 1, whose return is their median) when the
+    replays themselves are known (`from_returns`), else NaN and 0."""
     nominal: float
     noisy_mean: float
     replays: int
     eps: float
+    sd: float = math.nan
+    worst: float = math.nan
+    median_replay: int = 0
+    median: float = math.nan
 
     @property
     def holds(self) -> bool:
@@ -50,17 +61,19 @@ class Verdict:
         return "holds" if self.holds else "knife-edge"
 
     def line(self) -> str:
-        """One line for a person, e.g. "holds: 97 % of its return 5.21 under ±0.001 (20 replays)"."""
-        finite = math.isfinite(self.share)
-        kept = f"{100 * self.share:.0f} % of" if finite else f"{self.noisy_mean:.3f} against"
-        return (f"{self.label}: {kept} its return {self.nominal:.3f} under ±{self.eps:g} "
-                f"({self.replays} replays)")
+        """One line for a person, the return under noise first, e.g. "holds: mean return 5.120, sd
+        0.210, worst 4.650 under ±0.001 (20 replays); exact episode 5.210"."""
+        spread = "" if math.isnan(self.sd) else f", sd {self.sd:.3f}, worst {self.worst:.3f}"
+        short = "" if self.holds else f" (the mean is more than {100 * TOLERANCE:.0f} % below it)"
+        return (f"{self.label}: mean return {self.noisy_mean:.3f}{spread} under ±{self.eps:g} "
+                f"({self.replays} replays); exact episode {self.nominal:.3f}{short}")
 
     def to_json(self) -> dict:
         """The verdict as data (what `sgr report` and scripts keep)."""
         return {"holds": self.holds, "label": self.label, "nominal": self.nominal,
                 "noisy_mean": self.noisy_mean, "share": self.share, "replays": self.replays,
-                "eps": self.eps, "rule": RULE}
+                "eps": self.eps, "rule": RULE, "noisy_sd": self.sd, "noisy_worst": self.worst,
+                "median_replay": self.median_replay}
 
 
 def from_returns(returns: np.ndarray, eps: float = EPS) -> Verdict:
@@ -68,4 +81,18 @@ def from_returns(returns: np.ndarray, eps: float = EPS) -> Verdict:
     returns = np.asarray(returns, dtype=float)
     if len(returns) < 2:
         raise ValueError("a verdict needs the noise-free return and at least one noisy replay")
-    return Verdict(float(returns[0]), float(returns[1:].mean()), len(returns) - 1, eps)
+    noisy = returns[1:]
+    m = median_replay(returns)
+    sd = float(noisy.std(ddof=1)) if len(noisy) > 1 else 0.0
+    return Verdict(float(returns[0]), float(noisy.mean()), len(noisy), eps, sd, float(noisy.min()), m,
+                   float(returns[m]))
+
+
+def median_replay(returns: np.ndarray) -> int:
+    """The replay (1 to n) whose return is the median of the noisy ones, `returns[1:]` (for even n
+    the lower of the middle two; equal returns keep the replays' order): the typical perturbed
+    episode that champion.gif shows."""
+    noisy = np.asarray(returns, dtype=float)[1:]
+    if len(noisy) == 0:
+        raise ValueError("a median replay needs at least one noisy replay")
+    return int(np.argsort(noisy, kind="stable")[(len(noisy) - 1) // 2]) + 1

@@ -58,10 +58,12 @@ def test_evolution_is_unchanged_and_the_best_ever_record_is_kept(runs):
 
 
 def test_the_chosen_champion_rescores_to_the_bit_from_its_json(runs):
+    """Its fitness is the held-out figure (12 episodes, as `episodes` when `holdout` is auto), tagged
+    apart from the episodes that chose it."""
     champ = runs[1].champion()
     ev = champ["evaluation"]
     assert ev["robust"] == {**ROBUST, "episodes": 12, "reevaluate": False}
-    assert ev["tag"] == f"final/{champ['genome']['key']}" and ev["seed"] == 5
+    assert ev["tag"] == f"final-holdout/{champ['genome']['key']}" and ev["seed"] == 5
     assert rescore_champion(runs[1].path) == champ["fitness"]
     assert replay_champion(runs[1].path)[0] == champ["selection"]["nominal"]  # its exact episode
 
@@ -76,8 +78,8 @@ def test_the_choice_follows_the_rule_from_the_recorded_scores(runs):
         assert c["holds"] == (score >= nominal - 0.1 * abs(nominal))
     pool = [c for c in cands if c["holds"]] or cands
     best = max(pool, key=lambda c: min(c["score"], c["nominal"]))
-    assert champ["genome"]["key"] == best["key"] and champ["fitness"] == best["score"]
-    assert sel["holds"] == best["holds"]
+    assert champ["genome"]["key"] == best["key"] and sel["score"] == best["score"]
+    assert sel["holds"] == best["holds"] and champ["fitness"] != best["score"]  # the held-out figure
 
 
 def test_choose_takes_the_candidate_that_holds_with_the_best_worse_of_score_and_nominal_return():
@@ -119,7 +121,8 @@ def test_pooled_rank_takes_the_best_mean_of_every_perturbed_episode_among_those_
 
 def test_a_confirmed_choice_follows_its_rule_and_its_fitness_rescores_to_the_bit(runs, tmp_path):
     """select-champion --confirm: every candidate gets fresh episodes, the champion holds on both
-    sets (or none does), and its fitness is its confirmation, which champion.json alone gives again."""
+    sets (or none does), and its fitness is neither its score nor its confirmation but its held-out
+    episodes, which champion.json alone gives again."""
     import shutil
 
     copy = tmp_path / "confirmed"
@@ -134,9 +137,9 @@ def test_a_confirmed_choice_follows_its_rule_and_its_fitness_rescores_to_the_bit
         assert c["holds"] == (c["score"] >= floor and c["confirmed"] >= floor)
     pool = [c for c in cands if c["holds"]] or cands
     best = max(pool, key=lambda c: min(c["score"], c["nominal"]))
-    assert champ["genome"]["key"] == best["key"] and champ["fitness"] == best["confirmed"]
-    assert sel["score"] == best["score"] and champ["fitness"] != best["score"]
-    assert champ["evaluation"]["tag"] == f"final-confirm/{best['key']}"
+    assert champ["genome"]["key"] == best["key"] and sel["confirmed"] == best["confirmed"]
+    assert sel["score"] == best["score"] and champ["fitness"] not in (best["score"], best["confirmed"])
+    assert champ["evaluation"]["tag"] == f"final-holdout/{best['key']}"
     assert rescore_champion(copy) == champ["fitness"]
 
 
