@@ -8,8 +8,9 @@ on stderr. `load_config` returns a `RunConfig`: frozen and typed, every key
 present (defaults filled from the schema, the one place they live), checked once, `episode_steps`
 resolved to the number of steps a run uses and `robust`/`final_selection` parsed once into their
 dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
-run directory stores (config.yaml); it also records the arch and precision the run was created
-with. `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
+run directory stores (config.yaml), with the run's precision; `arch` is the one asked for when
+the config was checked, not written to config.yaml (segments.json records where each part of a run
+ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
 null) included.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
