@@ -10,8 +10,8 @@ resolved to the number of steps a run uses and `robust`/`final_selection` parsed
 dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
 run directory stores (config.yaml), with the run's precision; `arch` is the one asked for when
 the config was checked, not written to config.yaml (segments.json records where each part of a run
-ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
-null) included.
+ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
+(keys missing, `episode_steps` null) included.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
