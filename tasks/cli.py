@@ -124,12 +124,15 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     from tasks.validate import validate
-    from tsim import runtime
+    from tsim import backend, runtime
 
     runtime.use_precision(args.precision)
+    here = backend.get()  # one that cannot start fails here, in one line
+    if not args.json:
+        print(here.line(), flush=True)
     report = validate(args.dir)
     if args.json:
-        print(json.dumps(report))
+        print(json.dumps({**report, "backend": here.record()}))
         return 0
     for c in report["cases"]:
         print(f"{c['file']:<48} {c['task']:<22} com_err_final {c['com_err_final']:.2e} "
@@ -145,12 +148,15 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
-    from tsim import runtime
+    from tsim import backend, runtime
 
     runtime.use_precision(args.precision)
+    here = backend.get()  # one that cannot start fails here, in one line
+    if not args.json:
+        print(here.line(), flush=True)
     r = bench(args.task, args.robots, args.steps)
     if args.json:
-        print(json.dumps(r))
+        print(json.dumps({**r, "backend": here.record()}))
     else:
         print(f"{r['task']}: {r['robots']} robots x {r['steps']} steps: "
               f"{r['robot_steps_per_s']:.0f} robot-steps/s (env), "

@@ -54,6 +54,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
         "tests/evolve/runs/test_sweep.py": ("test_a_killed_sweep_resumes_to_the_same_runs",),
         "tests/evolve/runs/test_script_task.py": ALL,
         "tests/evolve/test_cli_precision.py": ALL,
+        "tests/evolve/test_cli_backend.py": ALL,
         "tests/evolve/test_working_folder.py": (
             "test_every_readme_command_runs_beside_a_tasks_py_an_evolve_py_and_a_tsim_py",),
         "tests/evolve/test_cli_errors.py": ("test_config_that_is_a_list", "test_unknown_arch",

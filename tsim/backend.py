@@ -46,9 +46,30 @@ class Backend:
         faithful, within evogym's chaos floor: docs/VALIDATION.md)."""
         return self.arch == "cpu" and self.precision == "f64"
 
+    @property
+    def runs_on(self) -> str:
+        """The arch the kernels really run on: "cpu", "cuda", "vulkan" or "metal" (what "gpu"
+        resolved to)."""
+        return runtime.resolved_arch()
+
+    @property
+    def device(self) -> str:
+        """The device's name ("x64: <CPU model>", the GPU's name, "<Vulkan device>: <type>")."""
+        return runtime.device()[0]
+
+    @property
+    def software(self) -> bool:
+        """Whether the device is a software one (Mesa's lavapipe: a GPU API run on the CPU)."""
+        return runtime.device()[1]
+
+    def line(self) -> str:
+        """One line naming the backend, the device and the precision (`tsim.runtime.describe`)."""
+        return runtime.describe()
+
     def record(self) -> dict:
-        """What a run folder records of it."""
-        return {"arch": self.arch, "precision": self.precision, "threads": self.threads}
+        """What a run folder records of it (a segment of the run's life: evolve/runs/segments.py)."""
+        return {"arch": self.runs_on, "asked": self.arch, "device": self.device, "software": self.software,
+                "precision": self.precision, "threads": self.threads}
 
 
 def get(arch: str | None = None, precision: str | None = None) -> Backend:

@@ -9,6 +9,7 @@ import tempfile
 import threading
 import time
 
+from tsim import devices
 from tsim.errors import SgrError
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
@@ -29,6 +30,7 @@ _ARCH: str | None = None
 # evogym's (bit for bit), f32 is faster and within evogym's chaos floor (docs/VALIDATION.md)
 PRECISIONS = ("f64", "f32")
 _PRECISION: str | None = None
+_DEVICE: tuple[str, bool] | None = None  # `device()`
 NO_F64 = ("metal",)  # archs without 64-bit floats
 
 
@@ -108,7 +110,7 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     An arch that Taichi cannot use here (no device, driver or backend), or that has no 64-bit
     floats for f64, raises ValueError (one line: what is missing, what to use) rather than running
     on the CPU as Taichi would."""
-    global _ARCH, _PRECISION
+    global _ARCH, _PRECISION, _DEVICE
     from_env = arch is None and bool(os.environ.get("SGR_ARCH"))
     prec_from_env = precision is None and bool(os.environ.get("SGR_PRECISION"))
     arch = requested_arch(arch)
@@ -154,6 +156,12 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     except ValueError:
         ti.reset()
         raise
+    name, software = devices.describe(backend())
+    if arch == "gpu" and software:  # a software device is never what a GPU is asked for
+        ti.reset()
+        raise SgrError(f"{what}: the only GPU here is {name.split(': ')[0]}, a software Vulkan device "
+                       f"(it runs on the CPU), {SOFTWARE_SPEED}; use SGR_ARCH=cpu (or SGR_ARCH=vulkan to "
+                       "run on it anyway)")
     if precision == "f64" and backend() in SPIRV_ARCHS and not _runs_f64():
         ti.reset()
         raise SgrError(f"{what}: this {backend()} device has no 64-bit floats, which sgr's f64 "
@@ -164,9 +172,39 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
             print(line, file=sys.stderr)
     _ARCH = arch
     _PRECISION = precision
+    _DEVICE = (name, software)
     if arch == "cpu":
         pin_threads()
     return _ARCH
+
+
+# what a software Vulkan device costs (docs/BENCHMARKS.md "Backends"): `SGR_ARCH=gpu` refuses one
+SOFTWARE_SPEED = ("25 to 60 times slower than SGR_ARCH=cpu (sgr bench: 307 against 7,991 robot-steps/s; "
+                  "85 against 5,237)")
+
+
+def resolved_arch() -> str:
+    """What the kernels run on once Taichi started, as an arch name: "cpu" (for x64 or arm64),
+    "cuda", "vulkan" or "metal" ("gpu" resolves to one of the last three)."""
+    name = backend()
+    return "cpu" if name in ("x64", "arm64") else name
+
+
+def device() -> tuple[str, bool]:
+    """(the device's name, whether it is a software device) of the started Taichi
+    (tsim/devices.py): "x64: <CPU model>", the CUDA GPU's name, "<Vulkan device>: <its type>"."""
+    if _DEVICE is None:
+        raise RuntimeError("Taichi has not started: call tsim.runtime.init() first")
+    return _DEVICE
+
+
+def describe() -> str:
+    """One line naming the backend, its device and the precision, e.g. "backend: cpu (x64: AMD
+    EPYC), f64" or "backend: vulkan (llvmpipe (LLVM 15.0.6, 128 bits): software, on the CPU),
+    f32"; the first line `sgr evolve`, `sgr bench` and `sgr validate` print."""
+    name, _ = device()
+    asked = f"; asked for {_ARCH}" if _ARCH != resolved_arch() else ""
+    return f"backend: {resolved_arch()} ({name}{asked}), {_PRECISION}"
 
 
 # what is missing when Taichi cannot start an arch (it does not say why)

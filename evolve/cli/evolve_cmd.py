@@ -84,7 +84,7 @@ def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None
 def run(args: argparse.Namespace) -> int:
     """`sgr evolve`."""
     from evolve.runs.config import load_config
-    from evolve.runs.experiment import Experiment
+    from evolve.runs.experiment import Experiment, start_backend
     from tsim import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
@@ -97,6 +97,7 @@ def run(args: argparse.Namespace) -> int:
                            "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
+        print(runtime.describe())  # the backend it started (it records it: segments.json)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
         if args.tensorboard and not exp.cfg.get("tensorboard"):
             from evolve.runs.reporters import configured_reporters
@@ -112,6 +113,8 @@ def run(args: argparse.Namespace) -> int:
         else:
             config, name = evolve_config(args, shape), None
         cfg = load_config(config, overrides)
+        # the first line names the backend; one that cannot start fails here, before the run exists
+        print(start_backend(cfg.precision).line(), flush=True)
         if name is None:
             name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
             if shape and not config.stem.endswith(f"-{shape[0]}x{shape[1]}"):

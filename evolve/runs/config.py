@@ -2,13 +2,16 @@
 
 The schema is the common keys below plus the method's own (`Problem.config_keys`). Paths inside a
 config (neat_config, ...) are relative to the YAML file; left out, they are the method's packaged
-defaults in configs/neat/. `load_config` returns a `RunConfig`: frozen and typed, every key
+defaults in configs/neat/. A relative one that is not beside the YAML file is taken from the
+packaged configs as if the file sat among them (a copied packaged config keeps working), saying so
+on stderr. `load_config` returns a `RunConfig`: frozen and typed, every key
 present (defaults filled from the schema, the one place they live), checked once, `episode_steps`
 resolved to the number of steps a run uses and `robust`/`final_selection` parsed once into their
 dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
-run directory stores (config.yaml); it also records the arch and precision the run was created
-with. `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
-null) included.
+run directory stores (config.yaml), with the run's precision; `arch` is the one asked for when
+the config was checked, not written to config.yaml (segments.json records where each part of a run
+ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
+(keys missing, `episode_steps` null) included.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
@@ -16,6 +19,7 @@ null) included.
 
 from __future__ import annotations
 
+import sys
 from pathlib import Path
 
 from evolve.methods import METHODS
@@ -157,7 +161,7 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     raw = dict(raw)
     for key in problem.default_files if problem else ():
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():
-            raw[key] = str(((base or Path.cwd()) / raw[key]).resolve())
+            raw[key] = _beside_or_packaged(raw[key], key, raw["method"], source, base or Path.cwd())
     start = raw.get("start_from")
     if isinstance(start, dict) and isinstance(start.get("run"), str) and not Path(start["run"]).is_absolute():
         raw["start_from"] = {**start, "run": str(((base or Path.cwd()) / start["run"]).resolve())}
@@ -166,6 +170,22 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
                           if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m
                           for m in raw["imports"]]
     return check_config(raw, source)
+
+
+def _beside_or_packaged(ref: str, key: str, method: str, source: str, base: Path) -> str:
+    """The absolute path of a config's relative file `ref` (neat_config, ...): beside the config
+    when it is there, else the packaged file it names, as if the config sat beside the packaged
+    configs of its method (a packaged config copied elsewhere keeps working), saying so in one
+    line; else the path beside the config, which check_config reports as missing."""
+    beside = (base / ref).resolve()
+    if beside.exists():
+        return str(beside)
+    for packaged in ((configs_dir() / method / ref).resolve(), configs_dir() / "neat" / Path(ref).name):
+        if packaged.is_file():
+            print(f"sgr: note: {source}: {key} {ref} is not beside it ({beside}); using sgr's packaged "
+                  f"{packaged}", file=sys.stderr)
+            return str(packaged)
+    return str(beside)
 
 
 def packaged_config(name: str) -> Path | None:

@@ -16,7 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from evolve.methods import METHODS
-from evolve.rollout.pool import BasePool, RolloutPool
+from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
 from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
@@ -25,12 +25,28 @@ from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
 from evolve.runs.reporters import ReporterSet, configured_reporters
 from evolve.runs.rundir import RunDir
+from evolve.runs.segments import record_segment
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
 from tasks.specs import BUILTIN
 from tsim import runtime
+from tsim.backend import Backend
+from tsim.backend import get as get_backend
 from tsim.errors import SgrError
+
+
+def start_backend(precision: str) -> Backend:
+    """Start Taichi in this process on $SGR_ARCH in the run's `precision` (its rollout workers
+    follow: they read $SGR_ARCH and $SGR_PRECISION): a backend that cannot run here fails now,
+    in one line, before anything is written, and the run records what it runs on."""
+    runtime.use_precision(precision)
+    return get_backend()
+
+
+def _workers(workers: int | str) -> int | str:
+    """What a segment records of `workers`: the number of rollout processes, or "ray"."""
+    return workers if workers == "ray" else resolve_workers(workers)
 
 
 def rollout_pool(workers: int | str) -> BasePool:
@@ -95,9 +111,11 @@ class Experiment:
         if cfg.workers == "ray":
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")
+        here = start_backend(cfg.precision)  # one that cannot start fails before the run exists
         run = RunDir(out)
         with run.locked_unless_it_fails():
             run.create(cfg, ini)
+            record_segment(run.path, 0, here.record(), _workers(cfg.workers))
             if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
                 run.save_task(spec_blob(cfg["task"]))
             state = None
@@ -115,6 +133,7 @@ class Experiment:
         run = RunDir(out)
         cfg = run.config()
         run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
+        here = start_backend(cfg.get("precision") or "f64")  # the run's; the arch: this process's
         with run.locked_unless_it_fails():
             state = load_checkpoint(run, cfg)
             if state is None:
@@ -131,7 +150,9 @@ class Experiment:
                 raise SgrError(f"{out} is finished ({done} of {cfg['generations']} generations); "
                                "add --generations N to extend it")
             run.truncate_rows(done)
-            return cls(run, cfg, state=state, quiet=quiet, workers=workers)
+            exp = cls(run, cfg, state=state, quiet=quiet, workers=workers)
+            record_segment(run.path, done, here.record(), _workers(workers or exp.cfg.workers))
+            return exp
 
     def state(self) -> dict:
         """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own

@@ -1,6 +1,7 @@
 """Run directories: resolved config, per-generation CSV, champion JSON, atomic checkpoints.
 
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
+segments.json (the arch, device and precision of each start and resume: evolve/runs/segments.py),
 checkpoints/gen-XXXXX.json.gz (state at the start of generation XXXXX: gzipped JSON, never a
 pickle; evolve/runs/checkpoint.py says what it holds). Every file that a crash could
 leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
@@ -161,7 +162,9 @@ class RunDir:
             raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                            "or another --out")
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
+        # the arch is not the config's: segments.json records where each part of the run ran
+        atomic_write(self.path / "config.yaml", yaml.safe_dump({k: v for k, v in dict(cfg).items()
+                                                                if k != "arch"}, sort_keys=False).encode())
         atomic_write(self.path / "neat.ini", neat_ini.encode())
         for name, text in (extra_files or {}).items():
             atomic_write(self.path / name, text.encode())

@@ -282,11 +282,12 @@ def test_a_closed_stdout_is_no_disk_error_and_the_run_goes_on(tmp_path, repo_roo
     proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "evolve", "--config", str(cfg),
                              "--out", "r"], cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             env=env)
-    head = [proc.stdout.readline(), proc.stdout.readline()]  # what `head -2` reads, then it exits
+    head = [proc.stdout.readline() for _ in range(3)]  # what `head -3` reads, then it exits
     proc.stdout.close()
     err = proc.stderr.read().decode()
     assert proc.wait(timeout=300) == 0, err
-    assert head[0].startswith(b"run directory: r") and head[1].startswith(b"gen    1/6")
+    assert head[0].startswith(b"backend: cpu (")  # the first line names the backend (issue 45)
+    assert head[1].startswith(b"run directory: r") and head[2].startswith(b"gen    1/6")
     assert "make room" not in err and "cannot write" not in err and "Traceback" not in err, err
     assert "Exception ignored" not in err, err
     assert len((tmp_path / "r" / "generations.csv").read_text().splitlines()) == 7  # all 6 generations

@@ -174,4 +174,5 @@ def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_pa
     assert run.name.startswith("direct-Walker-v0-seed0-")
     cfg = RunDir(run).config()
     assert cfg["method"] == "direct" and cfg["task"] == "Walker-v0" and cfg["episode_steps"] == 500
-    assert capsys.readouterr().out.startswith(f"run directory: {Path('runs') / run.name}")
+    out = capsys.readouterr().out.splitlines()  # the first line names the backend (issue 45)
+    assert out[0].startswith("backend: cpu (") and out[1] == f"run directory: {Path('runs') / run.name}"
