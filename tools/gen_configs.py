@@ -37,11 +37,12 @@ ROBUST_ACCUMULATED = """\
 # Honest by default (docs/EVOLVE.md "Robust evaluation"): every action carries uniform(±1e-3)
 # actuator noise; one fresh episode per genome and generation, a survivor's fitness the mean of its
 # scores so far (8 at most, then it is not simulated again: settle); the champion chosen at the end \
-among the final elites (final_selection). For the
+among the final elites (final_selection; auto: sized to at most a fifth of the run's episodes). For the
 # paper's nominal evaluation (knife-edge champions) set both to null, as configs/sweeps/paper.yaml does.
 robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
 reevaluate: true, accumulate: true, settle: 8}
-final_selection: {candidates: 16, episodes: 32, statistic: mean, tolerance: 0.05, rank: pooled, confirm: 32}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, confirm: auto, \
+holdout: auto}
 """
 
 TEMPLATES = {
