@@ -41,8 +41,8 @@ among the final elites (final_selection; auto: sized to at most a fifth of the r
 # paper's nominal evaluation (knife-edge champions) set both to null, as configs/sweeps/paper.yaml does.
 robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
 reevaluate: true, accumulate: true, settle: 8}
-final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, confirm: auto, \
-holdout: auto}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
+confirm: auto, holdout: auto}
 """
 
 TEMPLATES = {

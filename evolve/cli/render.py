@@ -22,8 +22,8 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
     r.add_argument("--out", help="GIF path, or .mp4 for an MP4 (needs pip install 'sgr[video]'); default "
                                  "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), with "
-                                 "--exact RUN_DIR/champion-exact.gif, with --replay I RUN_DIR/champion-replayI.gif; "
-                                 "with --body robot.gif")
+                                 "--exact RUN_DIR/champion-exact.gif, with --replay I "
+                                 "RUN_DIR/champion-replayI.gif; with --body robot.gif")
     r.add_argument("--width", type=positive(int), default=640)
     r.add_argument("--height", type=positive(int), default=320)
     r.add_argument("--fps", type=positive(float), default=30.0)
