@@ -173,8 +173,19 @@ def run_settings(run_dir: Path, cfg: dict | None = None) -> dict[str, str]:
             "pop": str(cfg.get("pop_size", 128)), "generations": str(cfg.get("generations", 250)),
             "steps": "?" if steps is None else str(steps),
             "evaluation": _evaluation(cfg.get("robust")), "selection": _selection(cfg.get("final_selection")),
-            "precision": str(cfg.get("precision") or "f64"), "arch": str(cfg.get("arch") or "not recorded"),
+            "precision": str(cfg.get("precision") or "f64"), "arch": _arches(run_dir, cfg),
             "start": f"from g{start.get('generation', '?')}" if isinstance(start, dict) else "fresh"}
+
+
+def _arches(run_dir: Path, cfg: dict) -> str:
+    """The arch(s) the run ran on, in the order of its segments (segments.json: "cuda, then cpu" for
+    a run resumed elsewhere); an older run's config.yaml `arch`; "not recorded" otherwise."""
+    from evolve.runs.segments import segments
+
+    arches = list(dict.fromkeys(str(s.get("arch")) for s in segments(run_dir)))
+    if not arches and isinstance(cfg.get("arch"), str):
+        arches = [cfg["arch"]]
+    return ", then ".join(arches) or "not recorded"
 
 
 def _evaluation(raw) -> str:

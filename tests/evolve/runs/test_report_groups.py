@@ -257,3 +257,15 @@ def test_sgr_plot_of_one_run_draws_its_species_and_body_diversity(tmp_path, save
     assert list(titles["body diversity"].get_lines()[0].get_ydata()) == [0.5, 0.25, 0.5 / 3]
     plot_run(run, tmp_path / "end.png")
     assert len(saved[-1].axes) == 1
+
+
+def test_a_run_resumed_on_another_arch_is_grouped_by_the_arches_its_segments_record(tmp_path):
+    """segments.json (one entry per start and resume) decides the arch setting: a run started on
+    CUDA and resumed on the CPU is not averaged with runs that ran on the CPU alone."""
+    runs = tmp_path / "runs"
+    for name, seed, arches in (("a", 0, ["cpu"]), ("b", 1, ["cpu"]), ("c", 2, ["cuda", "cpu"])):
+        run = make_run(runs / name, seed=seed)
+        (run / "segments.json").write_text(json.dumps(
+            [{"after_generation": g, "arch": a, "precision": "f64"} for g, a in enumerate(arches)]))
+    rows = table_rows(report(runs)[0])
+    assert set(rows) == {"sgr (arch cpu) / Walker-v0", "sgr (arch cuda, then cpu) / Walker-v0"}, rows
