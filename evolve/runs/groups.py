@@ -150,11 +150,21 @@ def read_config(run_dir: Path) -> dict:
     return cfg if isinstance(cfg, dict) else {}
 
 
+def episode_length(cfg: dict, task: str) -> int | None:
+    """The episode length a run used: its config's (runs record it), or for a config that left it
+    out (null: the paper's, "evogym": evogym's) the task's; None for a task not registered here."""
+    from tasks.specs import TASKS
+
+    steps = cfg.get("episode_steps")
+    if isinstance(steps, int):
+        return steps
+    spec = TASKS.get(task)
+    return None if spec is None else spec.episode_length(steps)
+
+
 def run_settings(run_dir: Path, cfg: dict | None = None) -> dict[str, str]:
     """The value of each of SETTINGS for a run, as text; a run without config.yaml (plots take
     those) has its method from its parent folder's name and "?" for the rest."""
-    from evolve.runs.report import episode_length
-
     cfg = read_config(run_dir) if cfg is None else cfg
     method = str(cfg.get("method") or (Path(run_dir).resolve().parent.name or UNKNOWN))
     if cfg.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own method

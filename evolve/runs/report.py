@@ -37,6 +37,7 @@ import yaml
 
 from evolve.runs import verdict as verdict_rule
 from evolve.runs.files import atomic_write
+from evolve.runs.groups import episode_length
 from evolve.runs.plots import read_generations, save_png
 from tsim.errors import SgrError
 
@@ -55,18 +56,6 @@ AUTHORS: dict[tuple[str, str], tuple[float | str | None, ...]] = {
     ("nested", "ObstacleTraverser-v1"): (1.14, None, None, "2.5-3.2"),  # end: range over their seeds
 }
 AUTHORS_GENERATIONS = 100  # their "end" figures come from runs of at least this many generations
-
-
-def episode_length(cfg: dict, task: str) -> int | None:
-    """The episode length a run used: its config's (runs record it), or for a config that left it
-    out (null: the paper's, "evogym": evogym's) the task's; None for a task not registered here."""
-    from tasks.specs import TASKS
-
-    steps = cfg.get("episode_steps")
-    if isinstance(steps, int):
-        return steps
-    spec = TASKS.get(task)
-    return None if spec is None else spec.episode_length(steps)
 
 
 def authors_not_comparable(task: str, episode_steps: list) -> str | None:
