@@ -45,9 +45,13 @@ def _type_name(t) -> str:
     return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
 
-def check_config(raw: dict, source: str = "config") -> RunConfig:
+def check_config(raw: dict, source: str = "config", named_in: Path | None = None) -> RunConfig:
     """Fill defaults and validate, once; raises SgrError naming the offending key. Keys `arch` and
-    `precision` (a run folder's config.yaml used as a config) are replaced by this run's."""
+    `precision` (a run folder's config.yaml used as a config) are replaced by this run's.
+    `named_in`: the file of a run or sweep folder the config was read back from (`--from RUN`, a
+    sweep's runs on --resume): its `imports:` are imported only after --trust-imports, and not at
+    all when the task is registered already (tasks/registry.py); a config the user names imports
+    them."""
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
@@ -82,9 +86,9 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     if not all(isinstance(m, str) for m in imports):
         raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
                        f"got {imports!r}")
-    for ref in imports:  # they register the user's tasks before the task is looked up
+    for ref in imports if named_in is None or cfg["task"] not in TASKS else ():  # the user's tasks
         try:
-            import_tasks(ref)
+            import_tasks(ref, named_in=named_in)
         except ValueError as exc:
             raise SgrError(f"{source}: key 'imports': {exc}") from None
     if cfg["task"] not in TASKS:
@@ -137,17 +141,18 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
                            robust=robust, selection=selection)
 
 
-def load_config(path: str | Path, overrides: dict | None = None) -> RunConfig:
+def load_config(path: str | Path, overrides: dict | None = None, named_in: Path | None = None) -> RunConfig:
     """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
-    resolve relative paths and validate a YAML config."""
+    resolve relative paths and validate a YAML config (`named_in`: see `check_config`)."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
         raise SgrError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
-    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent)
+    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent, named_in)
 
 
-def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> RunConfig:
+def config_from_dict(raw: dict, source: str = "config", base: Path | None = None,
+                     named_in: Path | None = None) -> RunConfig:
     """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
     `base` (default: the current folder)."""
     if not isinstance(raw, dict):
@@ -165,7 +170,7 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
         raw["imports"] = [str(((base or Path.cwd()) / m).resolve())
                           if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m
                           for m in raw["imports"]]
-    return check_config(raw, source)
+    return check_config(raw, source, named_in)
 
 
 def packaged_config(name: str) -> Path | None:
