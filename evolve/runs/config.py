@@ -8,7 +8,8 @@ resolved to the number of steps a run uses and `robust`/`final_selection` parsed
 dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
 run directory stores (config.yaml); it also records the arch and precision the run was created
 with. `RunConfig.of` reads a run folder's config.yaml back, older ones (keys missing, `episode_steps`
-null) included.
+null) included. Left out, `robust` and `final_selection` are the honest evaluation that `sgr evolve`
+runs by default (evolve/runs/run_config.py, `HONEST_ROBUST`); null is the paper's nominal one.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
@@ -23,7 +24,7 @@ from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
-from evolve.runs.run_config import COMMON, RunConfig
+from evolve.runs.run_config import COMMON, RunConfig, default
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
 from tsim import runtime
@@ -68,11 +69,11 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
             raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
                            f"known keys: {', '.join(sorted(schema))}")
     cfg = {}
-    for key, (typ, default) in schema.items():
+    for key, (typ, fallback) in schema.items():
         if key not in raw:
             if key == "task":
                 raise SgrError(f"{source}: missing required key {key!r}")
-            cfg[key] = default
+            cfg[key] = default(key, problem.reevaluate_elites) if key in COMMON else fallback
             continue
         val = raw[key]
         if typ is float and isinstance(val, int) and not isinstance(val, bool):
