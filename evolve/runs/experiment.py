@@ -86,7 +86,8 @@ class Experiment:
     @classmethod
     def from_config(cls, config: dict, out: str | Path, quiet: bool = False) -> Experiment:
         """A new run in `out` from a config dict (no YAML file needed; relative paths are taken
-        from the current folder, left-out files are the method's packaged defaults)."""
+        from the current folder, left-out files are the method's packaged defaults, left-out
+        `robust`/`final_selection` the honest evaluation of `sgr evolve`'s default run)."""
         return cls._start(config_from_dict(config, "config"), out, quiet)
 
     @classmethod
