@@ -14,7 +14,7 @@ from evolve.runs.decode import write_decoded
 from evolve.runs.experiment import Experiment
 
 TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20, "workers": 1,
-        "render_champion": False}
+        "render_champion": False, "robust": None, "final_selection": None}
 
 
 def main(out: Path) -> None:

@@ -58,7 +58,7 @@ def main() -> None:
     for n in names:
         cfg = {"method": args.method, "task": args.task, "pop_size": args.pop, "seed": args.seed,
                "generations": args.generations, "render_champion": False, "workers": workers,
-               "robust": DESIGNS[n]}
+               "robust": DESIGNS[n], "final_selection": None}
         exps[n] = Experiment.from_config(cfg, out / n, quiet=True)
     print(f"{args.method} {args.task} pop {args.pop}, {args.generations} generations, workers {workers}; "
           f"runs in {out}", flush=True)

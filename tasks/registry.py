@@ -3,21 +3,28 @@
 
 Rollout workers are other processes (`python -m evolve.rollout`, or Ray actors) that know only
 sgr's tasks: a registered spec travels with each job through the pipe
-(evolve/rollout/worker.py, `spec_blob`).
+(evolve/rollout/worker.py, `spec_blob`), between the processes of one run, never through a file.
 
-A run of a task registered in a script (no `imports:` to name it) keeps that spec in its folder,
-as the same pickle (`TASK_FILE`), so that `sgr render`, `sgr report`, `sgr evolve --resume` and
-`load_champion` work on it later, in another process. Loading it runs code, so it follows the rule
-of `imports:`: only where the files are yours alone, or after `trust_imports()` (--trust-imports).
+Nothing in a run or sweep folder runs code by being read (docs/RELIABILITY.md "Trust"). A run of
+a task registered in a script (no `imports:` to name it) keeps a *reference* to it (`TASK_FILE`,
+JSON): the task's name, the file that registered it and that file's sha256. Later, in another
+process, the task is known when that process registered it itself (it imported the user's
+script or module before `load_champion`, say), or, after `trust_imports()` (`--trust-imports`),
+by importing that file again, only if its digest still matches. The `imports:` a run's or
+sweep's config names follow the same rule (`import_tasks(named_in=...)`): imported only after
+`trust_imports()`, and not at all when the tasks are registered already. Code the user names
+in the command itself (`sgr evolve --config my.yaml`, a script's `Experiment.from_config`) is
+imported as they asked. An older sgr's `task.pkl` (`OLD_TASK_FILE`) is never unpickled on
+reading: `sgr convert-checkpoints DIR --trust-pickle` turns it into a reference.
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib
+import importlib.machinery
 import importlib.util
-import os
-import pickle
+import json
 import sys
 from pathlib import Path
 
@@ -28,16 +35,20 @@ from tasks.specs import BUILTIN, TASKS, forget_worlds
 from tsim.errors import SgrError
 
 _SGR = ("tasks", "tsim", "evolve")
-_TRUST_ALL = False  # --trust-imports: import code named in any file, whoever wrote it
-TASK_FILE = "task.pkl"  # in a run folder: the spec of a task registered in a script
+_TRUST_ALL = False  # --trust-imports: import the code that run and sweep folders name
+TASK_FILE = "task.json"  # in a run folder: the reference to a task registered in a script
+OLD_TASK_FILE = "task.pkl"  # an older sgr's: that task's pickled spec, never loaded on reading
+TASK_FORMAT, TASK_VERSION = "sgr-task-reference", 1
 HOW_TO_TRUST = "if you trust it, add --trust-imports (in Python: tasks.registry.trust_imports())"
+_SOURCES: dict[str, Path | None] = {}  # task name -> the file whose code registered it
 
 
 def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
     """Make `spec` a task: `BatchEnv(spec.name, ...)`, `gymnasium.make("sgr/" + spec.name, body=m)`
     (TimeLimit at `paper_steps`), configs and sweeps (`task: <name>`) and rollout workers. A name
     that is registered already is an error unless `replace`; sgr's own tasks cannot be replaced.
-    Returns the spec."""
+    The file of the code that called it is remembered: a run of the task refers to it
+    (`task_reference`). Returns the spec."""
     if not isinstance(spec, TaskSpec):
         raise TypeError(f"register takes a tasks.TaskSpec, got {type(spec).__name__}")
     if spec.name in BUILTIN:
@@ -47,6 +58,7 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
         raise SgrError(f"task {spec.name!r} is registered already; register(spec, replace=True) "
                        "replaces it")
     TASKS[spec.name] = spec
+    _SOURCES[spec.name] = _caller_file() or code_file(spec)
     forget_worlds()
     env_id = f"sgr/{spec.name}"
     if env_id in gym.registry:
@@ -56,8 +68,25 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
     return spec
 
 
+def _caller_file() -> Path | None:
+    """The .py file of the nearest caller outside sgr (the user's script or module), if it is one."""
+    frame = sys._getframe(1)
+    while frame is not None and frame.f_globals.get("__name__", "").split(".")[0] in _SGR:
+        frame = frame.f_back
+    f = frame.f_globals.get("__file__") if frame is not None else None
+    return Path(f).resolve() if isinstance(f, str) and f.endswith(".py") and Path(f).is_file() else None
+
+
+def code_file(spec: TaskSpec) -> Path | None:
+    """The .py file the spec's reward was defined in, when it is one (a pickled function keeps it)."""
+    f = getattr(getattr(spec.reward, "__code__", None), "co_filename", None)
+    ok = isinstance(f, str) and f.endswith(".py") and Path(f).is_absolute() and Path(f).is_file()
+    return Path(f).resolve() if ok else None
+
+
 def trust_imports(on: bool = True) -> None:
-    """`--trust-imports`: import the code that run and sweep folders name whoever wrote them."""
+    """`--trust-imports`: import the code that run and sweep folders name (their `imports:`, the
+    file that registered a script's task)."""
     global _TRUST_ALL
     _TRUST_ALL = on
 
@@ -65,13 +94,6 @@ def trust_imports(on: bool = True) -> None:
 def imports_trusted() -> bool:
     """Whether `trust_imports()` was called in this process (a sweep passes it on to its runs)."""
     return _TRUST_ALL
-
-
-def _yours(path: Path) -> bool:
-    """Whether only you can have written `path`: you own it and neither group nor others may write
-    it (git's rule for repositories, applied to the files that name code)."""
-    st = path.stat()
-    return st.st_uid == os.getuid() and not st.st_mode & 0o022
 
 
 class TaskModuleError(RuntimeError):
@@ -82,34 +104,19 @@ class TaskModuleError(RuntimeError):
 def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = None) -> None:
     """Import the module that registers your tasks: a module name (`mytasks`) or a .py file
     (relative to `base`, default the current folder). Importing the same file twice runs it once.
-    `named_in`: the file in a run or sweep folder that names `ref` (resuming, reporting); its code
-    is imported only when that file and the .py are yours alone (`_yours`) or after
-    `trust_imports()`, since a folder someone else could write must not run code. SgrError naming
-    `ref` when it cannot or may not be imported; TaskModuleError when its code raises."""
-    path = None
+    `named_in`: the file in a run or sweep folder that names `ref` (resuming, reporting); a folder
+    is data, so its code is imported only after `trust_imports()` (the caller skips this when the
+    tasks are registered already). SgrError naming `ref` when it cannot or may not be imported;
+    TaskModuleError when its code raises."""
+    if named_in is not None and not _TRUST_ALL:
+        raise SgrError(f"{named_in} names code to import ({ref}), which sgr does not run for reading a "
+                       f"folder: {HOW_TO_TRUST}, or register its tasks in your process first")
     if ref.endswith(".py"):
         path = Path(ref) if Path(ref).is_absolute() else (base or Path.cwd()) / ref
         path = path.resolve()
         if not path.is_file():
             raise SgrError(f"task module {ref!r}: file not found: {path}")
-    if named_in is not None and not _TRUST_ALL:
-        others = [p for p in (Path(named_in), path) if p is not None and not _yours(p)]
-        if others:
-            raise SgrError(f"{named_in} names code to import ({ref}) and {others[0]} could have been "
-                           f"written by someone else: {HOW_TO_TRUST}")
-    if path is not None:
-        name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
-        if name in sys.modules:
-            return
-        loader = importlib.util.spec_from_file_location(name, path)
-        module = importlib.util.module_from_spec(loader)
-        sys.modules[name] = module  # cloudpickle and dataclasses look modules up by name
-        try:
-            loader.loader.exec_module(module)
-        except Exception as exc:  # a bug in the user's code: its traceback is theirs to read
-            del sys.modules[name]
-            raise TaskModuleError(f"task module {path} raised {type(exc).__name__}: {exc}; "
-                                  "its traceback is above") from exc
+        _exec_file(path, path.read_bytes())
         return
     try:
         importlib.import_module(ref)
@@ -118,23 +125,76 @@ def import_tasks(ref: str, base: Path | None = None, *, named_in: Path | None = 
                        "or a .py file") from None
 
 
-def load_task_file(path: Path, named_in: Path) -> str:
-    """Register the task a run folder keeps in `path` (`TASK_FILE`, written where the run began),
-    unless a task of that name is registered already; returns its name. `named_in` is the run's
-    config.yaml. The pickle is code: loaded only when both files are yours alone (`_yours`) or
-    after `trust_imports()`; ValueError in one line, saying how to allow it, otherwise."""
-    path = Path(path)
-    if not _TRUST_ALL:
-        others = [p for p in (Path(named_in), path) if not _yours(p)]
-        if others:
-            raise SgrError(f"{path} holds the code of the run's own task, and {others[0]} could have "
-                             f"been written by someone else: {HOW_TO_TRUST}")
+class _BytesLoader(importlib.machinery.SourceFileLoader):
+    """A .py file's loader that compiles the bytes given (those whose digest was checked), never a
+    cached .pyc."""
+
+    def __init__(self, name: str, path: str, data: bytes):
+        super().__init__(name, path)
+        self._data = data
+
+    def get_code(self, fullname: str):
+        return self.source_to_code(self._data, self.path)
+
+
+def _exec_file(path: Path, data: bytes) -> None:
+    """Run `data`, the text of the .py file `path`, as a module of its own (once per file)."""
+    name = f"sgr_user_tasks_{path.stem}_{hashlib.sha1(str(path).encode()).hexdigest()[:10]}"
+    if name in sys.modules:
+        return
+    loader = _BytesLoader(name, str(path), data)
+    module = importlib.util.module_from_spec(importlib.util.spec_from_loader(name, loader))
+    sys.modules[name] = module  # cloudpickle and dataclasses look modules up by name
     try:
-        spec = pickle.loads(path.read_bytes())
-    except Exception as exc:  # a damaged file, or code that no longer loads (a module gone)
-        raise SgrError(f"{path}: the run's task does not load ({type(exc).__name__}: {exc})") from None
-    if not isinstance(spec, TaskSpec):
-        raise SgrError(f"{path}: not a task (a pickled {type(spec).__name__})")
-    if spec.name not in TASKS:
-        register(spec)
-    return spec.name
+        loader.exec_module(module)
+    except Exception as exc:  # a bug in the user's code: its traceback is theirs to read
+        del sys.modules[name]
+        raise TaskModuleError(f"task module {path} raised {type(exc).__name__}: {exc}; "
+                              "its traceback is above") from exc
+
+
+def task_reference(name: str, source: Path | None = None) -> dict:
+    """What a run folder keeps of a task registered in a script (`TASK_FILE`): its name, the file
+    whose code registered it (or `source`) and that file's sha256 (source null when there is no
+    file: a task registered in a notebook is known only where it is registered again)."""
+    source = source or _SOURCES.get(name)
+    ref = {"format": TASK_FORMAT, "version": TASK_VERSION, "task": name, "source": None, "sha256": None}
+    if source is not None and source.is_file():
+        ref.update(source=str(source), sha256=hashlib.sha256(source.read_bytes()).hexdigest())
+    return ref
+
+
+def load_task_reference(path: Path) -> str:
+    """The task a run folder refers to (`TASK_FILE`, JSON, read as data), registered in this process
+    unless it is already; returns its name. Its source file is imported only after
+    `trust_imports()`, and only while its sha256 is the one recorded; otherwise SgrError in one
+    line naming the file and what to do."""
+    path = Path(path)
+    try:
+        ref = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise SgrError(f"{path}: not a task reference ({exc})") from None
+    if not (isinstance(ref, dict) and ref.get("format") == TASK_FORMAT and isinstance(ref.get("task"), str)):
+        raise SgrError(f"{path}: not a task reference (no format {TASK_FORMAT!r} and task name)")
+    name, source, digest = ref["task"], ref.get("source"), ref.get("sha256")
+    if name in TASKS:  # registered by this process itself
+        return name
+    if not isinstance(source, str) or not isinstance(digest, str):
+        raise SgrError(f"{path}: task {name!r} was registered by code with no file (a notebook?): register "
+                       "it in your process first")
+    if not _TRUST_ALL:
+        raise SgrError(f"{path}: task {name!r} is registered by {source}, which sgr does not run for "
+                       f"reading a folder: import it in your process first, or {HOW_TO_TRUST}")
+    src = Path(source)
+    if not src.is_file():
+        raise SgrError(f"{path}: task {name!r} is registered by {source}, which is not there: register "
+                       "the task in your process first (import your copy of it)")
+    data = src.read_bytes()
+    if hashlib.sha256(data).hexdigest() != digest:
+        raise SgrError(f"{path}: {source} has changed since the run was made (its sha256 differs from the "
+                       "one recorded), so it is not imported: register the task in your process first "
+                       "(import it) to use it as it is now")
+    _exec_file(src.resolve(), data)
+    if name not in TASKS:
+        raise SgrError(f"{path}: {source} was imported but did not register task {name!r}")
+    return name

@@ -46,6 +46,7 @@ MARKS: dict[str, dict[str, tuple[str, ...]]] = {
             "test_ctrl_c_writes_a_checkpoint_and_every_generation_number_agrees",),
         "tests/evolve/runs/test_final_selection.py": (
             "test_choosing_again_on_one_or_two_workers_changes_nothing",),
+        "tests/evolve/runs/test_folder_trust.py": ALL,
         "tests/evolve/runs/test_imports.py": ALL,
         "tests/evolve/runs/test_ray_nodes.py": ALL,
         "tests/evolve/runs/test_resume.py": ("test_sigkilled_run_resumes_in_a_new_process_to_the_same_run",

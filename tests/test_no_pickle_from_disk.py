@@ -1,10 +1,10 @@
 """No file sgr reads can run code: nothing in the packages unpickles except the worker pipes of one
-run's own processes (evolve/rollout/pool.py, worker.py), the task a run of a script's task keeps
-(tasks/registry.py, behind the ownership check of imports:), and the conversion of an older sgr's
-checkpoints that the user must ask for with --trust-pickle (evolve/runs/legacy.py); every np.load
-says allow_pickle=False; YAML is read with safe_load only; nothing evals, execs or imports a name
-at run time, except the task modules a config names, behind an ownership check
-(tasks/registry.py). Checked on the source's syntax tree."""
+run's own processes (evolve/rollout/pool.py, worker.py) and the conversion of an older sgr's
+pickles (checkpoints, a script's task.pkl) that the user must ask for with --trust-pickle
+(evolve/runs/legacy.py); every np.load says allow_pickle=False; YAML is read with safe_load only;
+nothing evals, execs or imports a name at run time, except the task modules a config names
+(tasks/registry.py: from a run or sweep folder only after --trust-imports). Checked on the
+source's syntax tree."""
 
 from __future__ import annotations
 
@@ -13,12 +13,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("tsim", "tasks", "evolve")
-# tasks/registry.py: the spec of a script's task kept in its run folder (task.pkl), behind the same
-# ownership check as imports: (tests/evolve/runs/test_script_task.py)
-MAY_UNPICKLE = {"evolve/rollout/pool.py", "evolve/rollout/worker.py", "evolve/runs/legacy.py",
-                "tasks/registry.py"}
-# imports the task modules a config names (`imports:`): from a run or sweep folder only when the
-# files are the user's alone or --trust-imports is given (tests/evolve/runs/test_imports.py)
+# a run folder keeps a script's task as a reference (task.json), never as a pickle: tasks/registry.py
+# unpickles nothing (tests/evolve/runs/test_folder_trust.py)
+MAY_UNPICKLE = {"evolve/rollout/pool.py", "evolve/rollout/worker.py", "evolve/runs/legacy.py"}
+# imports the task modules a config names (`imports:`) and the file a task reference names: from a
+# run or sweep folder only with --trust-imports (tests/evolve/runs/test_folder_trust.py)
 MAY_IMPORT_BY_NAME = {"tasks/registry.py"}
 CODE_LOADERS = {"pickle", "cPickle", "_pickle", "dill", "cloudpickle", "marshal", "shelve", "joblib", "torch"}
 

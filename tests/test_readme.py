@@ -18,7 +18,8 @@ import json, sys, traceback
 blocks = json.loads(sys.argv[1])
 from evolve import Experiment
 exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 8,
-                              "episode_steps": 250, "workers": 1}, "runs/sgr-quick-seed0-TEST", quiet=True)
+                              "episode_steps": 250, "workers": 1, "robust": None, "final_selection": None},
+                             "runs/sgr-quick-seed0-TEST", quiet=True)
 exp.run_all(); exp.finish()
 for i, code in enumerate(blocks):
     try:

@@ -54,8 +54,8 @@ def add_noise(parser: argparse.ArgumentParser, *, several: bool, default, help: 
                         metavar="EPS", help=help)
 
 
-TRUST_HELP = ("import the code (imports:) that a run or sweep folder names even where someone else "
-              "could have written it; say you trust the folder")
+TRUST_HELP = ("import the code that a run or sweep folder names (its config's imports:, the file that "
+              "registered a script's task, checked against its recorded sha256); say you trust the folder")
 
 
 def add_trust_imports(parser: argparse.ArgumentParser) -> None:

@@ -112,7 +112,8 @@ def run(args: argparse.Namespace) -> int:
             config, name = continuation(args, overrides)
         else:
             config, name = evolve_config(args, shape), None
-        cfg = load_config(config, overrides)
+        named_in = config if args.start_from else None  # read back from a run folder: data
+        cfg = load_config(config, overrides, named_in)
         # the first line names the backend; one that cannot start fails here, before the run exists
         print(start_backend(cfg.precision).line(), flush=True)
         if name is None:
@@ -122,7 +123,7 @@ def run(args: argparse.Namespace) -> int:
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
         output_path(out, folder=True)
-        exp = Experiment.create(config, out, overrides, quiet=args.quiet)
+        exp = Experiment.create(config, out, overrides, quiet=args.quiet, named_in=named_in)
         print(f"run directory: {out}")
     return run_experiment(exp)
 
@@ -137,7 +138,8 @@ def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
         raise SgrError("--from starts from another run's config and population; --config, --task and "
                        "--method do not go with it")
     src = RunDir(resume_dir(args.start_from))
-    src.config()  # a run folder, or one line saying it is not
+    # a run folder, or one line saying it is not; its task known (its code run only with --trust-imports)
+    src.load_task(src.config())
     done = src.last_checkpoint_generation()
     if done is None:
         raise SgrError(f"--from {args.start_from}: the run has no checkpoint to start from")

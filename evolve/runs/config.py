@@ -11,7 +11,9 @@ dataclasses. It reads as a mapping of the config's keys to their YAML values, wh
 run directory stores (config.yaml), with the run's precision; `arch` is the one asked for when
 the config was checked, not written to config.yaml (segments.json records where each part of a run
 ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
-(keys missing, `episode_steps` null) included.
+(keys missing, `episode_steps` null) included. Left out, `robust` and `final_selection` are the
+honest evaluation that `sgr evolve` runs by default (evolve/runs/run_config.py, `HONEST_ROBUST`);
+null is the paper's nominal one.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
 (`tasks.register`); they are imported before the task is looked up, by every process of the run.
@@ -27,7 +29,7 @@ from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import FinalSelection, not_for
-from evolve.runs.run_config import COMMON, RunConfig
+from evolve.runs.run_config import COMMON, RunConfig, default
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
 from tsim import runtime
@@ -49,9 +51,13 @@ def _type_name(t) -> str:
     return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
 
-def check_config(raw: dict, source: str = "config") -> RunConfig:
+def check_config(raw: dict, source: str = "config", named_in: Path | None = None) -> RunConfig:
     """Fill defaults and validate, once; raises SgrError naming the offending key. Keys `arch` and
-    `precision` (a run folder's config.yaml used as a config) are replaced by this run's."""
+    `precision` (a run folder's config.yaml used as a config) are replaced by this run's.
+    `named_in`: the file of a run or sweep folder the config was read back from (`--from RUN`, a
+    sweep's runs on --resume): its `imports:` are imported only after --trust-imports, and not at
+    all when the task is registered already (tasks/registry.py); a config the user names imports
+    them."""
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
@@ -68,11 +74,11 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
             raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
                            f"known keys: {', '.join(sorted(schema))}")
     cfg = {}
-    for key, (typ, default) in schema.items():
+    for key, (typ, fallback) in schema.items():
         if key not in raw:
             if key == "task":
                 raise SgrError(f"{source}: missing required key {key!r}")
-            cfg[key] = default
+            cfg[key] = default(key, problem.reevaluate_elites) if key in COMMON else fallback
             continue
         val = raw[key]
         if typ is float and isinstance(val, int) and not isinstance(val, bool):
@@ -86,9 +92,9 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
     if not all(isinstance(m, str) for m in imports):
         raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
                        f"got {imports!r}")
-    for ref in imports:  # they register the user's tasks before the task is looked up
+    for ref in imports if named_in is None or cfg["task"] not in TASKS else ():  # the user's tasks
         try:
-            import_tasks(ref)
+            import_tasks(ref, named_in=named_in)
         except ValueError as exc:
             raise SgrError(f"{source}: key 'imports': {exc}") from None
     if cfg["task"] not in TASKS:
@@ -141,17 +147,18 @@ def check_config(raw: dict, source: str = "config") -> RunConfig:
                            robust=robust, selection=selection)
 
 
-def load_config(path: str | Path, overrides: dict | None = None) -> RunConfig:
+def load_config(path: str | Path, overrides: dict | None = None, named_in: Path | None = None) -> RunConfig:
     """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
-    resolve relative paths and validate a YAML config."""
+    resolve relative paths and validate a YAML config (`named_in`: see `check_config`)."""
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
         raise SgrError(f"{path}: a config must be a mapping of keys to values, got a {type(raw).__name__}")
-    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent)
+    return config_from_dict({**raw, **(overrides or {})}, str(path), path.parent, named_in)
 
 
-def config_from_dict(raw: dict, source: str = "config", base: Path | None = None) -> RunConfig:
+def config_from_dict(raw: dict, source: str = "config", base: Path | None = None,
+                     named_in: Path | None = None) -> RunConfig:
     """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
     `base` (default: the current folder)."""
     if not isinstance(raw, dict):
@@ -169,7 +176,7 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
         raw["imports"] = [str(((base or Path.cwd()) / m).resolve())
                           if isinstance(m, str) and m.endswith(".py") and not Path(m).is_absolute() else m
                           for m in raw["imports"]]
-    return check_config(raw, source)
+    return check_config(raw, source, named_in)
 
 
 def _beside_or_packaged(ref: str, key: str, method: str, source: str, base: Path) -> str:

@@ -25,7 +25,6 @@ from evolve.runs.run_config import RunConfig
 from evolve.runs.rundir import RunDir
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
-from tasks.registry import import_tasks
 from tasks.specs import body_fit_problem
 from tsim.errors import SgrError
 
@@ -80,10 +79,10 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
 
 
 def _imported(run: RunDir) -> dict:
-    """The run's config.yaml, the modules registering its own task imported."""
+    """The run's config.yaml, its own task registered (`RunDir.load_task`: by its imports or its
+    script only after --trust-imports)."""
     cfg = run.config()
-    for ref in cfg.get("imports") or ():
-        import_tasks(ref, named_in=run.path / "config.yaml")
+    run.load_task(cfg)
     return cfg
 
 

@@ -17,7 +17,6 @@ from pathlib import Path
 
 from evolve.methods import METHODS
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
-from evolve.rollout.worker import spec_blob
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import RunConfig, config_from_dict, load_config
@@ -29,6 +28,7 @@ from evolve.runs.segments import record_segment
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
+from tasks.registry import task_reference
 from tasks.specs import BUILTIN
 from tsim import runtime
 from tsim.backend import Backend
@@ -94,14 +94,16 @@ class Experiment:
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
-               quiet: bool = False) -> Experiment:
-        """A new run in `out` from a YAML config with `overrides` (CLI flags; None values ignored)."""
-        return cls._start(load_config(config_path, overrides), out, quiet)
+               quiet: bool = False, named_in: Path | None = None) -> Experiment:
+        """A new run in `out` from a YAML config with `overrides` (CLI flags; None values ignored);
+        `named_in`: the config was read back from a run or sweep folder (`check_config`)."""
+        return cls._start(load_config(config_path, overrides, named_in), out, quiet)
 
     @classmethod
     def from_config(cls, config: dict, out: str | Path, quiet: bool = False) -> Experiment:
         """A new run in `out` from a config dict (no YAML file needed; relative paths are taken
-        from the current folder, left-out files are the method's packaged defaults)."""
+        from the current folder, left-out files are the method's packaged defaults, left-out
+        `robust`/`final_selection` the honest evaluation of `sgr evolve`'s default run)."""
         return cls._start(config_from_dict(config, "config"), out, quiet)
 
     @classmethod
@@ -117,7 +119,7 @@ class Experiment:
             run.create(cfg, ini)
             record_segment(run.path, 0, here.record(), _workers(cfg.workers))
             if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
-                run.save_task(spec_blob(cfg["task"]))
+                run.save_task(task_reference(cfg["task"]))
             state = None
             if cfg.start_from is not None:  # another run's population (evolve/runs/continuation.py)
                 state = continued_state(cfg.start_from, load_neat_config(run.path / "neat.ini"))

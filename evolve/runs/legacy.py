@@ -1,10 +1,12 @@
-"""Checkpoints of an older sgr (pickles, gen-XXXXX.pkl) converted to today's JSON checkpoints.
+"""Pickles of an older sgr converted to today's data files: checkpoints (gen-XXXXX.pkl) to JSON
+checkpoints, and the pickled spec of a script's task (task.pkl) to a task reference (task.json:
+the task's name, the file its reward was defined in and that file's sha256; tasks/registry.py).
 
 This is the one place where sgr unpickles a file, and it runs only when the user says that they
 trust the folder (`sgr convert-checkpoints DIR --trust-pickle`): a pickle can run any code when it
 is loaded. Resuming never comes here; it refuses a run holding only pickles with the command above.
 A converted checkpoint holds the same state, so the run resumes from it as it would have from the
-pickle; each pickle is deleted once its JSON checkpoint is written.
+pickle; each pickle is deleted once its JSON replacement is written.
 """
 
 from __future__ import annotations
@@ -34,6 +36,32 @@ def load_trusted_pickle(path: Path) -> dict:
     return state
 
 
+def convert_task(run: RunDir) -> list[str]:
+    """An older sgr's task.pkl made a task reference (task.json); the names of the files written.
+    RUNS ANY CODE task.pkl HOLDS (only for folders the user trusts): the spec is unpickled and
+    registered in this process (so that its checkpoints convert too), and its reference names
+    the file its reward was defined in, when that file is still there (else none: the task is
+    known only where a process registers it)."""
+    from tasks.registry import OLD_TASK_FILE, TASK_FILE, code_file, register, task_reference
+    from tasks.spec import TaskSpec
+    from tasks.specs import TASKS
+
+    old = run.path / OLD_TASK_FILE
+    if not old.is_file():
+        return []
+    try:
+        spec = pickle.loads(old.read_bytes())
+    except Exception as exc:  # a damaged file, or code that no longer loads (a module gone)
+        raise SgrError(f"{old}: cannot convert ({type(exc).__name__}: {exc})") from None
+    if not isinstance(spec, TaskSpec):
+        raise SgrError(f"{old}: not a task (a pickled {type(spec).__name__})")
+    if spec.name not in TASKS:
+        register(spec)
+    run.save_task(task_reference(spec.name, source=code_file(spec)))
+    old.unlink()
+    return [TASK_FILE]
+
+
 def run_dirs(path: Path) -> list[RunDir]:
     """The run directories of `path`: itself when it is a run, else those under a sweep's runs/."""
     path = Path(path)
@@ -52,6 +80,8 @@ def convert_run(run: RunDir) -> list[str]:
 
     written = []
     cfg = run.config()
+    if run.pickled_checkpoints():
+        run.load_task(cfg)  # a task of the user's (the folder is trusted: `sgr convert-checkpoints`)
     run.lock()
     try:
         for f in run.pickled_checkpoints():

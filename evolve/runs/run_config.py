@@ -1,10 +1,18 @@
 """The run-config object: one run's configuration, frozen and typed (`RunConfig`), and the common
 schema its keys come from (`COMMON`: types and defaults, the one place the defaults live).
 evolve/runs/config.py checks a YAML config into one; `RunConfig.of` reads a run folder's
-config.yaml back. Methods, the search and the rollouts read it; none parses a key again."""
+config.yaml back. Methods, the search and the rollouts read it; none parses a key again.
+
+Honest by default: a config (a YAML file, or a dict given to `Experiment.from_config`) that leaves
+out `robust` and `final_selection` evolves under actuator noise and chooses its champion at the end
+(`HONEST_ROBUST`, `HONEST_SELECTION`: what `sgr evolve`'s default run, configs/sgr/quick.yaml,
+spells out); `robust: null` / `final_selection: null` ask for the paper's nominal evaluation. A run
+folder's config.yaml that lacks them was written before they existed and meant nominal
+(`ABSENT_BEFORE`)."""
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass, field, fields, replace
 from types import MappingProxyType
@@ -14,6 +22,13 @@ from evolve.rollout.robust import Robust
 from evolve.runs.final_selection import FinalSelection
 from tasks.specs import TASKS
 
+# docs/EVOLVE.md "Robust evaluation": every action carries uniform(+-1e-3) actuator noise, one fresh
+# episode per genome and generation, a survivor's fitness the mean of its scores so far (8 at most)
+HONEST_ROBUST = {"episodes": 1, "action_noise": "uniform", "action_scale": 0.001, "offset": 0.0,
+                 "statistic": "mean", "reevaluate": True, "accumulate": True, "settle": 8}
+# evolve/runs/final_selection.py: the champion chosen at the end among the final elites
+HONEST_SELECTION = {"candidates": "auto", "episodes": "auto", "statistic": "mean", "tolerance": 0.05,
+                    "rank": "pooled", "confirm": "auto", "holdout": "auto"}
 # key: (type or tuple of types, default); the method's own keys come from its Problem class
 COMMON: dict[str, tuple[Any, Any]] = {
     "method": (str, None),
@@ -29,13 +44,28 @@ COMMON: dict[str, tuple[Any, Any]] = {
     "tensorboard": (bool, False),  # evolve/runs/reporters.py: each generation's scalars in RUN/tensorboard
     "workers": ((int, str), "auto"),
     "imports": (list, []),
-    "robust": ((dict, type(None)), None),  # evolve/rollout/robust.py; null: one exact episode
+    "robust": ((dict, type(None)), HONEST_ROBUST),  # evolve/rollout/robust.py; null: one exact episode
     # evolve/runs/final_selection.py; null: the champion is the best-ever genome
-    "final_selection": ((dict, type(None)), None),
+    "final_selection": ((dict, type(None)), HONEST_SELECTION),
     # evolve/runs/continuation.py; null: a fresh population. {run: PATH, generation: G}: the population
     # of that run's checkpoint after generation G, evolved on at this config's robot_shape (sgr)
     "start_from": ((dict, type(None)), None),
 }
+# what a run folder's config.yaml that lacks a key meant: written before the key existed
+ABSENT_BEFORE = {"robust": None, "final_selection": None}
+
+
+def default(key: str, reevaluate_elites: bool = False) -> Any:
+    """A common key's default for a new config (a copy). A method whose evaluation changes state
+    (`Problem.reevaluate_elites`: nested, whose fitness is the best of a search run for each
+    body) evolves under the same noise without averaging scores (no accumulate, settle) and has
+    no final selection: both are refused for it."""
+    value = copy.deepcopy(COMMON[key][1])
+    if reevaluate_elites and key == "robust":
+        return {k: v for k, v in value.items() if k not in ("accumulate", "settle")}
+    if reevaluate_elites and key == "final_selection":
+        return None
+    return value
 
 
 @dataclass(frozen=True)
@@ -104,7 +134,8 @@ class RunConfig(Mapping[str, Any]):
         imported) first."""
         if isinstance(cfg, RunConfig):
             return cfg
-        values = {k: cfg[k] if k in cfg else default for k, (_, default) in COMMON.items()}
+        values = {k: cfg[k] if k in cfg else ABSENT_BEFORE.get(k, fallback)
+                  for k, (_, fallback) in COMMON.items()}
         own = [k for k in cfg if k not in COMMON and k not in ("arch", "precision")]
         return cls.build({**values, **{k: cfg[k] for k in own}}, own, arch=cfg.get("arch"),
                          precision=cfg.get("precision") or "f64")

@@ -180,32 +180,40 @@ class RunDir:
             raise SgrError(f"{f}: not a run config (no 'method' key)")
         return cfg
 
-    def save_task(self, blob: bytes) -> None:
-        """Keep the pickled spec of a task registered in a script (no `imports:` names it), so that
-        the run renders, reports and resumes in another process (tasks/registry.py, TASK_FILE)."""
+    def save_task(self, reference: dict) -> None:
+        """Keep the reference to a task registered in a script (no `imports:` names it): its name,
+        source file and that file's sha256, as JSON (tasks/registry.py, `task_reference`), so
+        that the run renders, reports and resumes in another process that registers it."""
         from tasks.registry import TASK_FILE
 
-        atomic_write(self.path / TASK_FILE, blob)
+        atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode())
 
     def load_task(self, cfg: dict) -> None:
-        """Register the run's own task in this process, if it is not sgr's: import the modules its
-        config names (`imports:`), else load the task the folder keeps (a script's); each only
-        where the files are yours alone or after --trust-imports. ValueError in one line when it
-        may not be loaded, or when the task is still unknown."""
-        from tasks.registry import TASK_FILE, import_tasks, load_task_file
+        """Register the run's own task in this process, unless it is sgr's or registered already:
+        import the modules its config names (`imports:`), else the file its task reference names
+        (a script's); either only after --trust-imports (tasks/registry.py). Reading the folder
+        runs nothing: SgrError in one line, saying how to allow it, when the task may not be
+        loaded or is still unknown."""
+        from tasks.registry import OLD_TASK_FILE, TASK_FILE, import_tasks, load_task_reference
         from tasks.specs import TASKS, unknown_task
 
         named_in = self.path / "config.yaml"
-        for ref in cfg.get("imports") or ():
-            import_tasks(ref, named_in=named_in)
         task = cfg.get("task")
         if not isinstance(task, str) or task in TASKS:
             return
-        if (self.path / TASK_FILE).is_file():
-            load_task_file(self.path / TASK_FILE, named_in)
+        refs = cfg.get("imports") or ()
+        for ref in refs:
+            import_tasks(ref, named_in=named_in)
+        if not refs and (self.path / TASK_FILE).is_file():
+            load_task_reference(self.path / TASK_FILE)
+        elif not refs and (self.path / OLD_TASK_FILE).is_file():
+            raise SgrError(f"{self.path / OLD_TASK_FILE}: an older sgr kept the run's task {task!r} as a "
+                           "pickle, which sgr does not load (it can run any code); register the task in "
+                           "your process first, or, if you trust this folder, convert it with: "
+                           f"sgr convert-checkpoints {self.path} --trust-pickle")
         if task not in TASKS:
-            raise ValueError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
-                             f"file that registers it is imported: add imports: [that file] to {named_in}")
+            raise SgrError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
+                           f"file that registers it is imported: add imports: [that file] to {named_in}")
 
     def update_config(self, cfg: dict) -> None:
         """Replace config.yaml atomically (a resume that extends `generations` does)."""

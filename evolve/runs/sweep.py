@@ -72,7 +72,8 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: 
     """Check a parsed sweep and resolve it (a seed count becomes a list, `configs` an absolute
     folder, relative to `base` or the cwd); every run's config is loaded, so a bad one fails before
     any run starts. ValueError naming `source`. `named_in`: the sweep folder's file the sweep was read
-    from (its imports are code: `tasks.registry.import_tasks`)."""
+    from: its imports are code, imported only after --trust-imports (`tasks.registry.import_tasks`)
+    and not at all when the sweep's tasks are registered already."""
     if not isinstance(raw, dict):
         raise _fail(source, "a sweep must be a mapping with methods, tasks and seeds")
     unknown = set(raw) - {"methods", "tasks", "seeds", "configs", "overrides", "imports"}
@@ -88,7 +89,8 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: 
         raise _fail(source, f"key 'imports' must be a list of module names or .py files, got {imports!r}")
     imports = [str(((base or Path.cwd()) / m).resolve()) if m.endswith(".py") and not Path(m).is_absolute()
                else m for m in imports]
-    for ref in imports:  # the user's tasks are registered before the task names are checked
+    registered = isinstance(tasks, list) and all(isinstance(t, str) and t in TASKS for t in tasks)
+    for ref in imports if named_in is None or not registered else ():  # the user's tasks, before names
         try:
             import_tasks(ref, named_in=named_in)
         except ValueError as exc:
@@ -124,7 +126,7 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: 
     if imports:
         sweep["imports"] = imports
     for run in runs_of(sweep):  # every config must exist and accept the overrides before any run starts
-        run_config(sweep, run, source)
+        run_config(sweep, run, source, named_in)
     return sweep
 
 
@@ -133,8 +135,11 @@ def runs_of(sweep: dict) -> list[SweepRun]:
     return [SweepRun(m, t, s) for m in sweep["methods"] for t in sweep["tasks"] for s in sweep["seeds"]]
 
 
-def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path, dict]:
-    """(config file, overrides) of one run, checked: the resolved config is returned by load_config."""
+def run_config(sweep: dict, run: SweepRun, source: str = "sweep",
+               named_in: Path | None = None) -> tuple[Path, dict]:
+    """(config file, overrides) of one run, checked: the resolved config is returned by load_config.
+    `named_in`: the sweep folder's sweep.yaml, when the sweep was read back from it (its imports
+    are then imported only after --trust-imports: `check_config`)."""
     from evolve.runs.config import load_config
 
     path = Path(sweep["configs"]) / run.method / f"{run.task}.yaml"
@@ -146,9 +151,9 @@ def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path,
     if sweep.get("imports"):
         overrides["imports"] = sweep["imports"]
     # the config file's own errors name it
-    load_config(path, {"imports": overrides["imports"]} if "imports" in overrides else {})
+    load_config(path, {"imports": overrides["imports"]} if "imports" in overrides else {}, named_in)
     try:
-        load_config(path, {**overrides, "seed": run.seed})
+        load_config(path, {**overrides, "seed": run.seed}, named_in)
     except ValueError as exc:  # an override's: name the sweep file, where it was written
         msg = str(exc).removeprefix(f"{path}: ")
         raise _fail(source, f"key 'overrides' (for {run.method} on {run.task}, config {path}): "
@@ -159,10 +164,12 @@ def run_config(sweep: dict, run: SweepRun, source: str = "sweep") -> tuple[Path,
 class Sweep:
     """A sweep directory: create it from a sweep file, or open it to resume."""
 
-    def __init__(self, out: str | Path, sweep: dict):
+    def __init__(self, out: str | Path, sweep: dict, named_in: Path | None = None):
+        """`named_in`: the sweep.yaml it was opened from (a folder's: its imports are data)."""
         self.path = Path(out)
         self.sweep = sweep
         self.runs = runs_of(sweep)
+        self.named_in = named_in
 
     @classmethod
     def create(cls, sweep_file: str | Path, out: str | Path) -> Sweep:
@@ -183,7 +190,7 @@ class Sweep:
         f = Path(out) / SWEEP_FILE
         if not f.is_file():
             raise SgrError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f))
+        sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f), named_in=f)
         old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
                and not sweep.run_dir(r).checkpoints()]
         if old:  # refused before any run starts (each would fail, and be retried, alone)
@@ -215,8 +222,8 @@ class Sweep:
             return
         if rd.path.exists():
             shutil.rmtree(rd.path)
-        path, overrides = run_config(self.sweep, run)
-        Experiment.create(str(path), str(rd.path), overrides, quiet=True).close()
+        path, overrides = run_config(self.sweep, run, named_in=self.named_in)
+        Experiment.create(str(path), str(rd.path), overrides, quiet=True, named_in=self.named_in).close()
 
     def pending(self) -> list[SweepRun]:
         """Runs not finished yet, including those not created yet, in sweep order."""
@@ -393,6 +400,6 @@ def _progress(sweep: Sweep, backend: LocalBackend, t0: float, gens_at_start: int
 def _wanted(sweep: Sweep, run: SweepRun) -> int:
     from evolve.runs.config import load_config
 
-    path, overrides = run_config(sweep.sweep, run)
-    return int(load_config(path, overrides)["generations"])
+    path, overrides = run_config(sweep.sweep, run, named_in=sweep.named_in)
+    return int(load_config(path, overrides, sweep.named_in)["generations"])
 

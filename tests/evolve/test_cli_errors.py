@@ -44,7 +44,8 @@ def in_process(capsys, *argv: str, names=()) -> str:
 
 def tiny_config(tmp_path, repo_root, name="tiny.yaml", **changes):
     cfg = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 2,
-           "render_champion": False, "neat_config": str(repo_root / "configs/neat/sgr.ini"), **changes}
+           "render_champion": False, "neat_config": str(repo_root / "configs/neat/sgr.ini"), "robust": None,
+           "final_selection": None, **changes}
     p = tmp_path / name
     p.write_text(yaml.safe_dump(cfg))
     return p

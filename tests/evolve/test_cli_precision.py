@@ -28,7 +28,7 @@ def test_bench_runs_in_the_precision_of_its_flag_or_of_sgr_precision(tmp_path):
 
 def test_evolve_records_the_precision_it_ran_in(tmp_path, repo_root):
     cfg = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 2,
-           "render_champion": False, "workers": 1,
+           "render_champion": False, "workers": 1, "robust": None, "final_selection": None,
            "neat_config": str(repo_root / "configs/neat/sgr.ini")}
     (tmp_path / "tiny.yaml").write_text(yaml.safe_dump(cfg))
     r = run_cli("evolve", "--config", "tiny.yaml", "--out", "run", "--precision", "f32", "--quiet",
@@ -58,8 +58,8 @@ def test_an_f32_champion_replays_exactly_in_f32_and_is_refused_in_an_f64_process
     recorded fitness (batched rescoring and gymnasium rollout alike), and a process already in f64
     gets one line saying why it cannot."""
     cfg = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 20,
-           "render_champion": False, "workers": 1, "precision": "f32",
-           "neat_config": str(repo_root / "configs/neat/sgr.ini")}
+           "render_champion": False, "workers": 1, "precision": "f32", "robust": None,
+           "final_selection": None, "neat_config": str(repo_root / "configs/neat/sgr.ini")}
     (tmp_path / "f32.yaml").write_text(yaml.safe_dump(cfg))
     r = run_cli("evolve", "--config", "f32.yaml", "--out", "run", "--quiet", cwd=tmp_path)
     assert r.returncode == 0, r.stderr

@@ -58,7 +58,8 @@ def test_a_registered_toy_method_runs_from_a_config_dict(tmp_path, monkeypatch):
     monkeypatch.setitem(METHODS, GaitProblem.name, GaitProblem)  # the registry line
     exp = Experiment.from_config({"method": "gait", "task": "Walker-v0", "generations": 3, "pop_size": 6,
                                   "episode_steps": 12, "workers": 1, "render_champion": False,
-                                  "max_amplitude": 0.4}, tmp_path / "run", quiet=True)
+                                  "max_amplitude": 0.4, "robust": None, "final_selection": None},
+                                 tmp_path / "run", quiet=True)
     exp.run_all()
     exp.close()
     run = RunDir(tmp_path / "run")

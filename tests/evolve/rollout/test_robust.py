@@ -45,8 +45,8 @@ NESTED = {"pop_size": 6, "inner_pop_size": 6, "inner_generations": 1}
 
 def config(method: str, **changes) -> dict:
     return {"method": method, "task": "Walker-v0", "generations": 3, "pop_size": 12, "seed": 5,
-            "episode_steps": 30, "render_champion": False, "workers": 1,
-            **(NESTED if method == "nested" else {}), **changes}
+            "episode_steps": 30, "render_champion": False, "workers": 1, "robust": None,
+            "final_selection": None, **(NESTED if method == "nested" else {}), **changes}
 
 
 def run(tmp: Path, name: str, cfg: dict) -> RunDir:

@@ -7,7 +7,7 @@ import pytest
 from evolve.runs.experiment import Experiment
 
 TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20,
-        "workers": 1, "render_champion": False}
+        "workers": 1, "render_champion": False, "robust": None, "final_selection": None}
 
 
 def tiny_run(method: str, folder: Path) -> Path:

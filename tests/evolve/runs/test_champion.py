@@ -12,8 +12,8 @@ from evolve import Experiment, config_from_dict, load_champion
 @pytest.mark.parametrize("method", ["sgr", "direct"])  # DenseController, GraphController
 def test_a_champion_replays_its_fitness_exactly_in_gymnasium(tmp_path, method):
     exp = Experiment.from_config({"method": method, "task": "Walker-v0", "generations": 2, "pop_size": 8,
-                                  "episode_steps": 30, "workers": 1, "render_champion": False},
-                                 tmp_path / "run", quiet=True)
+                                  "episode_steps": 30, "workers": 1, "render_champion": False,
+                                  "robust": None, "final_selection": None}, tmp_path / "run", quiet=True)
     exp.run_all()
     exp.close()
     champ = load_champion(tmp_path / "run")

@@ -55,7 +55,8 @@ def test_a_full_disk_at_the_run_end_cuts_no_gif_and_resume_writes_the_end_files(
 
     config = tmp_path / "tiny.yaml"
     config.write_text(yaml.safe_dump({"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 8,
-                                      "episode_steps": 60, "workers": 1}))
+                                      "episode_steps": 60, "workers": 1, "robust": None,
+                                      "final_selection": None}))
     run = tmp_path / "run"
     assert main(["evolve", "--config", str(config), "--out", str(run), "--quiet"]) == 1
     err = capsys.readouterr().err.strip().splitlines()

@@ -21,7 +21,8 @@ def test_a_short_sgr_run_on_every_task(tmp_path, name):
     out = tmp_path / name
     exp = Experiment.from_config({"method": "sgr", "task": name, "generations": 2, "pop_size": 4,
                                   "episode_steps": STEPS, "workers": 1, "render_champion": False,
-                                  "checkpoint_every": 1}, out, quiet=True)
+                                  "checkpoint_every": 1, "robust": None, "final_selection": None}, out,
+                                 quiet=True)
     try:
         exp.run_all()
     finally:
@@ -42,8 +43,8 @@ def test_a_randomised_task_champion_replays_evolutions_episode_in_every_world(tm
     the champion's fitness, so perturbed ones differ from it by their action noise alone."""
     out = tmp_path / name
     exp = Experiment.from_config({"method": "sgr", "task": name, "generations": 1, "pop_size": 4,
-                                  "episode_steps": 40, "workers": 1, "render_champion": False},
-                                 out, quiet=True)
+                                  "episode_steps": 40, "workers": 1, "render_champion": False,
+                                  "robust": None, "final_selection": None}, out, quiet=True)
     try:
         exp.run_all()
     finally:

@@ -12,7 +12,8 @@ from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
-        "episode_steps": 15, "checkpoint_every": 2, "render_champion": False}
+        "episode_steps": 15, "checkpoint_every": 2, "render_champion": False, "robust": None,
+        "final_selection": None}
 
 
 def _write(tmp_path, repo_root, **changes):

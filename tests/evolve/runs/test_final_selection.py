@@ -33,7 +33,7 @@ COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_in
 def config(**changes) -> dict:
     return {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 12, "seed": 5,
             "episode_steps": 40, "render_champion": False, "workers": 1, "checkpoint_every": 1,
-            "robust": ROBUST, **changes}
+            "robust": ROBUST, "final_selection": None, **changes}
 
 
 def run(tmp: Path, name: str, cfg: dict) -> RunDir:

@@ -11,7 +11,7 @@ TIMINGS = ("build_s", "sim_s", "neat_s", "total_s")
 
 def config(repo_root, seed: int) -> dict:
     return {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 12, "episode_steps": 20,
-            "seed": seed, "render_champion": False, "workers": 1,
+            "seed": seed, "render_champion": False, "workers": 1, "robust": None, "final_selection": None,
             "neat_config": str(repo_root / "configs/neat/sgr.ini")}
 
 

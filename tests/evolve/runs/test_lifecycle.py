@@ -30,7 +30,8 @@ def test_the_newest_checkpoint_is_the_highest_generation_and_pickles_do_not_coun
 
 def tiny(repo_root) -> dict:
     return {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 4, "episode_steps": 2,
-            "render_champion": False, "workers": 1, "neat_config": str(repo_root / "configs/neat/sgr.ini")}
+            "render_champion": False, "workers": 1, "neat_config": str(repo_root / "configs/neat/sgr.ini"),
+            "robust": None, "final_selection": None}
 
 
 def test_an_experiment_in_a_with_block_lets_go_of_its_run_however_the_block_ends(tmp_path, repo_root):

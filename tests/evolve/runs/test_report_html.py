@@ -35,7 +35,8 @@ def browse(exe: str, page: Path, *flags: str) -> subprocess.CompletedProcess:
 def test_report_html_renders_with_every_image_in_headless_chromium(tmp_path):
     exe = chromium()
     exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 8,
-                                  "episode_steps": 40, "render_champion": False, "workers": 1},
+                                  "episode_steps": 40, "render_champion": False, "workers": 1,
+                                  "robust": None, "final_selection": None},
                                  tmp_path / "runs" / "sgr-Walker-v0-s0", quiet=True)
     exp.run_all()
     exp.close()

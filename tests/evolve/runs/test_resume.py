@@ -38,7 +38,7 @@ METHODS = {
 def write_config(tmp_path: Path, repo_root: Path, method: str, **changes) -> Path:
     cfg = {"method": method, "task": "Walker-v0", "generations": GENERATIONS, "seed": 3,
            "episode_steps": 12, "checkpoint_every": 3, "render_champion": False, "workers": 1,
-           **METHODS[method], **changes}
+           "robust": None, "final_selection": None, **METHODS[method], **changes}
     for key in ("neat_config", "controller_neat_config"):
         if key in cfg:
             cfg[key] = str(repo_root / cfg[key])

@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parents[3]
 def tiny(repo_root, **changes) -> dict:
     return {"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 6, "episode_steps": 5,
             "render_champion": False, "workers": 1, "neat_config": str(repo_root / "configs/neat/sgr.ini"),
-            **changes}
+            "robust": None, "final_selection": None, **changes}
 
 
 def test_a_config_is_frozen_typed_and_reads_as_its_yaml(repo_root):
@@ -89,3 +89,39 @@ def test_every_existing_run_folder_reads_back(repo_root):
         assert cfg.robust == Robust.from_config(raw.get("robust")), path
         for key, value in raw.items():  # every key as written (episode_steps: resolved)
             assert cfg[key] == value or key == "episode_steps" and value in (None, "evogym"), (path, key)
+
+
+@pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
+def test_a_config_without_robust_keys_evaluates_as_the_cli_default_run_does(tmp_path, method):
+    """One default: a config (a dict for `Experiment.from_config`, or a YAML file) that leaves out
+    `robust` and `final_selection` gets the honest evaluation of `sgr evolve`'s default run
+    (configs/sgr/quick.yaml; nested: its packaged config's, which has no final selection); null
+    keeps the paper's nominal evaluation."""
+    from evolve.runs.config import configs_dir
+
+    cli = load_config(configs_dir() / "sgr" / "quick.yaml")
+    assert cli.robust is not None and cli.final_selection is not None  # the control: honest
+    packaged = load_config(configs_dir() / method / "Walker-v0.yaml") if method == "nested" else cli
+    cfg = config_from_dict({"method": method, "task": "Walker-v0"})
+    assert (cfg.robust, cfg.final_selection) == (packaged.robust, packaged.final_selection)
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump({"method": method, "task": "Walker-v0"}))
+    assert (load_config(tmp_path / "c.yaml").robust, load_config(tmp_path / "c.yaml").final_selection) \
+        == (packaged.robust, packaged.final_selection)
+    nominal = config_from_dict({"method": method, "task": "Walker-v0", "robust": None,
+                                "final_selection": None})
+    assert (nominal.robust, nominal.final_selection) == (None, None)
+
+
+def test_from_config_without_robust_keys_writes_the_honest_evaluation_in_full(tmp_path, repo_root):
+    """The run folder records what the run did: a run started without the keys keeps them in
+    config.yaml, so it reads back (and resumes) as the honest run it was, not as an older folder
+    whose missing keys meant nominal."""
+    cfg = {k: v for k, v in tiny(repo_root).items() if k not in ("robust", "final_selection")}
+    Experiment.from_config(cfg, tmp_path / "r", quiet=True).close()
+    written = RunDir(tmp_path / "r").config()
+    quick = yaml.safe_load((ROOT / "configs/sgr/quick.yaml").read_text())
+    assert (written["robust"], written["final_selection"]) == (quick["robust"], quick["final_selection"])
+    back = RunConfig.of(written)
+    assert back.robust == Robust.from_config(quick["robust"]) and back.final_selection is not None
+    older = {k: v for k, v in written.items() if k not in ("robust", "final_selection")}
+    assert (RunConfig.of(older).robust, RunConfig.of(older).final_selection) == (None, None)

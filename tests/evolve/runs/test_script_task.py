@@ -1,12 +1,15 @@
 """A run of a task registered in a script (docs/TASKS.md's step_left.py, no `imports:`) can be
-used afterwards from other processes: it renders, reports, resumes and loads with
-`load_champion`. The folder keeps the task's code; where someone else could have written it, each
-of those refuses in one line that says how to allow it (--trust-imports), as `imports:` does."""
+used afterwards from other processes: the folder keeps a reference to the script (task.json: the
+task's name, the script's path and sha256), never its code. With --trust-imports, `sgr render`,
+`sgr report` and `sgr evolve --resume` import the script again (its run guarded by `if __name__ ==
+"__main__"`); `load_champion` works in a process that imported the script itself. Without either,
+each refuses in one line that says how to allow it, having run nothing of the script."""
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
-import stat
 import subprocess
 import sys
 from pathlib import Path
@@ -38,10 +41,15 @@ tasks.register(TaskSpec(name="ScriptLeft-v0", world=world_from_matrix(ground), o
                         paper_steps=20, evogym_steps=20, observation=(O.VCOM, O.POINTS),
                         reward=leftward, goal=(20, 1.0, "left")))
 
-exp = Experiment.from_config({"method": "sgr", "task": "ScriptLeft-v0", "generations": 2,
-                              "pop_size": 8, "workers": 2, "render_champion": False}, out="runs/left")
-exp.run_all()
-exp.finish()
+with open("executed.log", "a") as log:  # each time the script's code runs
+    log.write(__name__ + "\\n")
+
+if __name__ == "__main__":
+    exp = Experiment.from_config({"method": "sgr", "task": "ScriptLeft-v0", "generations": 2,
+                                  "pop_size": 8, "workers": 2, "render_champion": False,
+                                  "robust": None, "final_selection": None}, out="runs/left")
+    exp.run_all()
+    exp.finish()
 '''
 
 
@@ -65,34 +73,45 @@ def script_run(tmp_path_factory) -> Path:
     return cwd
 
 
+def executed(cwd: Path) -> list[str]:
+    """The names the script's code ran under, in order (its log)."""
+    return (cwd / "executed.log").read_text().split()
+
+
+def test_the_run_keeps_a_reference_to_the_script_not_its_code(script_run):
+    ref = json.loads((script_run / "runs/left/task.json").read_text())
+    script = script_run / "script.py"
+    assert ref["task"] == "ScriptLeft-v0" and Path(ref["source"]) == script.resolve()
+    assert ref["sha256"] == hashlib.sha256(script.read_bytes()).hexdigest()
+    assert not (script_run / "runs/left/task.pkl").exists()
+
+
 def test_a_script_task_run_renders_reports_loads_and_resumes_in_other_processes(script_run):
     cwd = script_run
-    r = sgr("render", "runs/left", "--width", "64", "--height", "32", cwd=cwd)
+    r = sgr("render", "runs/left", "--width", "64", "--height", "32", "--trust-imports", cwd=cwd)
     assert r.returncode == 0 and (cwd / "runs/left/champion.gif").is_file(), r.stderr
-    r = sgr("report", "runs", "--replays", "1", "--no-gallery", cwd=cwd)
+    r = sgr("report", "runs", "--replays", "1", "--no-gallery", "--trust-imports", cwd=cwd)
     assert r.returncode == 0 and "ScriptLeft-v0" in (cwd / "runs/report.md").read_text(), r.stderr
-    code = ("from evolve import load_champion; c = load_champion('runs/left'); "
+    code = ("import script; from evolve import load_champion; c = load_champion('runs/left'); "
             "print(c.task, c.rollout() == c.fitness)")
     r = run([sys.executable, "-c", code], cwd)
     assert r.returncode == 0 and r.stdout.split() == ["ScriptLeft-v0", "True"], r.stderr
-    r = sgr("evolve", "--resume", "runs/left", "--generations", "3", "--workers", "2", "--quiet", cwd=cwd)
+    r = sgr("evolve", "--resume", "runs/left", "--generations", "3", "--workers", "2", "--quiet",
+            "--trust-imports", cwd=cwd)
     assert r.returncode == 0, r.stderr
     assert [int(x["generation"]) for x in RunDir(cwd / "runs/left").rows()] == [1, 2, 3]
+    assert executed(cwd)[0] == "__main__" and "__main__" not in executed(cwd)[1:]  # never ran again
 
 
-def test_a_script_task_others_could_write_is_refused_in_one_line_naming_trust_imports(script_run):
-    task_file = script_run / "runs/left/task.pkl"
-    mode = task_file.stat().st_mode
-    task_file.chmod(mode | stat.S_IWGRP)
-    try:
-        for args in (["render", "runs/left"], ["report", "runs/left", "--no-gallery"],
-                     ["evolve", "--resume", "runs/left", "--generations", "9"]):
-            r = sgr(*args, cwd=script_run)
-            lines = r.stderr.strip().splitlines()
-            assert r.returncode == 2 and len(lines) == 1, r.stderr
-            assert "task.pkl" in lines[0] and "--trust-imports" in lines[0], lines
-        r = sgr("render", "runs/left", "--width", "64", "--height", "32", "--out", "trusted.gif",
-                "--trust-imports", cwd=script_run)
-        assert r.returncode == 0 and (script_run / "trusted.gif").is_file(), r.stderr
-    finally:
-        task_file.chmod(mode)
+def test_without_trust_a_script_task_is_refused_in_one_line_and_nothing_of_it_runs(script_run):
+    before = executed(script_run)
+    for args in (["render", "runs/left"], ["report", "runs/left", "--no-gallery"],
+                 ["evolve", "--resume", "runs/left", "--generations", "9"]):
+        r = sgr(*args, cwd=script_run)
+        lines = r.stderr.strip().splitlines()
+        assert r.returncode == 2 and len(lines) == 1, r.stderr
+        assert "task.json" in lines[0] and "script.py" in lines[0] and "--trust-imports" in lines[0], lines
+    code = "from evolve import load_champion; load_champion('runs/left')"
+    r = run([sys.executable, "-c", code], script_run)
+    assert r.returncode == 1 and "--trust-imports" in r.stderr.strip().splitlines()[-1], r.stderr
+    assert executed(script_run) == before
