@@ -69,13 +69,16 @@ class BodyBatch(Sequence):
     FIELDS_A = ("actuator_voxels", "actuator_flat")
 
     def __init__(self, matrices: Sequence[np.ndarray], n_points: np.ndarray, n_edges: np.ndarray,
-                 n_voxels: np.ndarray, n_actuators: np.ndarray, arrays: dict[str, np.ndarray]):
+                 n_voxels: np.ndarray, n_actuators: np.ndarray, arrays: dict[str, np.ndarray],
+                 n_rows: np.ndarray | None = None):
         self.matrices = matrices
         self.n_points = np.asarray(n_points, dtype=np.int64)
         self.n_edges = np.asarray(n_edges, dtype=np.int64)
         self.n_voxels = np.asarray(n_voxels, dtype=np.int64)
         self.n_actuators = np.asarray(n_actuators, dtype=np.int64)
         self.arrays = arrays
+        self.n_rows = np.array([np.shape(m)[0] for m in matrices], dtype=np.int64) if n_rows is None \
+            else np.asarray(n_rows, dtype=np.int64)  # each matrix's height (`Body.place`)
         self._cache: dict[int, Body] = {}
         self._starts = None
 
@@ -134,7 +137,7 @@ class BodyBatch(Sequence):
             for f in fields:
                 arrays[f] = self.arrays[f][idx]
         mats = [self.matrices[i] for i in order]
-        return BodyBatch(mats, *(n[order] for n in counts), arrays)
+        return BodyBatch(mats, *(n[order] for n in counts), arrays, self.n_rows[order])
 
     @classmethod
     def concatenate(cls, batches: Sequence[BodyBatch]) -> BodyBatch:
@@ -143,7 +146,8 @@ class BodyBatch(Sequence):
         arrays = {f: np.concatenate([b.arrays[f] for b in batches]) for f in names}
         mats = [m for b in batches for m in b.matrices]
         return cls(mats, *(np.concatenate([getattr(b, c) for b in batches])
-                           for c in ("n_points", "n_edges", "n_voxels", "n_actuators")), arrays)
+                           for c in ("n_points", "n_edges", "n_voxels", "n_actuators")), arrays,
+                   np.concatenate([b.n_rows for b in batches]))
 
 
 def _ranges(starts: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -197,7 +201,8 @@ _CHUNK_CELLS = 32_768  # cells per chunk (1,310 bodies of 5x5): measured best at
 
 def _build_chunk(M: np.ndarray, mats: Sequence[np.ndarray]) -> BodyBatch:  # noqa: PLR0915
     N, H, W = M.shape
-    i32 = np.int32
+    HW = H * W
+    i64 = np.int64
     F = M != 0
     Fp = np.zeros((N, H + 2, W + 2), dtype=bool)
     Fp[:, 1:-1, 1:-1] = F
@@ -218,27 +223,23 @@ def _build_chunk(M: np.ndarray, mats: Sequence[np.ndarray]) -> BodyBatch:  # noq
         makers.append(mk)
         new[..., s] = mk == 3 - s
     new &= F[..., None]
-    flat_new = new.reshape(N, -1)
-    ids = np.cumsum(flat_new, axis=1, dtype=i32) - 1
-    n_points = ids[:, -1].astype(np.int64) + 1
-    ids = ids.reshape(N, H, W, 4)
+    ids = np.cumsum(new.reshape(N, -1), axis=1, dtype=i64) - 1
+    n_points = ids[:, -1] + 1
     # the id at each corner seen from each of its cells (that cell's slot), then the maker's
-    idp = np.zeros((N, H + 2, W + 2, 4), dtype=i32)
-    idp[:, 1:-1, 1:-1] = ids
+    idp = np.zeros((N, H + 2, W + 2, 4), dtype=i64)
+    idp[:, 1:-1, 1:-1] = ids.reshape(N, H, W, 4)
     cand = np.stack([idp[:, :-1, :-1, 3], idp[:, :-1, 1:, 2], idp[:, 1:, :-1, 1], idp[:, 1:, 1:, 0]],
                     axis=-1)  # (N, H+1, W+1, 4): the point each corner cell would make
-    P = np.empty((N, H, W, 4), dtype=i32)
+    P = np.empty((N, H, W, 4), dtype=i64)
     for s in range(4):
         dy, dx = s // 2, s % 2
         c = cand[:, dy:dy + H, dx:dx + W]
         which = np.maximum(makers[s], 0)[..., None].astype(np.intp)
         P[..., s] = np.take_along_axis(c, which, axis=-1)[..., 0]
     p_tl, p_tr, p_bl, p_br = P[..., 0], P[..., 1], P[..., 2], P[..., 3]
-    fp = np.flatnonzero(new) % (H * W * 4)
-    ps = fp & 3
-    pr, pc = (fp >> 2) // W, (fp >> 2) % W
-    corner_cx = pc + (ps & 1)
-    corner_ry = pr + (ps >> 1)
+    fp = np.flatnonzero(new) % (4 * HW)  # (cell, slot) of each new point
+    corner_cx = (fp >> 2) % W + (fp & 1)
+    corner_ry = (fp >> 2) // W + ((fp >> 1) & 1)
 
     # ---- edges: main ones (top?, bottom, left?, right per cell), then two diagonals per cell
     made = np.empty((N, H, W, 4), dtype=bool)
@@ -246,99 +247,106 @@ def _build_chunk(M: np.ndarray, mats: Sequence[np.ndarray]) -> BodyBatch:  # noq
     made[..., 1] = F
     made[..., 2] = F & ~lft
     made[..., 3] = F
-    vox_id = np.cumsum(F.reshape(N, -1), axis=1, dtype=i32).reshape(N, H, W) - 1
-    n_vox = vox_id[:, -1, -1].astype(np.int64) + 1 if H * W else np.zeros(N, dtype=np.int64)
-    eid = np.cumsum(made.reshape(N, -1), axis=1, dtype=i32) - 1
-    n_main = eid[:, -1] + 1
-    eid = eid.reshape(N, H, W, 4)
+    vox_id = np.cumsum(F.reshape(N, -1), axis=1, dtype=i64).reshape(N, H, W) - 1
+    n_vox = F.reshape(N, -1).sum(axis=1, dtype=i64)
+    eid = np.cumsum(made.reshape(N, -1), axis=1, dtype=i64).reshape(N, H, W, 4) - 1
+    n_main = made.reshape(N, -1).sum(axis=1, dtype=i64)
     e_bot, e_right = eid[..., 1], eid[..., 3]
     e_top = eid[..., 0].copy()
     e_top[:, 1:] = np.where(t[:, 1:], e_bot[:, :-1], e_top[:, 1:])
     e_left = eid[..., 2].copy()
     e_left[:, :, 1:] = np.where(lft[:, :, 1:], e_right[:, :, :-1], e_left[:, :, 1:])
-    n_edges = n_main.astype(np.int64) + 2 * n_vox
+    n_edges = n_main + 2 * n_vox
 
-    # spring constants by material: main (NaN: rigid keeps K_RIGID_MAIN) and diagonal
+    # every body's edge slots: 4 main per cell (top, bottom, left, right), then 2 diagonals per
+    # cell; the made ones, in this order, are its edges
+    keep = np.empty((N, 6 * HW), dtype=bool)
+    keep[:, :4 * HW] = made.reshape(N, -1)
+    keep[:, 4 * HW:].reshape(N, HW, 2)[:] = F.reshape(N, HW, 1)
+
+    def slots(dtype: type) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        a = np.empty((N, 6 * HW), dtype=dtype)
+        return a, a[:, :4 * HW].reshape(N, H, W, 4), a[:, 4 * HW:].reshape(N, H, W, 2)
+
+    # endpoints, with the surface swap (an open bottom runs br -> bl, a made left bl -> tl)
+    open_b = ~b
+    ea, ea_m, ea_d = slots(i64)
+    ea_m[..., 0], ea_m[..., 1], ea_m[..., 2], ea_m[..., 3] = p_tl, np.where(open_b, p_br, p_bl), p_bl, p_tr
+    ea_d[..., 0], ea_d[..., 1] = p_tr, p_tl
+    eb, eb_m, eb_d = slots(i64)
+    eb_m[..., 0], eb_m[..., 1], eb_m[..., 2], eb_m[..., 3] = p_tr, np.where(open_b, p_bl, p_br), p_tl, p_br
+    eb_d[..., 0], eb_d[..., 1] = p_bl, p_br
+
+    # spring constants: a main edge keeps K_RIGID_MAIN unless an owner is non-rigid, the later
+    # one (below, right) winning; diagonals by their voxel's material
     km_of = np.array([np.nan, np.nan, C.K_SOFT_MAIN, C.K_ACT_MAIN, C.K_ACT_MAIN, np.nan])
     kd_of = np.array([0.0, C.K_RIGID_DIAG, C.K_SOFT_DIAG, C.K_ACT_DIAG, C.K_ACT_DIAG, C.K_RIGID_DIAG])
-    km = km_of[M]  # (N, H, W)
-    km_below = np.full((N, H, W), np.nan)
-    km_below[:, :-1] = np.where(b[:, :-1], km[:, 1:], np.nan)
-    km_right = np.full((N, H, W), np.nan)
-    km_right[:, :, :-1] = np.where(rgt[:, :, :-1], km[:, :, 1:], np.nan)
+    km = km_of[M]
     own = np.where(np.isnan(km), C.K_RIGID_MAIN, km)
-    k_main = np.stack([own, np.where(np.isnan(km_below), own, km_below), own,
-                       np.where(np.isnan(km_right), own, km_right)], axis=-1)
+    ek, ek_m, ek_d = slots(np.float64)
+    ek_m[..., 0] = own
+    ek_m[..., 2] = own
+    ek_m[..., 1] = own
+    ek_m[:, :-1, :, 1] = np.where(b[:, :-1] & ~np.isnan(km[:, 1:]), km[:, 1:], own[:, :-1])
+    ek_m[..., 3] = own
+    ek_m[:, :, :-1, 3] = np.where(rgt[:, :, :-1] & ~np.isnan(km[:, :, 1:]), km[:, :, 1:], own[:, :, :-1])
+    ek_d[:] = kd_of[M][..., None]
 
     # drivers: actuator index j of the edge's owners that drive that side (H: top/bottom, V: sides)
     is_h, is_v = M == C.H_ACT, M == C.V_ACT
     act = is_h | is_v
-    j = np.cumsum(act.reshape(N, -1), axis=1, dtype=i32).reshape(N, H, W) - 1
-    n_act = j[:, -1, -1].astype(np.int64) + 1
+    j = np.cumsum(act.reshape(N, -1), axis=1, dtype=i64).reshape(N, H, W) - 1
+    n_act = act.reshape(N, -1).sum(axis=1, dtype=i64)
     jh = np.where(is_h, j, -1)
     jv = np.where(is_v, j, -1)
-    jh_below = np.full((N, H, W), -1, dtype=i32)
+    jh_below = np.full((N, H, W), -1, dtype=i64)
     jh_below[:, :-1] = np.where(b[:, :-1], jh[:, 1:], -1)
-    jv_right = np.full((N, H, W), -1, dtype=i32)
+    jv_right = np.full((N, H, W), -1, dtype=i64)
     jv_right[:, :, :-1] = np.where(rgt[:, :, :-1], jv[:, :, 1:], -1)
-    first = np.stack([jh, jh, jv, jv], axis=-1)
-    second = np.stack([np.full_like(jh, -1), jh_below, np.full_like(jh, -1), jv_right], axis=-1)
-    d0 = np.where(first >= 0, first, second)
-    d1 = np.where(first >= 0, second, -1)
+    dr = np.full((N, 6 * HW, 2), -1, dtype=i64)
+    dr_m = dr[:, :4 * HW].reshape(N, H, W, 4, 2)
+    dr_m[..., 0, 0] = jh
+    dr_m[..., 1, 0] = np.where(jh >= 0, jh, jh_below)
+    dr_m[..., 1, 1] = np.where(jh >= 0, jh_below, -1)
+    dr_m[..., 2, 0] = jv
+    dr_m[..., 3, 0] = np.where(jv >= 0, jv, jv_right)
+    dr_m[..., 3, 1] = np.where(jv >= 0, jv_right, -1)
 
-    # endpoints, with the surface swap (an open bottom runs br -> bl, a made left bl -> tl)
-    open_b = ~b
-    ea_main = np.stack([p_tl, np.where(open_b, p_br, p_bl), p_bl, p_tr], axis=-1)
-    eb_main = np.stack([p_tr, np.where(open_b, p_bl, p_br), p_tl, p_br], axis=-1)
-
-    # the packed edges: per body its made main edges, then its voxels' diagonals
-    fm = np.flatnonzero(made)  # (body, cell, side) row-major
-    en = fm // (H * W * 4)
+    # the packing: np.take of flat indices (boolean masks and fancy indices of several dimensions
+    # are up to 50x slower here)
+    fk = np.flatnonzero(keep)
     fv = np.flatnonzero(F)
-    vn = fv // (H * W)
-    e_start = np.concatenate(([0], np.cumsum(n_edges)))
-    total_e = int(e_start[-1])
-    pos_main = e_start[en] + eid.reshape(-1)[fm]
-    vpos = e_start[vn] + n_main[vn] + 2 * vox_id.reshape(-1)[fv]
-    edge_a = np.empty(total_e, dtype=np.int64)
-    edge_b = np.empty(total_e, dtype=np.int64)
-    edge_k = np.empty(total_e)
-    edge_rest = np.empty(total_e)
-    diag = np.zeros(total_e, dtype=bool)
-    drivers = np.full((total_e, 2), -1, dtype=np.int64)
-    edge_a[pos_main] = ea_main.reshape(-1)[fm]
-    edge_b[pos_main] = eb_main.reshape(-1)[fm]
-    edge_k[pos_main] = k_main.reshape(-1)[fm]
-    edge_rest[pos_main] = C.MAIN_REST
-    drivers[pos_main, 0] = d0.reshape(-1)[fm]
-    drivers[pos_main, 1] = d1.reshape(-1)[fm]
-    kd = kd_of[M.reshape(-1)[fv]]
-    for k, (pa, pb) in enumerate(((p_tr, p_bl), (p_tl, p_br))):
-        edge_a[vpos + k] = pa.reshape(-1)[fv]
-        edge_b[vpos + k] = pb.reshape(-1)[fv]
-        edge_k[vpos + k] = kd
-        edge_rest[vpos + k] = C.DIAG_REST
-        diag[vpos + k] = True
+    diag = (fk % (6 * HW)) >= 4 * HW
+    edge_rest = np.where(diag, C.DIAG_REST, C.MAIN_REST)
+    cell = fv % HW
+
+    def pick(a: np.ndarray, idx: np.ndarray, k: int = 0) -> np.ndarray:
+        return np.take(a.reshape(-1, k) if k else a.reshape(-1), idx, axis=0)
 
     # voxels, row-major per body
-    Pf = P.reshape(-1, 4)[fv]
-    voxel_points = Pf[:, [0, 1, 3, 2]].astype(np.int64)
-    voxel_edges = np.stack([e_top.reshape(-1)[fv], e_right.reshape(-1)[fv], e_bot.reshape(-1)[fv],
-                            e_left.reshape(-1)[fv]], axis=1).astype(np.int64)
-    opened = np.stack([t, rgt, b, lft], axis=-1).reshape(-1, 4)[fv]
-    voxel_open = ~opened
-    voxel_type = M.reshape(-1)[fv]
-    cell = fv - vn * (H * W)
-    vr, vc = cell // W, cell % W
-    voxel_rc = np.empty((len(fv), 2), dtype=np.int64)
-    voxel_rc[:, 0] = vr
-    voxel_rc[:, 1] = vc
-    a_sel = act.reshape(-1)[fv]
-    actuator_voxels = vox_id.reshape(-1)[fv][a_sel].astype(np.int64)
-    actuator_flat = cell[a_sel].astype(np.int64)
+    ve = np.empty((N, H, W, 4), dtype=i64)
+    ve[..., 0], ve[..., 1], ve[..., 2], ve[..., 3] = e_top, e_right, e_bot, e_left
+    op = np.empty((N, H, W, 4), dtype=bool)
+    op[..., 0], op[..., 1], op[..., 2], op[..., 3] = ~t, ~rgt, ~b, ~lft
+    vp = np.empty((N, H, W, 4), dtype=i64)
+    vp[..., 0], vp[..., 1], vp[..., 2], vp[..., 3] = p_tl, p_tr, p_br, p_bl
+    voxel_rc = np.empty((len(fv), 2), dtype=i64)
+    voxel_rc[:, 0] = cell // W
+    voxel_rc[:, 1] = cell % W
+    fa = np.flatnonzero(act)
+    edge_a = pick(ea, fk)
+    edge_b = pick(eb, fk)
+    edge_k = pick(ek, fk)
+    edge_drivers = pick(dr, fk, 2)
+    voxel_type = pick(M, fv)
+    voxel_points = pick(vp, fv, 4)
+    voxel_edges = pick(ve, fv, 4)
+    voxel_open = pick(op, fv, 4)
+    actuator_voxels = pick(vox_id, fa)
+    actuator_flat = fa % HW
     arrays = {"corner_cx": corner_cx, "corner_ry": corner_ry, "edge_a": edge_a, "edge_b": edge_b,
-              "edge_rest": edge_rest, "edge_k": edge_k, "edge_is_diag": diag, "edge_drivers": drivers,
+              "edge_rest": edge_rest, "edge_k": edge_k, "edge_is_diag": diag, "edge_drivers": edge_drivers,
               "voxel_rc": voxel_rc, "voxel_type": voxel_type, "voxel_points": voxel_points,
               "voxel_edges": voxel_edges, "voxel_open": voxel_open, "actuator_voxels": actuator_voxels,
               "actuator_flat": actuator_flat}
-    return BodyBatch(mats, n_points, n_edges, n_vox, n_act, arrays)
+    return BodyBatch(mats, n_points, n_edges, n_vox, n_act, arrays, np.full(N, H, dtype=np.int64))
