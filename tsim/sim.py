@@ -41,42 +41,52 @@ def _as_body(body: Body | object, passive_ok: bool) -> Body:
 
 
 def _as_bodies(bodies: Sequence[Body | object], passive_ok: bool) -> BodyBatch:
-    """The batch's bodies, checked as `_as_body` checks each (its error for the first bad one):
-    matrices all at once (`build_bodies`), `Body`s as they are."""
-    if any(isinstance(b, Body) for b in bodies):
-        return BodyBatch.from_bodies([_as_body(b, passive_ok) for b in bodies])
-    groups: dict[tuple, list[int]] = {}
+    """The batch's bodies, checked as `_as_body` checks each, all at once (on a bad body, the
+    first one's own error): matrices built together (`build_bodies`), `Body`s kept as they are."""
     if isinstance(bodies, np.ndarray) and bodies.ndim == 3:
-        groups[bodies.shape[1:]] = list(range(len(bodies)))
-        arrays = {bodies.shape[1:]: bodies}
+        mats = _checked(bodies, passive_ok)
     else:
-        for i, b in enumerate(bodies):
-            try:
-                shape = np.shape(b)
-            except ValueError:  # ragged rows
-                _as_body(b, passive_ok)
-                raise
-            groups.setdefault(shape, []).append(i)
-        arrays = {}
-        for shape, idx in groups.items():
-            if len(shape) != 2:
-                _as_body(bodies[idx[0]], passive_ok)  # raises the one-line error
-            try:
-                arrays[shape] = np.asarray([bodies[i] for i in idx], dtype=float)
-            except (TypeError, ValueError):
-                for i in idx:
-                    _as_body(bodies[i], passive_ok)
-                raise
-    mats = [None] * len(bodies)
+        has_body = any(isinstance(b, Body) for b in bodies)
+        items = [b.matrix if isinstance(b, Body) else b for b in bodies] if has_body else bodies
+        mats = _checked_list(items, passive_ok)
+        if mats is not None and has_body:
+            return BodyBatch.from_bodies([b if isinstance(b, Body) else build_body(m)
+                                          for b, m in zip(bodies, mats, strict=True)])
+    if mats is None:  # some body is bad: the first one raises its error
+        for b in bodies:
+            _as_body(b, passive_ok)
+        raise AssertionError("a body failed the batch check but not the single one")
+    return build_bodies(mats)
+
+
+def _checked_list(items: Sequence[object], passive_ok: bool) -> list[np.ndarray] | np.ndarray | None:
+    """The matrices as int64 (an (N, H, W) array when they share a shape) if all pass
+    `_as_body`'s checks, else None. Checked per shape, all of a shape at once."""
+    groups: dict[tuple, list[int]] = {}
+    for i, b in enumerate(items):
+        try:
+            shape = np.shape(b)
+        except ValueError:  # ragged rows
+            return None
+        groups.setdefault(shape, []).append(i)
+    out: list = [None] * len(items)
     for shape, idx in groups.items():
-        m = _checked(np.asarray(arrays[shape]), passive_ok)
-        if m is None:  # some body is bad: find the first and raise its error
-            for i in idx:
-                _as_body(bodies[i], passive_ok)
-            raise AssertionError("a body failed the batch check but not the single one")
+        if len(shape) != 2:
+            return None
+        try:
+            arr = np.asarray([items[i] for i in idx])
+            if arr.dtype.kind not in "biuf":  # e.g. numeric strings, which the one-body check reads
+                arr = arr.astype(float)
+        except (TypeError, ValueError):
+            return None
+        m = _checked(arr, passive_ok)
+        if m is None:
+            return None
+        if len(groups) == 1:
+            return m
         for i, one in zip(idx, m, strict=True):
-            mats[i] = one
-    return build_bodies(mats if len(groups) > 1 else m)
+            out[i] = one
+    return out
 
 
 def _checked(arr: np.ndarray, passive_ok: bool) -> np.ndarray | None:

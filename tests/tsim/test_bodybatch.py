@@ -186,3 +186,18 @@ def test_batch_check_names_the_first_bad_body(bad, words):
     good = [[3, 3], [1, 1]]
     with pytest.raises(SgrError, match=words):
         BatchSim(task_world("Walker-v0"), [good, good, bad, good], (1, 1))
+
+
+def test_batch_check_raises_for_the_first_bad_body_across_shapes_and_bodies():
+    """Bodies of several shapes, and `Body` objects, are checked all at once, yet the error is the
+    first bad body's, in the caller's order, as the one-at-a-time check gave."""
+    from tsim.body import build_body
+    world = task_world("Walker-v0")
+    good = [[3, 3], [1, 1]]
+    with pytest.raises(SgrError, match="connected"):
+        BatchSim(world, [good, [[3, 0, 0], [0, 0, 3], [3, 3, 3]], [[3, 9], [1, 1]]], (1, 1))
+    with pytest.raises(SgrError, match="actuator"):
+        BatchSim(world, [build_body(good), build_body([[1, 2], [2, 1]]), good], (1, 1))
+    sim = BatchSim(world, [build_body(good), good, [[4, 4, 4]]], (1, 1))
+    assert_same_body(sim.bodies[0], oracle(np.array(good)))
+    assert_same_body(sim.bodies[2], oracle(np.array([[4, 4, 4]])))
