@@ -1,7 +1,8 @@
 """Voxel bodies: validation, connectivity and the point/spring topology evogym builds from them.
 
 A `Body` is a pure function of its material matrix and connections, so it is built with plain
-numpy/Python once per distinct matrix (cached) and can be tested without Taichi. Point, edge and
+numpy/Python once per distinct matrix (cached) and can be tested without Taichi; `_build` is also
+the oracle of `tsim.bodybatch.build_bodies`, which builds a whole batch at once. Point, edge and
 voxel order follow evogym's `ObjectCreator` (spec section 1.2-1.4): the simulator, observations and
 actuator order all depend on that order.
 """

@@ -52,10 +52,8 @@ def _as_bodies(bodies: Sequence[Body | object], passive_ok: bool) -> BodyBatch:
         if mats is not None and has_body:
             return BodyBatch.from_bodies([b if isinstance(b, Body) else build_body(m)
                                           for b, m in zip(bodies, mats, strict=True)])
-    if mats is None:  # some body is bad: the first one raises its error
-        for b in bodies:
-            _as_body(b, passive_ok)
-        raise AssertionError("a body failed the batch check but not the single one")
+    if mats is None:  # some body is bad (the first one raises its error), or of an unusual type
+        return BodyBatch.from_bodies([_as_body(b, passive_ok) for b in bodies])
     return build_bodies(mats)
 
 
@@ -110,9 +108,11 @@ def _checked(arr: np.ndarray, passive_ok: bool) -> np.ndarray | None:
 
 class BatchSim:
     """B worlds of `world`, robot b built from `bodies[b]` and placed with its matrix's bottom-left
-    cell at grid cell `origin`. `passive_ok` admits bodies without actuators (evogym loads those as
-    plain objects; the reference traces contain a few). `arch` and `precision` choose the process's
-    backend (`tsim.backend.get`: None means $SGR_ARCH / $SGR_PRECISION, else cpu / f64)."""
+    cell at grid cell `origin` (bodies: `Body`s or matrices, or one (B, H, W) array; matrices are
+    checked and built all at once, `tsim.bodybatch`). `passive_ok` admits bodies without actuators
+    (evogym loads those as plain objects; the reference traces contain a few). `arch` and
+    `precision` choose the process's backend (`tsim.backend.get`: None means $SGR_ARCH /
+    $SGR_PRECISION, else cpu / f64)."""
 
     def __init__(self, world: World, bodies: Sequence[Body | object], origin: tuple[int, int],
                  *, arch: str | None = None, precision: str | None = None, passive_ok: bool = False):
