@@ -35,13 +35,13 @@ def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None) -
     from tasks.env import BatchEnv
     from tasks.specs import TASKS
     from tsim import runtime
-    from tsim.sampling import sample_robot
+    from tsim.sampling import sample_robots
 
     arch = runtime.init()
     out: dict = {"arch": arch, "robots": robots, "steps": steps, "seed": seed, "tasks": {}}
     for task in tasks or TASKS:
         rng = np.random.default_rng(seed)
-        bodies = [sample_robot((5, 5), rng) for _ in range(robots)]
+        bodies = list(sample_robots(robots, (5, 5), rng))
         t0 = time.perf_counter()
         env = BatchEnv(task, bodies, episode_steps=steps)
         A = env.sim.max_actuators

@@ -36,7 +36,7 @@ os.environ["SGR_THREADS"] = _threads_arg()
 import numpy as np  # noqa: E402
 
 from tasks.bench import bench_bodies  # noqa: E402
-from tsim.sampling import sample_robot  # noqa: E402
+from tsim.sampling import sample_robots  # noqa: E402
 
 EVOGYM_PY = Path.home() / ".cache/evogym-venv/bin/python"
 
@@ -48,7 +48,7 @@ def bodies_of_size(n: int, count: int, seed: int = 0) -> tuple[list[np.ndarray],
         rng = np.random.default_rng(seed)
         try:
             pd = (empty, *[(1 - empty) / 4] * 4)
-            return [sample_robot((n, n), rng, pd=pd, max_tries=100_000) for _ in range(count)], empty
+            return list(sample_robots(count, (n, n), rng, pd=pd, max_tries=100_000)), empty
         except RuntimeError:
             empty -= 0.05
 

@@ -24,7 +24,7 @@ import numpy as np  # noqa: E402
 from tasks.bench import sinusoid  # noqa: E402
 from tasks.env import BatchEnv  # noqa: E402
 from tsim import runtime  # noqa: E402
-from tsim.sampling import sample_robot  # noqa: E402
+from tsim.sampling import sample_robots  # noqa: E402
 
 
 def main() -> None:
@@ -35,7 +35,7 @@ def main() -> None:
     ap.add_argument("--steps", type=int, default=200)
     a = ap.parse_args()
     rng = np.random.default_rng(0)
-    bodies = [sample_robot((a.size, a.size), rng) for _ in range(a.robots)]
+    bodies = list(sample_robots(a.robots, (a.size, a.size), rng))
     env = BatchEnv("Walker-v0", bodies, episode_steps=a.steps + 1)
     n_act = env.sim.max_actuators
     env.step(np.ones((a.robots, n_act)))  # compiles the kernel (or loads it from Taichi's cache)

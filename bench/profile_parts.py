@@ -34,10 +34,10 @@ def child(size: int, robots: int, steps: int) -> dict:
 
     from tasks.bench import sinusoid
     from tasks.env import BatchEnv
-    from tsim.sampling import sample_robot
+    from tsim.sampling import sample_robots
 
     rng = np.random.default_rng(0)
-    bodies = [sample_robot((size, size), rng) for _ in range(robots)]
+    bodies = list(sample_robots(robots, (size, size), rng))
     env = BatchEnv("Walker-v0", bodies, episode_steps=steps + 2)
     A = env.sim.max_actuators
     env.step(np.ones((robots, A)))

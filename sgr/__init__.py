@@ -23,8 +23,8 @@ import tasks  # noqa: F401  (registers the gymnasium ids: gym.make("sgr/Walker-v
 
 _FROM = {
     "tsim": ["BatchSim", "Body", "Renderer", "SgrError", "World", "build_body", "check_robot", "has_actuator",
-             "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix",
-             "write_gif"],
+             "is_connected", "load_world", "sample_robot", "sample_robots", "world_from_dict",
+             "world_from_matrix", "write_gif"],
     "tasks": ["TASKS", "BatchEnv", "Measure", "SgrEnv", "SgrVectorEnv", "TaskSpec", "obs_dim", "register",
               "task_spec", "task_world"],
     "evolve": ["METHODS", "Champion", "Experiment", "Problem", "RunDir", "config_from_dict", "load_champion",

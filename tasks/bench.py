@@ -8,7 +8,7 @@ import numpy as np
 
 from tasks.env import BatchEnv
 from tsim import runtime
-from tsim.sampling import sample_robot
+from tsim.sampling import sample_robots
 
 
 def sinusoid(t: int, n_act: int, period: float = 20.0) -> np.ndarray:
@@ -24,7 +24,7 @@ def bench(task: str = "Walker-v0", robots: int = 128, steps: int = 100, seed: in
     if robots < 1 or steps < 1:
         raise ValueError("robots and steps must be >= 1")
     rng = np.random.default_rng(seed)
-    return bench_bodies(task, [sample_robot((5, 5), rng) for _ in range(robots)], steps)
+    return bench_bodies(task, list(sample_robots(robots, (5, 5), rng)), steps)
 
 
 def bench_bodies(task: str, bodies: list[np.ndarray], steps: int, physics: bool = True) -> dict:

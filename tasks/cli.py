@@ -96,11 +96,11 @@ def _demo(args: argparse.Namespace) -> int:
     """Short main job: a batch of random robots with open-loop gaits; writes results.json."""
     from tasks.bench import sinusoid
     from tasks.env import BatchEnv
-    from tsim.sampling import sample_robot
+    from tsim.sampling import sample_robots
 
     out = output_path(args.out, folder=True)
     rng = np.random.default_rng(args.seed)
-    bodies = [sample_robot((5, 5), rng) for _ in range(args.robots)]
+    bodies = sample_robots(args.robots, (5, 5), rng)
     env = BatchEnv(args.task, bodies, episode_steps=args.steps)
     t0 = time.perf_counter()
     total = np.zeros(env.n_worlds)

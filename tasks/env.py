@@ -54,7 +54,9 @@ class BatchEnv:
         self.n_worlds = self.sim.n_worlds
         self.n_actuators = self.sim.n_actuators.copy()
         self.n_points = self.sim.n_robot_points.copy()
-        self.obs_dims = np.array([self.spec.obs_dim(n) for n in self.n_points])
+        # one spec call per distinct point count (a batch has few)
+        sizes, inverse = np.unique(self.n_points, return_inverse=True)
+        self.obs_dims = np.array([self.spec.obs_dim(int(n)) for n in sizes])[inverse.reshape(-1)]
         self.max_obs_dim = int(self.obs_dims.max())
         N = self.sim.max_robot_points
         self._mask = np.arange(N)[None, :] < self.n_points[:, None]
@@ -69,7 +71,7 @@ class BatchEnv:
         # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
         self._points_now: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         self.task_state: dict[str, np.ndarray] = {}
-        self._rngs: list[random.Random] = []
+        self._rngs: dict[int, random.Random] = {}
         self.seed(seeds)
         self.reset()
 
@@ -140,17 +142,28 @@ class BatchEnv:
         with `seeds[w]` (an int: seeds + w; None: w)."""
         if seeds is None or np.isscalar(seeds):
             base = 0 if seeds is None else int(seeds)
-            seeds = [base + w for w in range(self.n_worlds)]
-        if len(seeds) != self.n_worlds:
-            raise ValueError(f"{len(seeds)} seeds for {self.n_worlds} worlds")
-        self._rngs = [random.Random(int(s)) for s in seeds]
+            self._seeds = (base, None)
+        else:
+            if len(seeds) != self.n_worlds:
+                raise ValueError(f"{len(seeds)} seeds for {self.n_worlds} worlds")
+            self._seeds = (0, [int(s) for s in seeds])
+        # made when a world first draws (a task without per-episode randomness never does)
+        self._rngs = {}
+
+    def _rng(self, w: int) -> random.Random:
+        """World w's random stream, seeded by `seed` (made on first use)."""
+        rng = self._rngs.get(w)
+        if rng is None:
+            base, seeds = self._seeds
+            rng = self._rngs[w] = random.Random(base + w if seeds is None else seeds[w])
+        return rng
 
     def _init_state(self, mask: np.ndarray | None) -> None:
         if self.spec.state is None:
             return
         worlds = range(self.n_worlds) if mask is None else np.nonzero(mask)[0]
         for w in worlds:
-            for key, value in self.spec.state(self._rngs[w]).items():
+            for key, value in self.spec.state(self._rng(int(w))).items():
                 value = np.asarray(value)
                 if key not in self.task_state:
                     self.task_state[key] = np.zeros((self.n_worlds, *value.shape), value.dtype)

@@ -23,9 +23,10 @@ Shapes and units, the one convention for point arrays in tsim, tasks and evolve:
 from tsim.body import Body, build_body, check_robot, has_actuator, is_connected
 from tsim.errors import SgrError
 from tsim.render import Renderer, write_gif
-from tsim.sampling import sample_robot
+from tsim.sampling import sample_robot, sample_robots
 from tsim.sim import BatchSim
 from tsim.world import World, load_world, world_from_dict, world_from_matrix
 
 __all__ = ["BatchSim", "Body", "Renderer", "SgrError", "World", "build_body", "check_robot", "has_actuator",
-           "is_connected", "load_world", "sample_robot", "world_from_dict", "world_from_matrix", "write_gif"]
+           "is_connected", "load_world", "sample_robot", "sample_robots", "world_from_dict",
+           "world_from_matrix", "write_gif"]

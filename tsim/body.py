@@ -1,7 +1,8 @@
 """Voxel bodies: validation, connectivity and the point/spring topology evogym builds from them.
 
 A `Body` is a pure function of its material matrix and connections, so it is built with plain
-numpy/Python once per distinct matrix (cached) and can be tested without Taichi. Point, edge and
+numpy/Python once per distinct matrix (cached) and can be tested without Taichi; `_build` is also
+the oracle of `tsim.bodybatch.build_bodies`, which builds a whole batch at once. Point, edge and
 voxel order follow evogym's `ObjectCreator` (spec section 1.2-1.4): the simulator, observations and
 actuator order all depend on that order.
 """
@@ -57,6 +58,78 @@ def is_connected(matrix: np.ndarray) -> bool:
                 seen.add((rr, cc))
                 stack.append((rr, cc))
     return len(seen) == len(filled)
+
+
+def is_connected_batch(matrices: np.ndarray) -> np.ndarray:
+    """(N,) bool: `is_connected` of each of the (N, H, W) matrices, by flood fills run together:
+    on one 64-bit mask per matrix when H * W <= 64, else on boolean arrays."""
+    m = np.asarray(matrices)
+    if m.ndim != 3:
+        raise ValueError(f"is_connected_batch needs an (N, H, W) array, got shape {m.shape}")
+    n, h, w = m.shape
+    filled = m != 0
+    if n == 0 or h * w == 0:
+        return np.zeros(n, dtype=bool)
+    if h * w <= 64:
+        return _connected_bits(filled.reshape(n, h * w), h, w)
+    return _connected_bool(filled)
+
+
+def _connected_bits(filled: np.ndarray, h: int, w: int) -> np.ndarray:
+    """Flood fills on bit masks (bit r * w + c is cell (r, c)): grow from each mask's lowest set bit
+    by the four shifts until nothing changes."""
+    n, hw = filled.shape
+    bits = np.zeros((n, 64), dtype=bool)
+    bits[:, :hw] = filled
+    full = np.packbits(bits, axis=1, bitorder="little").view("<u8").reshape(n).astype(np.uint64)
+    col = np.arange(64) % w
+    inside = np.arange(64) < hw
+    no_first = np.packbits(((col != 0) & inside), bitorder="little").view("<u8")[0].astype(np.uint64)
+    no_last = np.packbits(((col != w - 1) & inside), bitorder="little").view("<u8")[0].astype(np.uint64)
+    one, sw = np.uint64(1), np.uint64(w)
+    out = np.zeros(n, dtype=bool)
+    live = np.flatnonzero(full)
+    f = full[live]
+    x = f & (~f + one)  # the lowest set bit
+    while len(live):
+        for _ in range(4):
+            x = (x | ((x << one) & no_first) | ((x >> one) & no_last) | (x << sw) | (x >> sw)) & f
+        nx = (x | ((x << one) & no_first) | ((x >> one) & no_last) | (x << sw) | (x >> sw)) & f
+        done = nx == x
+        if done.any():
+            out[live[done]] = x[done] == f[done]
+            keep = ~done
+            live, f, x = live[keep], f[keep], nx[keep]
+        else:
+            x = nx
+    return out
+
+
+def _connected_bool(filled: np.ndarray) -> np.ndarray:
+    """Flood fills on (N, H, W) boolean arrays, for matrices of more than 64 cells."""
+    n, h, w = filled.shape
+    flat = filled.reshape(n, -1)
+    out = np.zeros(n, dtype=bool)
+    live = np.flatnonzero(flat.any(axis=1))
+    f = filled[live]
+    x = np.zeros_like(f)
+    first = flat[live].argmax(axis=1)
+    x.reshape(len(live), -1)[np.arange(len(live)), first] = True
+    while len(live):
+        nx = x.copy()
+        nx[:, 1:] |= x[:, :-1]
+        nx[:, :-1] |= x[:, 1:]
+        nx[:, :, 1:] |= x[:, :, :-1]
+        nx[:, :, :-1] |= x[:, :, 1:]
+        nx &= f
+        done = (nx == x).all(axis=(1, 2))
+        if done.any():
+            out[live[done]] = (x[done] == f[done]).all(axis=(1, 2))
+            keep = ~done
+            live, f, x = live[keep], f[keep], nx[keep]
+        else:
+            x = nx
+    return out
 
 
 def has_actuator(matrix: np.ndarray) -> bool:

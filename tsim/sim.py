@@ -17,7 +17,8 @@ from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
 from tsim import runtime, spirv
-from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected
+from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected, is_connected_batch
+from tsim.bodybatch import BodyBatch, build_bodies
 from tsim.launch import CachedLaunch
 from tsim.rounding import rest, to_pair
 from tsim.world import World
@@ -39,11 +40,79 @@ def _as_body(body: Body | object, passive_ok: bool) -> Body:
     return body if isinstance(body, Body) else build_body(m)
 
 
+def _as_bodies(bodies: Sequence[Body | object], passive_ok: bool) -> BodyBatch:
+    """The batch's bodies, checked as `_as_body` checks each, all at once (on a bad body, the
+    first one's own error): matrices built together (`build_bodies`), `Body`s kept as they are."""
+    if isinstance(bodies, np.ndarray) and bodies.ndim == 3:
+        mats = _checked(bodies, passive_ok)
+    else:
+        has_body = any(isinstance(b, Body) for b in bodies)
+        items = [b.matrix if isinstance(b, Body) else b for b in bodies] if has_body else bodies
+        mats = _checked_list(items, passive_ok)
+        if mats is not None and has_body:
+            return BodyBatch.from_bodies([b if isinstance(b, Body) else build_body(m)
+                                          for b, m in zip(bodies, mats, strict=True)])
+    if mats is None:  # some body is bad (the first one raises its error), or of an unusual type
+        return BodyBatch.from_bodies([_as_body(b, passive_ok) for b in bodies])
+    return build_bodies(mats)
+
+
+def _checked_list(items: Sequence[object], passive_ok: bool) -> list[np.ndarray] | np.ndarray | None:
+    """The matrices as int64 (an (N, H, W) array when they share a shape) if all pass
+    `_as_body`'s checks, else None. Checked per shape, all of a shape at once."""
+    groups: dict[tuple, list[int]] = {}
+    for i, b in enumerate(items):
+        try:
+            shape = np.shape(b)
+        except ValueError:  # ragged rows
+            return None
+        groups.setdefault(shape, []).append(i)
+    out: list = [None] * len(items)
+    for shape, idx in groups.items():
+        if len(shape) != 2:
+            return None
+        try:
+            arr = np.asarray([items[i] for i in idx])
+            if arr.dtype.kind not in "biuf":  # e.g. numeric strings, which the one-body check reads
+                arr = arr.astype(float)
+        except (TypeError, ValueError):
+            return None
+        m = _checked(arr, passive_ok)
+        if m is None:
+            return None
+        if len(groups) == 1:
+            return m
+        for i, one in zip(idx, m, strict=True):
+            out[i] = one
+    return out
+
+
+def _checked(arr: np.ndarray, passive_ok: bool) -> np.ndarray | None:
+    """(N, H, W) matrices as int64 if every one passes `_as_body`'s checks, else None."""
+    if arr.ndim != 3 or arr.shape[1] * arr.shape[2] == 0 or arr.dtype.kind not in "biuf":
+        return None
+    if arr.dtype.kind == "f":
+        if not (np.isfinite(arr).all() and (arr == np.round(arr)).all()):
+            return None
+    if len(arr) and (arr.min() < 0 or arr.max() > C.V_ACT):
+        return None
+    m = arr.astype(np.int64)
+    if not passive_ok:
+        flat = m.reshape(len(m), -1)
+        if not ((flat == C.H_ACT) | (flat == C.V_ACT)).any(axis=1).all():
+            return None
+    if not is_connected_batch(m).all():
+        return None
+    return m
+
+
 class BatchSim:
     """B worlds of `world`, robot b built from `bodies[b]` and placed with its matrix's bottom-left
-    cell at grid cell `origin`. `passive_ok` admits bodies without actuators (evogym loads those as
-    plain objects; the reference traces contain a few). `arch` and `precision` choose the process's
-    backend (`tsim.backend.get`: None means $SGR_ARCH / $SGR_PRECISION, else cpu / f64)."""
+    cell at grid cell `origin` (bodies: `Body`s or matrices, or one (B, H, W) array; matrices are
+    checked and built all at once, `tsim.bodybatch`). `passive_ok` admits bodies without actuators
+    (evogym loads those as plain objects; the reference traces contain a few). `arch` and
+    `precision` choose the process's backend (`tsim.backend.get`: None means $SGR_ARCH /
+    $SGR_PRECISION, else cpu / f64)."""
 
     def __init__(self, world: World, bodies: Sequence[Body | object], origin: tuple[int, int],
                  *, arch: str | None = None, precision: str | None = None, passive_ok: bool = False):
@@ -54,7 +123,7 @@ class BatchSim:
         self.dtype = self.backend.dtype
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
-        self.bodies = [_as_body(b, passive_ok) for b in bodies]
+        self.bodies = _as_bodies(bodies, passive_ok)  # a sequence of `Body`s (made when read)
         self.free_objects = world.free_objects
         self._build()
         self.reset()
@@ -63,12 +132,14 @@ class BatchSim:
     def _build(self) -> None:
         bodies, objs = self.bodies, self.free_objects
         B = len(bodies)
-        parts = [[b] + [o.body for o in objs] for b in bodies]
-        n_pts = np.array([sum(p.n_points for p in ps) for ps in parts])
-        n_edges = np.array([sum(p.n_edges for p in ps) for ps in parts])
-        n_vox = np.array([sum(p.n_voxels for p in ps) for ps in parts])
-        self.n_robot_points = np.array([b.n_points for b in bodies])
-        self.n_actuators = np.array([b.n_actuators for b in bodies])
+        obj_p = [o.body.n_points for o in objs]
+        obj_e = [o.body.n_edges for o in objs]
+        obj_v = [o.body.n_voxels for o in objs]
+        n_pts = bodies.n_points + sum(obj_p)
+        n_edges = bodies.n_edges + sum(obj_e)
+        n_vox = bodies.n_voxels + sum(obj_v)
+        self.n_robot_points = bodies.n_points.copy()
+        self.n_actuators = bodies.n_actuators.copy()
         P, E, V = int(n_pts.max()), int(n_edges.max()), int(n_vox.max())
         # actuated objects (sgr.evogym's further robots) read the action columns after the robot's
         n_obj_act = sum(o.body.n_actuators for o in objs if o.actuated)
@@ -87,61 +158,94 @@ class BatchSim:
         n_fix = sum(len(f) for f in fixed)
         lists = np.zeros((B, max(V, n_fix), 3), dtype=np.int32)
         counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
-        for w, ps in enumerate(parts):
-            p_off = e_off = v_off = 0
-            a_off = bodies[w].n_actuators
-            surf, surf_robot, rigid, fix = [], 0, [], []
-            for obj_id, part in enumerate(ps):
-                place = (self.origin if obj_id == 0 else objs[obj_id - 1].cell)
-                pts = part.place(*place)
-                pos0[w, p_off:p_off + part.n_points] = pts.T
-                sl = slice(e_off, e_off + part.n_edges)
-                edge_i[w, sl, 0] = part.edge_a + p_off
-                edge_i[w, sl, 1] = part.edge_b + p_off
-                if obj_id == 0:
-                    edge_i[w, sl, 2:4] = part.edge_drivers
-                elif objs[obj_id - 1].actuated:
-                    d = part.edge_drivers
-                    edge_i[w, sl, 2:4] = np.where(d >= 0, d + a_off, -1)
-                    a_off += part.n_actuators
-                else:
-                    edge_i[w, sl, 2:4] = -1
-                edge_f[w, sl, K.E_REST] = part.edge_rest
-                self._rest_f64[w, sl] = part.edge_rest
-                edge_f[w, sl, K.E_K] = part.edge_k
-                edge_f[w, sl, K.E_GOAL] = part.edge_rest
-                edge_f[w, sl, K.E_LEQ] = part.edge_rest
-                vs = slice(v_off, v_off + part.n_voxels)
-                vox_i[w, vs, K.V_PTS:K.V_PTS + 4] = part.voxel_points + p_off
-                vox_i[w, vs, K.V_OPEN:K.V_OPEN + 4] = part.voxel_open
-                vox_i[w, vs, K.V_TYPE] = part.voxel_type
-                vox_i[w, vs, K.V_OBJ] = obj_id
-                vox_i[w, vs, K.V_ROW] = part.voxel_rc[:, 0]
-                vox_i[w, vs, K.V_COL] = part.voxel_rc[:, 1]
-                s_idx = list(np.nonzero(part.voxel_is_surface)[0] + v_off)
-                surf += s_idx
-                if obj_id == 0:
-                    surf_robot = len(s_idx)
-                rigid += list(np.nonzero(part.voxel_type == C.RIGID)[0] + v_off)
-                if obj_id > 0:
-                    fix += list(fixed[obj_id - 1] + p_off)
-                p_off += part.n_points
-                e_off += part.n_edges
-                v_off += part.n_voxels
-            lists[w, :len(surf), 0] = surf
-            lists[w, :len(rigid), 1] = rigid
-            lists[w, :len(fix), 2] = fix
-            counts[w, K.N_FIXED] = len(fix)
-            counts[w, K.N_PTS] = p_off
-            counts[w, K.N_EDGES] = e_off
-            counts[w, K.N_VOX] = v_off
-            counts[w, K.N_SURF] = len(surf)
-            counts[w, K.N_SURF_ROBOT] = surf_robot
-            counts[w, K.N_RIGID] = len(rigid)
-            counts[w, K.N_ACT] = bodies[w].n_actuators
-        # free objects sit right after the robot, so their offset differs per world
-        self._obj_offsets = [[int(self.n_robot_points[w]) + sum(o.body.n_points for o in objs[:k])
-                              for w in range(B)] for k in range(len(objs))]
+
+        # the robots, all at once: each packed row goes to (its world, its index in its body)
+        a = bodies.arrays
+        wp, ip = _rows(bodies.n_points)
+        wv, iv = _rows(bodies.n_voxels)
+        x, y = self.origin  # `Body.place`, evaluated in the same order
+        start_x = x * C.CELL
+        max_y = y * C.CELL + bodies.n_rows * C.CELL
+        pos0[wp, ip, 0] = start_x + a["corner_cx"] * C.CELL
+        pos0[wp, ip, 1] = max_y[wp] - a["corner_ry"] * C.CELL
+        # edges and voxels as whole rows (one scatter of row-sized items each, the fastest numpy has)
+        fe = _flat_rows(bodies.n_edges, E)
+        rest_e = a["edge_rest"]
+        rows_i = np.empty((len(fe), 4), dtype=np.int32)
+        rows_i[:, 0] = a["edge_a"]
+        rows_i[:, 1] = a["edge_b"]
+        rows_i[:, 2:4] = a["edge_drivers"]
+        _scatter_rows(edge_i, fe, rows_i)
+        rows_f = np.empty((len(fe), K.N_EDGE_F), dtype=real)
+        rows_f[:, K.E_REST] = rest_e
+        rows_f[:, K.E_K] = a["edge_k"]
+        rows_f[:, K.E_GOAL] = rest_e
+        rows_f[:, K.E_LEQ] = rest_e
+        _scatter_rows(edge_f, fe, rows_f)
+        self._rest_f64.reshape(-1)[fe] = rest_e
+        rows_v = np.zeros((len(wv), K.N_VOX_I), dtype=np.int32)
+        rows_v[:, K.V_PTS:K.V_PTS + 4] = a["voxel_points"]
+        rows_v[:, K.V_OPEN:K.V_OPEN + 4] = a["voxel_open"]
+        rows_v[:, K.V_TYPE] = a["voxel_type"]
+        rows_v[:, K.V_ROW] = a["voxel_rc"][:, 0]
+        rows_v[:, K.V_COL] = a["voxel_rc"][:, 1]
+        _scatter_rows(vox_i, wv * V + iv, rows_v)
+        n_surf = _list_by_world(lists, 0, a["voxel_open"].any(axis=1), wv, iv, B)
+        counts[:, K.N_SURF_ROBOT] = n_surf
+        n_rigid = _list_by_world(lists, 1, a["voxel_type"] == C.RIGID, wv, iv, B)
+
+        # then each free object (the same in every world) at its world's offsets
+        rows = np.arange(B)[:, None]
+        p_off, e_off, v_off = self.n_robot_points.copy(), bodies.n_edges.copy(), bodies.n_voxels.copy()
+        a_off = self.n_actuators.copy()
+        n_fixed = 0
+        self._obj_offsets = []
+        for obj_id, obj in enumerate(objs, start=1):
+            part = obj.body
+            self._obj_offsets.append(p_off.copy())
+            pts = part.place(*obj.cell)
+            pcols = p_off[:, None] + np.arange(part.n_points)
+            pos0[rows, pcols] = pts.T
+            ecols = e_off[:, None] + np.arange(part.n_edges)
+            edge_i[rows, ecols, 0] = part.edge_a + p_off[:, None]
+            edge_i[rows, ecols, 1] = part.edge_b + p_off[:, None]
+            if obj.actuated:
+                d = part.edge_drivers
+                edge_i[rows, ecols, 2:4] = np.where(d >= 0, d + a_off[:, None, None], -1)
+                a_off += part.n_actuators
+            else:
+                edge_i[rows, ecols, 2:4] = -1
+            edge_f[rows, ecols, K.E_REST] = part.edge_rest
+            self._rest_f64[rows, ecols] = part.edge_rest
+            edge_f[rows, ecols, K.E_K] = part.edge_k
+            edge_f[rows, ecols, K.E_GOAL] = part.edge_rest
+            edge_f[rows, ecols, K.E_LEQ] = part.edge_rest
+            vcols = v_off[:, None] + np.arange(part.n_voxels)
+            vox_i[rows, vcols, K.V_PTS:K.V_PTS + 4] = part.voxel_points + p_off[:, None, None]
+            vox_i[rows, vcols, K.V_OPEN:K.V_OPEN + 4] = part.voxel_open
+            vox_i[rows, vcols, K.V_TYPE] = part.voxel_type
+            vox_i[rows, vcols, K.V_OBJ] = obj_id
+            vox_i[rows, vcols, K.V_ROW] = part.voxel_rc[:, 0]
+            vox_i[rows, vcols, K.V_COL] = part.voxel_rc[:, 1]
+            s_idx = np.nonzero(part.voxel_is_surface)[0]
+            lists[rows, n_surf[:, None] + np.arange(len(s_idx)), 0] = s_idx + v_off[:, None]
+            n_surf = n_surf + len(s_idx)
+            r_idx = np.nonzero(part.voxel_type == C.RIGID)[0]
+            lists[rows, n_rigid[:, None] + np.arange(len(r_idx)), 1] = r_idx + v_off[:, None]
+            n_rigid = n_rigid + len(r_idx)
+            f_idx = fixed[obj_id - 1]
+            lists[rows, n_fixed + np.arange(len(f_idx)), 2] = f_idx + p_off[:, None]
+            n_fixed += len(f_idx)
+            p_off += part.n_points
+            e_off += part.n_edges
+            v_off += part.n_voxels
+        counts[:, K.N_FIXED] = n_fixed
+        counts[:, K.N_PTS] = p_off
+        counts[:, K.N_EDGES] = e_off
+        counts[:, K.N_VOX] = v_off
+        counts[:, K.N_SURF] = n_surf
+        counts[:, K.N_RIGID] = n_rigid
+        counts[:, K.N_ACT] = self.n_actuators
 
         t = self.world.terrain
         nt = max(1, len(t.corners))
@@ -200,7 +304,7 @@ class BatchSim:
         # and prune only when some world is long enough to gain from it (tests force either)
         self.sweep_mode = K.SWEEP_AUTO if any(
             _sweep_pays(pos0[w], vox_i[w, lists[w, :counts[w, K.N_SURF], 0], K.V_PTS:K.V_PTS + 4])
-            for w in range(B)) else K.SWEEP_OFF
+            for w in np.flatnonzero(counts[:, K.N_SURF] >= K.SWEEP_MIN)) else K.SWEEP_OFF
         # and whether a substep may test only the pairs listed at an earlier one (the same pairs
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
@@ -268,9 +372,12 @@ class BatchSim:
     def reset(self, mask: np.ndarray | None = None) -> None:
         """Back to the initial placement at rest (evogym `reset`), running again; `mask` (B,) bool
         resets only those worlds."""
-        sel = np.ones(self.n_worlds, dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
-        if sel.shape != (self.n_worlds,):
-            raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
+        if mask is None:
+            sel = slice(None)  # every world: plain slices, several times faster than a full mask
+        else:
+            sel = np.asarray(mask, dtype=bool)
+            if sel.shape != (self.n_worlds,):
+                raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         if mask is None:
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
         self.state[sel] = 0.0
@@ -503,6 +610,42 @@ class BatchSim:
             out[:, :, 0:2] += np.where(own, st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
             out[:, :, 2:4] += np.where(own, st[:, :, K.S_VEL_LO:K.S_VEL_LO + 2], 0.0)
         return out
+
+
+def _rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """For rows packed body after body (`BodyBatch`), each row's body and its index in that body."""
+    total = int(counts.sum())
+    owner = np.repeat(np.arange(len(counts)), counts)
+    starts = np.cumsum(counts) - counts
+    return owner, np.arange(total) - starts[owner]
+
+
+def _flat_rows(counts: np.ndarray, width: int) -> np.ndarray:
+    """For rows packed body after body, each row's place `world * width + index` in a padded
+    (B, width) layout."""
+    starts = np.cumsum(counts) - counts
+    shift = np.arange(len(counts)) * width - starts
+    return np.arange(int(counts.sum())) + np.repeat(shift, counts)
+
+
+def _scatter_rows(dst: np.ndarray, at: np.ndarray, rows: np.ndarray) -> None:
+    """dst (B, n, k) seen as B * n rows of k items: rows (m, k) into rows `at` (m,), each row as
+    one opaque item (numpy's 1-D scatter; several times faster than a 2-D fancy assignment)."""
+    k = dst.shape[-1] * dst.itemsize
+    item = np.dtype((np.void, k))
+    dst.reshape(-1, dst.shape[-1]).view(item).reshape(-1)[at] = \
+        np.ascontiguousarray(rows, dtype=dst.dtype).view(item).reshape(-1)
+
+
+def _list_by_world(lists: np.ndarray, col: int, keep: np.ndarray, world: np.ndarray, index: np.ndarray,
+                   B: int) -> np.ndarray:
+    """Write each world's kept packed rows' `index` into `lists[world, :, col]` in order; the
+    counts per world."""
+    w, i = world[keep], index[keep]
+    n = np.bincount(w, minlength=B)
+    _, slot = _rows(n)
+    lists[w, slot, col] = i
+    return n
 
 
 def _taichi_array(a: np.ndarray):
