@@ -51,6 +51,8 @@ def run(args, installed, timeout=300) -> subprocess.CompletedProcess:
     return r
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_evolve_a_task_then_use_the_champion_as_the_readme_says(installed):
     site, elsewhere, _ = installed
     r = run([str(site / "bin" / "sgr"), "evolve", "--task", "Climber-v2", "--generations", "2"], installed)
@@ -65,6 +67,8 @@ def test_evolve_a_task_then_use_the_champion_as_the_readme_says(installed):
     assert (elsewhere / "champion.gif").read_bytes()[:6] == b"GIF89a"
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_the_tasks_walkthrough_evolves_a_task_of_ones_own_with_two_workers(installed):
     _, elsewhere, _ = installed
     script = code_block(ROOT / "docs" / "TASKS.md", "## Your own task")

@@ -7,6 +7,8 @@ import sys
 import tomllib
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -17,6 +19,8 @@ def test_every_package_is_listed_for_the_distribution():
     assert found | {"evolve.configs"} == listed
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_plain_install_runs_sgr_evolve_from_another_folder(tmp_path):
     site = tmp_path / "site"
     build = subprocess.run([sys.executable, "-m", "pip", "install", "-q", "--no-deps", "--no-build-isolation",

@@ -15,6 +15,8 @@ import yaml
 
 from tsim import devices
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
+
 ROOT = Path(__file__).resolve().parents[2]
 
 

@@ -7,7 +7,10 @@ import os
 import subprocess
 import sys
 
+import pytest
 import yaml
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
 
 def run_cli(*args, cwd, env=None) -> subprocess.CompletedProcess:

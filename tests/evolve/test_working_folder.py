@@ -44,6 +44,8 @@ def sgr(folder: tuple[Path, dict], *args: str) -> str:
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_every_readme_command_runs_beside_a_tasks_py_an_evolve_py_and_a_tsim_py(folder):
     cwd, _ = folder
     run = re.search(r"run directory: (\S+)", sgr(folder, "evolve", "--config", "tiny.yaml")).group(1)

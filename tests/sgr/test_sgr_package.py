@@ -4,6 +4,8 @@
 import subprocess
 import sys
 
+import pytest
+
 import evolve
 import sgr
 import tasks
@@ -20,6 +22,8 @@ def test_sgr_reexports_every_public_name_of_tsim_tasks_and_evolve():
     assert ns["BatchEnv"] is tasks.BatchEnv and ns["Experiment"] is evolve.Experiment
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_importing_sgr_evogym_leaves_evolve_alone():
     code = "import sys, sgr.evogym.envs; print('evolve' in sys.modules)"
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)

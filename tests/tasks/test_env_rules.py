@@ -68,6 +68,7 @@ def test_self_collision_instability_gives_exactly_minus_3_terminates_and_repeats
     assert r[0] == 0.0
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", ["Walker-v0", "Thrower-v0"])
 def test_mixed_batch_equals_one_env_per_body(task):
     rng = np.random.default_rng(11)

@@ -71,6 +71,7 @@ def test_registry_has_every_task_but_those_left(folder):
         assert TASKS[name].world == facts["world_file"]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", NEW_TASKS)
 def test_reset_observation_and_returns_match_evogym(returns, task):
     r = returns(task)
@@ -89,6 +90,7 @@ def evogym_spread(z, key: str, ref: str) -> np.ndarray:
     return np.maximum(z[key + "_p9"], z[key + "_m9"])
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", NEW_TASKS + FIRST_FOUR)
 def test_every_robot_return_and_com_within_evogyms_own_spread(folder, returns, task):
     """Per robot, not only the median: a change that moves a few robots (say the -3 instability

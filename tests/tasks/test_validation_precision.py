@@ -19,6 +19,10 @@ import os
 import subprocess
 import sys
 
+import pytest
+
+pytestmark = pytest.mark.slow
+
 PASSING = ["Walker-v0", "Hurdler-v0", "HeightMaximizer-v0", "Pusher-v1", "BridgeWalker-v0",
            "Traverser-v0", "Climber-v2", "Jumper-v0", "Lifter-v0", "PlatformJumper-v0"]
 

@@ -8,6 +8,8 @@ import pytest
 
 from tasks.validate import validate_returns
 
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def report(data_dir):

@@ -13,6 +13,8 @@ import pytest
 
 from tasks.validate import validate_traces
 
+pytestmark = pytest.mark.slow
+
 
 @pytest.fixture(scope="module")
 def report(data_dir):

@@ -12,6 +12,8 @@ from tsim import kernels as K
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
 
+pytestmark = pytest.mark.slow
+
 
 def _run(task: str, bodies, steps: int, serial: bool, extra_tiers: int = 0,
          sweep: int | None = None, pair_list: int | None = None, drop: float = 0.0) -> BatchSim:

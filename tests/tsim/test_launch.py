@@ -2,6 +2,7 @@
 compute exactly what Taichi's own call computes, and notice when its arguments change."""
 
 import numpy as np
+import pytest
 
 from tasks.specs import task_world
 from tsim import kernels as K
@@ -35,6 +36,7 @@ def test_cached_launches_compute_what_taichis_call_computes():
     assert np.array_equal(cached.counts, plain.counts)
 
 
+@pytest.mark.slow
 def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
     cached, plain = _pair()
     for t in range(5):

@@ -46,6 +46,8 @@ def _clean_env(**extra: str) -> dict:
     return {**base, "SGR_THREADS": "1", **extra}
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_f32_steps_in_float32_and_follows_evogym_at_the_start(data_dir):
     """In an f32 process the state, observations and rewards are float32, and in the first 3 steps
     evogym's 24 recorded robots follow evogym's COMs to float32's rounding (~3e-8; bound 1e-6):
@@ -153,6 +155,8 @@ if __name__ == "__main__":
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_f32_pairs_keep_the_increments_a_float32_coordinate_loses():
     """Far from the origin a float32 coordinate cannot hold a substep's increment (v dt ~1e-6 to
     1e-4 against an ulp of 1.9e-6 at 20) and its springs see lengths rounded at that ulp. f32 keeps
@@ -194,6 +198,8 @@ print(json.dumps(out))
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_f32_bodies_flush_against_walls_start_as_evogyms(data_dir):
     """Climber-v1's robot rests 3.4e-16 above its pipe's floor and Climber-v2's 3.4e-16 above the
     terrain, flush between walls: plain float32 (with each coordinate on its float64 side of the
@@ -369,6 +375,8 @@ print(json.dumps({"cols": a.state.shape[2], "same": a.state.tobytes() == b.state
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_f32_state_written_from_outside_drops_stale_low_parts():
     """f32's low parts (state columns 8:14) hold only for the positions they were stored with: a
     state whose positions are rewritten from outside (a reset, evogym's `revert`) steps exactly as

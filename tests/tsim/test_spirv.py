@@ -96,6 +96,8 @@ print(ref.state.dtype, ref.state.shape[-1], int(ref.counts[1, K.STATUS] == K.UNS
 """
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_in_f32_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it_low_parts_too():
     """f32's state has more columns (the pairs' low parts, tsim/kernels/pairs.py), and its two-sum
     reads the global scratch's 1.0 in the SPIR-V launch: launches of one substep leave the unstable

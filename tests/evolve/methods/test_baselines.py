@@ -12,6 +12,8 @@ from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_search import NeatSearch
 
+pytestmark = pytest.mark.slow
+
 TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 
 

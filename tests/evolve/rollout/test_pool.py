@@ -51,6 +51,8 @@ def test_chunks_cover_every_robot_once_and_balance_the_voxel_load():
         assert balanced_chunks(costs, n) == chunks  # depends on the costs only
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_two_worker_processes_return_exactly_the_in_process_returns():
     rng = np.random.default_rng(0)
     bodies = [sample_robot((5, 5), rng) for _ in range(7)]
@@ -64,6 +66,8 @@ def test_two_worker_processes_return_exactly_the_in_process_returns():
     assert np.any(local != 0.0)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_errors_in_a_worker_are_raised_in_the_caller_and_the_pool_survives():
     rng = np.random.default_rng(1)
     bodies = [sample_robot((5, 5), rng) for _ in range(4)]
@@ -78,6 +82,8 @@ def test_errors_in_a_worker_are_raised_in_the_caller_and_the_pool_survives():
         assert pool.run("Walker-v0", bodies, ctrls, dense_policy, 5).shape == (4,)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_worker_killed_mid_generation_is_started_again_with_the_same_results(capsys):
     import os
     import signal
@@ -115,6 +121,8 @@ def test_worker_counts_are_checked():
             resolve_workers(bad)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
 def test_runs_give_the_same_results_with_one_or_two_worker_processes(tmp_path, shipped_config, method):
     from evolve.runs.experiment import Experiment

@@ -19,6 +19,8 @@ from evolve.runs.experiment import Experiment  # noqa: E402
 from evolve.runs.ray_sweep import RayBackend  # noqa: E402
 from evolve.runs.sweep import Sweep  # noqa: E402
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess, pytest.mark.ray]
+
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 
 

@@ -69,6 +69,8 @@ def test_one_episode_without_noise_is_the_nominal_run_bit_for_bit(tmp_path):
     assert b["evaluation"]["robust"]["episodes"] == 1 and a["evaluation"]["robust"] is None
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
 def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescores_exactly(
         tmp_path, method):
@@ -86,6 +88,8 @@ def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescor
         assert int(r["episodes"]) % ROBUST["episodes"] == 0 and int(r["episodes"]) > 0
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("robust", [ROBUST, FAST, SETTLE], ids=["k3", "accumulate-race", "accumulate-settle"])
 def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_same_run(tmp_path, robust):
     cfg = config("sgr", robust=robust, generations=8, pop_size=24, checkpoint_every=2)
@@ -111,6 +115,8 @@ def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_s
     assert crashed.champion() == full.champion()
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_with_reevaluate_elites_are_simulated_again_with_fresh_noise_and_the_run_stays_exact(tmp_path):
     cfg = config("sgr", robust={**ROBUST, "reevaluate": True}, generations=4)
     once = run(tmp_path, "a", cfg)
@@ -168,6 +174,8 @@ def test_nested_neat_refuses_accumulated_fitness_in_one_line(tmp_path, capsys):
     assert "key 'robust.accumulate' is not for method 'nested'" in err and err.count("\n") == 1, err
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_episode_noise_follows_the_episode_not_its_slot_in_the_batch_or_the_worker():
     rng = np.random.default_rng(1)
     bodies = [sample_robot((5, 5), rng) for _ in range(5)]

@@ -19,6 +19,8 @@ from tsim import world_from_matrix
 from tsim.body import build_body
 from tsim.sampling import sample_robot
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
+
 NAME = "UserStepLeft-v0"
 
 
@@ -65,6 +67,7 @@ def test_a_user_task_gives_the_same_returns_in_two_worker_processes(user_task):
     assert np.array_equal(a, b) and np.ptp(a) > 0
 
 
+@pytest.mark.ray
 def test_a_user_task_on_ray_actors(user_task):
     """Ray actors too (Ray pickles the job; the spec inside it registers the task there)."""
     ray = pytest.importorskip("ray")

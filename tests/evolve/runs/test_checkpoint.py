@@ -72,6 +72,8 @@ def test_the_planted_pickle_would_run_code_if_loaded(tmp_path):
     assert marker.exists()
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_pickle_planted_in_checkpoints_runs_nothing_and_the_run_resumes_from_the_newest_real_one(
         tmp_path, repo_root):
     cfg = config(tmp_path, repo_root)
@@ -116,6 +118,7 @@ def _as_old_pickles(done: RunDir) -> None:
         f.unlink()
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["sgr", "nested"])
 def test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_exactly(
         tmp_path, repo_root, capsys, method):

@@ -35,6 +35,7 @@ def test_counting_equals_comparing_every_pair_with_eq_2():
                                                                    rel=1e-12)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
 def test_every_method_with_bodies_records_it(tmp_path, method):
     with Experiment.from_config({"method": method, **TINY}, tmp_path / "run", quiet=True) as exp:

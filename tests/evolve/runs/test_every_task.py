@@ -10,6 +10,8 @@ from evolve.runs.champion import read_champion, replay_champion
 from evolve.runs.experiment import Experiment
 from tasks.specs import TASKS
 
+pytestmark = pytest.mark.slow
+
 STEPS = 5
 # every task, BidirectionalWalker-v0 (random goals) too: rollouts seed every world alike, so a
 # body's fitness does not depend on its slot in the batch and champion.json replays to it

@@ -59,6 +59,7 @@ def test_nested_config_errors_name_the_key(tmp_path, repo_root, capsys, changes,
     assert not (tmp_path / "run" / "generations.csv").exists()
 
 
+@pytest.mark.slow
 def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
     p = _write(tmp_path, repo_root)
     full = Experiment.create(str(p), str(tmp_path / "full"), {}, quiet=True)
@@ -93,6 +94,7 @@ def test_killed_run_resumes_with_identical_fitness_columns(tmp_path, repo_root):
     assert replay_champion(tmp_path / "full")[0] == pytest.approx(ca["fitness"], abs=1e-9)
 
 
+@pytest.mark.slow
 def test_a_run_directory_is_not_overwritten(tmp_path, repo_root, capsys):
     p = _write(tmp_path, repo_root, generations=1)
     out = str(tmp_path / "r")
@@ -114,6 +116,8 @@ def test_ctrl_c_stops_the_run_with_a_resume_hint(tmp_path, repo_root, capsys, mo
     assert RunDir(out).latest_checkpoint() is not None  # generation 0's state is there to resume
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_ctrl_c_writes_a_checkpoint_and_every_generation_number_agrees(tmp_path, repo_root):
     """A real SIGINT: the generation under way ends, a checkpoint of it is written (none was due:
     checkpoint_every is 1000) and the run stops with exit 130. The console, generations.csv,
@@ -167,6 +171,7 @@ def test_packaged_configs_resolve_by_name_from_any_folder(tmp_path, monkeypatch)
     assert find_config("sgr/Climber-v2") == Path("sgr/Climber-v2")
 
 
+@pytest.mark.slow
 def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     assert main(["evolve", "--task", "Walker-v0", "--method", "direct", "--generations", "1", "--pop", "4",

@@ -78,6 +78,7 @@ def test_a_best_ever_that_fails_only_its_confirmation_or_ranks_below_is_explaine
     assert "it is the best-ever genome" in explain(record(rows, 9, 9, 2.4))
 
 
+@pytest.mark.slow
 def test_the_end_of_run_lines_say_what_chose_the_champion_and_why(finished):
     run, console = finished
     champ = RunDir(run).champion()
@@ -93,6 +94,7 @@ def test_the_end_of_run_lines_say_what_chose_the_champion_and_why(finished):
     assert head.startswith(f"champion: fitness {champ['fitness']:.3f} (the mean of 10 held-out perturbed")
 
 
+@pytest.mark.slow
 def test_the_headline_fitness_comes_from_episodes_that_did_not_choose(finished, tmp_path):
     """champion.json's fitness is scored on its own tag, 10 episodes whose noise keys meet none of
     the choosing episodes' (every candidate's score and confirmation); rescoring the record on the
@@ -133,6 +135,7 @@ def test_the_median_replay_is_the_middle_of_the_noisy_returns():
     assert verdict.median_replay([0.0, 5.0, 7.0, 5.0, 1.0]) == 1  # 1 [5 5] 7: of equal ones, the earlier
 
 
+@pytest.mark.slow
 def test_champion_gif_shows_the_median_replay_and_the_exact_episode_is_one_flag_away(finished, capsys):
     run, console = finished
     returns = replay_champion(run, verdict.REPLAYS, verdict.EPS)
@@ -192,6 +195,7 @@ def test_a_selection_record_from_before_the_holdout_still_describes():
     assert re.search(r"score 1\.5000 \(mean of 32 perturbed episodes\), nominal 1\.5000", describe(old))
 
 
+@pytest.mark.slow
 def test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion(tmp_path):
     """The sizes come from the config alone (generations x pop_size x robust episodes), so a run
     killed while choosing, resumed, sizes and chooses exactly as the uninterrupted run did."""

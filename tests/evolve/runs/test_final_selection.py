@@ -143,6 +143,8 @@ def test_a_confirmed_choice_follows_its_rule_and_its_fitness_rescores_to_the_bit
     assert rescore_champion(copy) == champ["fitness"]
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_choosing_again_on_one_or_two_workers_changes_nothing(runs, tmp_path, capsys):
     import shutil
 

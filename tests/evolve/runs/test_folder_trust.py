@@ -33,6 +33,8 @@ from tasks.specs import TASKS, forget_worlds
 from tsim import world_from_matrix
 from tsim.errors import SgrError
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
+
 ROOT = Path(__file__).resolve().parents[3]
 NAME = "FolderLeft-v0"
 

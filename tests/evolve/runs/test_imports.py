@@ -7,9 +7,12 @@ import os
 import subprocess
 import sys
 
+import pytest
 import yaml
 
 from evolve.runs.rundir import RunDir
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
 TASK_FILE = '''
 import numpy as np

@@ -28,6 +28,8 @@ from evolve.runs.ray_sweep import RayBackend  # noqa: E402
 from evolve.runs.rundir import RunDir  # noqa: E402
 from evolve.runs.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess, pytest.mark.ray]
+
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 GENERATIONS = 8
 SWEEP = {"methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": 1,

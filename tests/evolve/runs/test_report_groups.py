@@ -155,6 +155,7 @@ def test_pool_names_a_setting_or_is_refused_in_one_line(tmp_path, capsys):
     assert "never averaged together" in capsys.readouterr().err
 
 
+@pytest.mark.slow
 def test_sgr_plot_runs_star_works_after_plot_report_and_decode_wrote_there(tmp_path, sgr_run, capsys,
                                                                            monkeypatch):
     """`sgr plot runs/*` once runs/ holds fitness.png, report.md, summary.csv, curves.png,

@@ -16,6 +16,8 @@ from evolve.runs.experiment import Experiment
 from evolve.runs.gallery import VOXEL_RGB, body_image
 from evolve.runs.report import write_report
 
+pytestmark = [pytest.mark.slow, pytest.mark.browser]
+
 
 def chromium() -> str:
     exe = shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")

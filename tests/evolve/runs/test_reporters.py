@@ -122,6 +122,7 @@ def test_tensorboard_events_hold_each_generations_scalars_as_generations_csv_has
     assert got["fitness/best_ever"][3] == f32(run.champion()["fitness"])
 
 
+@pytest.mark.slow
 def test_sgr_evolve_tensorboard_flag_writes_the_events_and_without_the_extra_says_how_to_install(
         tmp_path, repo_root, capsys, monkeypatch):
     import yaml

@@ -89,6 +89,8 @@ def max_node_key(state: dict) -> int:
     return max(keys)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("method", list(METHODS))
 def test_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path, repo_root, method):
     cfg = write_config(tmp_path, repo_root, method)
@@ -137,6 +139,8 @@ def test_damaged_newest_checkpoint_falls_back_to_the_previous_one(tmp_path, repo
     assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_no_usable_checkpoint_is_one_error_line(tmp_path, repo_root):
     cfg = write_config(tmp_path, repo_root, "sgr", generations=2, pop_size=8, checkpoint_every=1)
     run = RunDir(tmp_path / "run")
@@ -152,6 +156,7 @@ def test_no_usable_checkpoint_is_one_error_line(tmp_path, repo_root):
     assert "gen-00001.json.gz" in err and "gen-00002.json.gz" in err
 
 
+@pytest.mark.slow
 def test_a_finished_run_is_extended_exactly_by_resume_with_more_generations(tmp_path, repo_root, capsys):
     from evolve.cli import main
 
@@ -196,6 +201,7 @@ def test_run_files_get_the_permissions_of_the_umask(tmp_path, repo_root):
     assert {oct(f.stat().st_mode & 0o777) for f in files} == {"0o644"}
 
 
+@pytest.mark.slow
 def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path, repo_root, capsys,
                                                                         monkeypatch):
     import errno

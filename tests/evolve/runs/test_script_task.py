@@ -18,6 +18,8 @@ import pytest
 
 from evolve.runs.rundir import RunDir
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
+
 ROOT = Path(__file__).resolve().parents[3]
 
 SCRIPT = '''

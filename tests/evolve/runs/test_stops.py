@@ -11,11 +11,14 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
 import yaml
 
 from evolve.cli import main
 from evolve.runs.experiment import Experiment
 from evolve.runs.rundir import RunDir
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
 # the deterministic columns (the rest are timings)
 FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]

@@ -48,6 +48,8 @@ def best_seeds(sweep: Path) -> list[tuple[str, int]]:
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
     spec = write_sweep(tmp_path, TINY)
     assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "whole"), "--quiet"]) == 0

@@ -20,6 +20,7 @@ def get_params():
         for env_name in sgr.evogym.BASELINE_ENV_NAMES 
     ]
 
+@pytest.mark.slow
 @pytest.mark.parametrize("env_name", get_params())
 def test_env_creatable_and_has_correct_api(env_name):
     """

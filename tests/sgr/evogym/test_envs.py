@@ -33,6 +33,7 @@ def test_evogyms_env_classes_are_importable_by_name_and_bound_to_their_task():
     assert env.task == "Climber-v2" and env.render().shape == (600, 1200, 3)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", ["Walker-v0", "Pusher-v0", "Thrower-v0", "Climber-v1", "Traverser-v0"])
 def test_gym_make_of_a_bare_id_earns_evogyms_rewards(task):
     d = np.load(DATA / "evogym32" / f"returns_{task}.npz", allow_pickle=False)

@@ -45,6 +45,7 @@ def run():
     return sim, d, names, {k: np.array(v) for k, v in got.items()}
 
 
+@pytest.mark.slow
 def test_every_point_follows_evogym_for_300_steps(run):
     sim, d, _, got = run
     assert got["pos"].shape == d["pos"].shape  # every point of the world, terrain included

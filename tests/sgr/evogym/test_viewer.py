@@ -86,6 +86,8 @@ def _read_xwd(path: Path) -> np.ndarray:
     return px[..., [2, 1, 0]] if little else px[..., [1, 2, 3]]
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.skipif(not shutil.which("xwd"), reason="needs xwd (Debian package x11-apps)")
 def test_screen_mode_opens_a_window_showing_the_frame_under_xvfb(tmp_path, xvfb_display):
     sim = _sim()

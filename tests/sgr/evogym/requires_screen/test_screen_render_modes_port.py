@@ -10,6 +10,8 @@ from itertools import product
 import sgr.evogym.envs
 from sgr.evogym import sample_robot
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
+
 LITE_TEST_ENV_NAMES = [
     "Pusher-v0",
     "Walker-v0",
