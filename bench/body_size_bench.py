@@ -75,6 +75,7 @@ def main() -> None:
     ap.add_argument("--evogym-python", type=Path, default=EVOGYM_PY)
     ap.add_argument("--threads", type=int, default=1, help="sgr's Taichi threads")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--record", metavar="PATH", help="also write a record (tasks/records.py)")
     args = ap.parse_args()
     rows = []
     for n in args.sizes:
@@ -94,6 +95,14 @@ def main() -> None:
                   f"{empty:.2f})  sgr {ours:7.0f} on {args.threads} thread(s)  {ev}", flush=True)
     if args.json:
         print(json.dumps(rows))
+    if args.record:
+        from tasks.records import figure, write_record
+
+        figures = {f"sgr-{r['size']}x{r['size']}": figure(round(r["sgr"]), "robot-steps/s") for r in rows}
+        figures.update({f"per-core-{r['size']}x{r['size']}": figure(round(r["per_core_ratio"], 1), "x evogym")
+                        for r in rows if r["per_core_ratio"]})
+        write_record(args.record, None, figures, task=args.task, robots=args.robots, steps=args.steps,
+                     threads=args.threads)
 
 
 if __name__ == "__main__":

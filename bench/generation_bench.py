@@ -29,6 +29,7 @@ def main() -> None:
                     help="rollout processes (default: the config's, auto = all CPUs)")
     ap.add_argument("--shape", type=parse_shape, help="robot_shape RxC (default: the config's)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--record", metavar="PATH", help="also write a record (tasks/records.py)")
     args = ap.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         flags = {"generations": args.generations, "pop_size": args.pop, "workers": args.workers,
@@ -52,6 +53,11 @@ def main() -> None:
            "steps": steps, "generations": args.generations, "first_generation_s": rows[0]["total_s"],
            **{f"median_{k}": v for k, v in med.items()},
            "robot_steps_per_s": robot_steps / sum(r["sim_s"] for r in timed), "wall_s": wall}
+    if args.record:
+        from tasks.records import figure, write_record
+
+        write_record(args.record, None, {"generation": figure(round(med["total_s"], 2), "s per generation")},
+                     **{k: out[k] for k in ("config", "method", "task", "pop", "shape", "workers", "steps")})
     if args.json:
         print(json.dumps(out))
     else:

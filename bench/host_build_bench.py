@@ -68,6 +68,7 @@ def main() -> None:
     ap.add_argument("--step-size", type=int, default=8192, help="B for the host step figure (0: skip)")
     ap.add_argument("--steps", type=int, default=10)
     ap.add_argument("--json", help="also write the figures here")
+    ap.add_argument("--record", metavar="PATH", help="also write a record (tasks/records.py)")
     a = ap.parse_args()
 
     from tasks.env import BatchEnv
@@ -115,6 +116,15 @@ def main() -> None:
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)
+    if a.record:
+        from tasks.records import figure, write_record
+
+        figures = {f"{k}-{B}": figure(round(v[1], 2), "us per robot (CPU)")
+                   for B, row in out["sizes"].items() for k, v in row.items()}
+        if "step_host" in out:
+            figures[f"step_host-{out['step_host']['B']}"] = figure(round(out["step_host"]["cpu_us"], 2),
+                                                                   "us per robot-step (CPU)")
+        write_record(a.record, None, figures, task=a.task)
 
 
 if __name__ == "__main__":

@@ -6,6 +6,8 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
+import shlex
 import time
 from pathlib import Path
 
@@ -155,6 +157,17 @@ def _bench(args: argparse.Namespace) -> int:
     if not args.json:
         print(here.line(), flush=True)
     r = bench(args.task, args.robots, args.steps)
+    if args.record:
+        from tasks.records import figure, write_record
+
+        write_record(args.record, None, {
+            "env": figure(round(r["robot_steps_per_s"]), "robot-steps/s"),
+            "physics": figure(round(r["physics_robot_steps_per_s"]), "robot-steps/s")},
+            task=r["task"], robots=r["robots"], steps=r["steps"], threads=r["threads"],
+            precision=r["precision"], backend=here.record(),
+            command=shlex.join([*(f"{k}={v}" for k, v in sorted(os.environ.items()) if k.startswith("SGR_")),
+                                "sgr", "bench", "--task", r["task"], "--robots", str(r["robots"]), "--steps",
+                                str(r["steps"]), *(["--precision", args.precision] * bool(args.precision))]))
     if args.json:
         print(json.dumps({**r, "backend": here.record()}))
     else:
@@ -184,5 +197,7 @@ def register_task_commands(sub) -> None:
     b.add_argument("--robots", type=positive(int), default=128)
     b.add_argument("--steps", type=positive(int), default=100)
     b.add_argument("--json", action="store_true")
+    b.add_argument("--record", metavar="PATH", help="also write the figures as a record (JSON with the "
+                   "machine, commit, date and command; docs/records/ holds those the docs quote)")
     b.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     b.set_defaults(fn=_bench)

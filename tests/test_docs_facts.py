@@ -1,0 +1,215 @@
+"""The docs' facts, not only their headings.
+
+1. Every figure in a "Today" section that links to a record (`[6.70](records/host-costs.json#sample)`)
+   shows the record's value(s), to the digits it prints; every figure cell of a Today table carries
+   such a link. A record (docs/records/*.json) is what a benchmark or study wrote, with the machine,
+   the commit, the date and the command (`sgr bench --record`, `python bench/... --record`).
+2. Every file path and `sgr` command named in README.md and docs/*.md exists: a backticked
+   `bench/x.py`, `configs/...`, `docs/...` is a file of the repository (`../shared/...`: of the
+   shared folder beside it), and `sgr <command>` is a command of the CLI's parser.
+"""
+
+import json
+import re
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+DOCS = ROOT / "docs"
+RECORDS = DOCS / "records"
+SHARED = ROOT.parent / "shared"
+PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
+TODAY = {"BENCHMARKS.md": "Today's figures, per machine", "VALIDATION.md": "Today", "RESULTS.md": "Today"}
+RECORD_KEYS = {"name", "figures", "machine", "commit", "date", "command"}
+
+LINK = re.compile(r"\[([^\]]*)\]\((?:docs/)?records/([\w.-]+\.json)#([\w.-]+)\)")
+NUMBER = re.compile(r"(?<![\w.])[-−]?\d[\d,]*(?:\.\d+)?(?:e[-+]?\d+)?")
+# a path the docs name: a top-level folder of the repository (or ../shared), then a file or folder
+PATH = re.compile(r"(?<![\w./-])((?:\.\./shared|bench|tools|configs|docs|tests|tsim|tasks|evolve|examples)"
+                  r"/[\w./*-]*[\w/*])")
+SPAN = re.compile(r"`([^`\n]+)`")
+# files a how-to asks the reader to write (they are the reader's, not the repository's)
+THE_READERS = {"tasks/suite/hopper.py": "TASKS.md: how to add a task", "evolve/methods/gait.py": "EVOLVE.md: "
+               "how to add a method"}
+# `sgr CMD` at the start of a command line (after `VAR=value`s, `&&`, `|`), not `sgr` in prose
+COMMAND = re.compile(r"(?:^|(?:&&|\|)\s*)(?:[A-Z_]+=\S*\s+)*sgr\s+([a-z][\w-]*)")
+
+
+def section(text: str, heading: str) -> str:
+    """The text under `## heading`, up to the next `## `."""
+    start = text.index(f"\n## {heading}\n")
+    end = text.find("\n## ", start + 1)
+    return text[start:end if end > 0 else len(text)]
+
+
+def numbers(text: str) -> list[float]:
+    return [float(n.replace(",", "").replace("−", "-")) for n in NUMBER.findall(text)]
+
+
+def shown(value: float, text: str) -> bool:
+    """`text` (one number as printed) is `value` to the digits it prints."""
+    digits = len(text.split(".")[1]) if "." in text and "e" not in text.lower() else 0
+    printed = float(text.replace(",", "").replace("−", "-"))
+    if "e" in text.lower():
+        mantissa = text.lower().split("e")[0]
+        digits = len(mantissa.split(".")[1]) if "." in mantissa else 0
+        return abs(printed - value) <= 0.5 * 10 ** (int(text.lower().split("e")[1]) - digits) * 1.0001
+    return abs(printed - value) <= 0.5 * 10 ** -digits + 1e-12
+
+
+def load(name: str) -> dict:
+    return json.loads((RECORDS / name).read_text())
+
+
+def figure_values(record: dict, key: str) -> list[float]:
+    value = record["figures"][key]["value"]
+    return [float(v) for v in (value if isinstance(value, list) else [value])]
+
+
+def check_links(text: str) -> list[str]:
+    """What disagrees between the record links in `text` and their records."""
+    wrong = []
+    for shown_text, name, key in LINK.findall(text):
+        if not (RECORDS / name).exists():
+            wrong.append(f"{name}: no such record")
+            continue
+        record = load(name)
+        if key not in record["figures"]:
+            wrong.append(f"{name}#{key}: no such figure in the record")
+            continue
+        printed = NUMBER.findall(shown_text)
+        values = figure_values(record, key)
+        if len(printed) != len(values) or not all(map(shown, values, printed)):
+            wrong.append(f"{name}#{key}: the doc shows {shown_text!r}, the record {values}")
+    return wrong
+
+
+def table_cells_without_a_record(text: str) -> list[str]:
+    """Figure cells of the tables in `text` (every column but the first and a `command` one) that
+    link to no record."""
+    bare, header = [], None
+    for line in text.splitlines():
+        if not line.startswith("|"):
+            header = None
+            continue
+        cells = [c.strip() for c in line.replace("\\|", "/").strip().strip("|").split("|")]
+        if header is None:
+            header = cells
+            continue
+        if set(line) <= set("|-: "):
+            continue
+        for title, cell in zip(header[1:], cells[1:], strict=False):
+            if title.lower() != "command" and re.search(r"\d", cell) and not LINK.search(cell):
+                bare.append(f"{cells[0]} / {title}: {cell}")
+    return bare
+
+
+@pytest.mark.parametrize("doc", sorted(TODAY))
+def test_every_figure_of_today_shows_its_records_value(doc):
+    today = section((DOCS / doc).read_text(), TODAY[doc])
+    assert LINK.search(today), f"{doc}: no figure of Today links to its record"
+    wrong = check_links(today)
+    assert not wrong, f"{doc}: {wrong}"
+    assert not table_cells_without_a_record(today), f"{doc}: figures without a record"
+
+
+def test_every_record_says_where_and_how_it_was_measured():
+    records = sorted(RECORDS.glob("*.json"))
+    assert records
+    for path in records:
+        record = json.loads(path.read_text())
+        assert RECORD_KEYS <= set(record), (path.name, RECORD_KEYS - set(record))
+        assert record["name"] == path.stem
+        assert re.fullmatch(r"[0-9a-f]{7,40}", record["commit"]), (path.name, record["commit"])
+        assert re.fullmatch(r"20\d\d-\d\d-\d\d.*", record["date"]), (path.name, record["date"])
+        assert record["machine"] and record["command"]
+        for key, figure in record["figures"].items():
+            assert "unit" in figure and figure_values(record, key), (path.name, key)
+
+
+def test_a_figure_that_disagrees_with_its_record_is_found(tmp_path):
+    """The check above can fail: a figure one digit off, and a link to a missing figure."""
+    name = sorted(RECORDS.glob("*.json"))[0].name
+    record = load(name)
+    key, figure = next(iter(record["figures"].items()))
+    value = figure_values(record, key)[0]
+    assert not check_links(f"[{value!r}](records/{name}#{key})" if len(figure_values(record, key)) == 1
+                           else "")
+    assert check_links(f"[{value + 1!r}](records/{name}#{key})")
+    assert check_links(f"[{value!r}](records/{name}#no-such-figure)")
+    assert table_cells_without_a_record("| what | sgr |\n|---|---|\n| x | 12.5 robot-steps/s |\n")
+
+
+def spans(text: str) -> list[str]:
+    """Inline code spans and the lines of fenced or indented code blocks."""
+    out = []
+    fenced = False
+    for line in text.splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+            continue
+        if fenced or line.startswith("    "):
+            out.append(line.strip())
+        else:
+            out += SPAN.findall(line)
+    return out
+
+
+def named_paths(text: str) -> set[str]:
+    found = set()
+    for span in spans(text):
+        for path in PATH.findall(span):
+            if not re.search(r"[*<>{}]|\.\.\.|[A-Z]{3,}_?[A-Z]*/|/[A-Z_]{3,}(?:/|$)", path):
+                found.add(path.split("::")[0].rstrip("."))
+    return found
+
+
+def sgr_commands(text: str) -> set[str]:
+    return {m for span in spans(text) for m in COMMAND.findall(span.strip().removeprefix("$ "))}
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_file_path_a_page_names_exists(page):
+    missing = sorted(p for p in named_paths(page.read_text())
+                     if not p.startswith("../shared/") and not (ROOT / p).exists() and p not in THE_READERS)
+    assert not missing, f"{page.name} names files that do not exist: {missing}"
+
+
+@pytest.mark.skipif(not SHARED.is_dir(), reason="no shared folder beside this checkout (../shared)")
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_shared_path_a_page_names_exists(page):
+    missing = sorted(p for p in named_paths(page.read_text())
+                     if p.startswith("../shared/") and not (ROOT / p).exists())
+    assert not missing, f"{page.name} names shared files that do not exist: {missing}"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_sgr_command_a_page_names_exists(page):
+    from evolve.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if a.dest == "cmd")
+    unknown = sorted(sgr_commands(page.read_text()) - set(sub.choices))
+    assert not unknown, f"{page.name} names sgr commands that do not exist: {unknown}"
+
+
+def test_the_path_and_command_checks_can_fail():
+    text = "Run `python bench/no_such_bench.py` then `sgr frobnicate RUN` (see `docs/BENCHMARKS.md`)."
+    assert named_paths(text) == {"bench/no_such_bench.py", "docs/BENCHMARKS.md"}
+    assert sgr_commands(text) == {"frobnicate"}
+
+
+def test_sgr_bench_record_writes_a_record_of_what_it_measured(tmp_path, monkeypatch, capsys):
+    from evolve.cli import main
+
+    monkeypatch.setenv("SGR_THREADS", "1")
+    assert main(["bench", "--robots", "2", "--steps", "3", "--record", str(tmp_path / "b.json")]) == 0
+    record = json.loads((tmp_path / "b.json").read_text())
+    assert RECORD_KEYS <= set(record) and record["name"] == "b"
+    assert record["command"].endswith("sgr bench --task Walker-v0 --robots 2 --steps 3")
+    assert "SGR_THREADS=1 " in record["command"]
+    printed = capsys.readouterr().out.splitlines()[-1]  # "... N robot-steps/s (env), M (physics only) ..."
+    env, physics = (float(x) for x in re.findall(r"(\d+) (?:robot-steps/s \(env\)|\(physics only\))",
+                                                 printed))
+    assert figure_values(record, "env") == [env] and figure_values(record, "physics") == [physics]
+    assert re.fullmatch(r"[0-9a-f]{12}(\+dirty)?", record["commit"]) and record["machine"]
