@@ -114,6 +114,13 @@ def test_every_figure_of_today_shows_its_records_value(doc):
     assert not table_cells_without_a_record(today), f"{doc}: figures without a record"
 
 
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+def test_every_figure_a_page_links_to_a_record_shows_its_value(page):
+    """README's figures too (and any page's, beyond Today)."""
+    wrong = check_links(page.read_text())
+    assert not wrong, f"{page.name}: {wrong}"
+
+
 def test_every_record_says_where_and_how_it_was_measured():
     records = sorted(RECORDS.glob("*.json"))
     assert records
