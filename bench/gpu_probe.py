@@ -37,13 +37,13 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 # seconds per part on a GPU (--limit NAME=S overrides; --quick divides them)
-LIMITS = {"throughput_5x5": 100, "throughput_10x10": 90, "kernels": 30, "parity": 60}
+LIMITS = {"throughput_5x5": 80, "throughput_10x10": 120, "kernels": 45, "parity": 60}
 SIZES = [8192, 32768, 65536, 131072]
 BLOCKS = [32, 64, 128]
 SHAPES = ["5x5", "10x10"]
 PARITY_TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 BODIES = 1024  # distinct bodies, tiled to each B
-STEP_SECONDS = 1.0  # each figure times steps until this much time has passed (at least min_steps)
+STEP_SECONDS = 0.7  # each figure times steps until this much time has passed (at least min_steps)
 DEFAULT_BLOCK = 64  # tsim.kernels.GPU_BLOCK
 
 
@@ -155,9 +155,12 @@ def part_throughput(args, out: Path) -> dict:
                 env.reset()
                 t = [0]
                 physics = functools.partial(_physics_step, sim, acts, t)
+                before = set(os.listdir()) if not cpu else set()
                 t1 = time.perf_counter()
                 physics()  # compiles this variant (or loads it from Taichi's cache)
                 row["first_step_s"] = time.perf_counter() - t1
+                if not cpu:  # the PTX modules this variant's first step compiled
+                    row["ptx"] = sorted(set(os.listdir()) - before)
                 s, n = _time_steps(physics, args.min_steps, args.step_seconds, deadline)
                 row.update(physics_robot_steps_per_s=B / s, physics_steps_timed=n)
                 if (cpu or block == DEFAULT_BLOCK) and lanes == 1 and time.perf_counter() < deadline:
@@ -187,6 +190,17 @@ def _keep_step_ptx(folder: Path) -> None:
         f.unlink()
 
 
+def _ptx_blocks(out: Path) -> dict[str, int]:
+    """"<part>/<file>.ptx.gz" -> the block size whose first step compiled it (the throughput parts
+    list the files each variant's first step wrote)."""
+    blocks = {}
+    for part in sorted(out.glob("part_throughput_*.json")):
+        for row in json.loads(part.read_text()).get("rows", []):
+            for name in row.get("ptx", []):
+                blocks[f"{part.stem[5:]}/{name}.gz"] = row["block"]
+    return blocks
+
+
 def _cuda():
     """libcuda's functions by name (the _v2 ones where they exist), or None without libcuda."""
     import ctypes
@@ -211,10 +225,6 @@ def _cuda():
 
 def part_kernels(args, out: Path) -> dict:
     """Registers, local bytes and occupancy of the step kernels the throughput parts compiled."""
-    import ctypes
-    import gzip
-    import shutil
-
     path = out / "part_kernels.json"
     if os.environ.get("SGR_ARCH", "cpu") == "cpu":
         rec = {"part": "kernels", "kernels": "n/a (cpu)"}
@@ -226,6 +236,20 @@ def part_kernels(args, out: Path) -> dict:
         rec["kernels"] = "n/a (no libcuda.so.1)"
         _write(path, rec)
         return rec
+    try:
+        _kernel_attributes(call, args, out, rec)
+    except Exception as e:  # noqa: BLE001 -- what failed goes into the record, the probe goes on
+        rec["errors"].append(f"{type(e).__name__}: {e}")
+    _write(path, rec)
+    return rec
+
+
+def _kernel_attributes(call, args, out: Path, rec: dict) -> None:
+    import ctypes
+    import gzip
+    import shutil
+
+    path = out / "part_kernels.json"
     c_int = ctypes.c_int
     call("cuInit", 0)
     dev = c_int()
@@ -245,7 +269,14 @@ def part_kernels(args, out: Path) -> dict:
     call("cuDevicePrimaryCtxRetain", ctypes.byref(ctx), dev)
     call("cuCtxPushCurrent", ctx)
     ptxas = shutil.which("ptxas")
-    for f in sorted((out / "ptx").glob("*/*.ptx.gz")):
+    deadline = time.perf_counter() + args.limit - 5
+    compiled_for = _ptx_blocks(out)
+    files = sorted((out / "ptx").glob("*/*.ptx.gz"),  # the default block size's first
+                   key=lambda f: (compiled_for.get(f"{f.parent.name}/{f.name}") != DEFAULT_BLOCK, str(f)))
+    for f in files:
+        if time.perf_counter() > deadline:
+            rec["errors"].append(f"{f.parent.name}/{f.name}: not loaded, out of time")
+            continue
         text = gzip.open(f, "rt").read()
         entries = [e for e in re.findall(r"\.entry\s+([\w.$]+)\s*\(", text) if "step_kernel" in e]
         log = ctypes.create_string_buffer(1 << 16)
@@ -271,12 +302,14 @@ def part_kernels(args, out: Path) -> dict:
                 call("cuFuncGetAttribute", ctypes.byref(v), a, func)
                 fa[key] = v.value
             k = {"module": f"{f.parent.name}/{f.name}", "entry": e, **fa, "occupancy": {},
+                 "compiled_for_block": compiled_for.get(f"{f.parent.name}/{f.name}"),
                  "ptxas_info": [ln for ln in info.splitlines() if e in ln or "spill" in ln
-                                or "registers" in ln][:6]}
+                                or "registers" in ln][:8]}
             for block in args.blocks:
                 n = c_int()
                 if block <= k["max_threads_per_block"]:
-                    call("cuOccupancyMaxActiveBlocksPerMultiprocessor", ctypes.byref(n), func, block, 0)
+                    call("cuOccupancyMaxActiveBlocksPerMultiprocessor", ctypes.byref(n), func, block,
+                         ctypes.c_size_t(0))
                 warps = n.value * block // 32
                 k["occupancy"][str(block)] = {
                     "blocks_per_sm": n.value, "warps_per_sm": warps,
@@ -284,19 +317,24 @@ def part_kernels(args, out: Path) -> dict:
                     "resident_worlds": n.value * block * d["sms"]}
             rec["kernels"].append(k)
         call("cuModuleUnload", mod)
-        if ptxas:
+        if ptxas and time.perf_counter() < deadline:
             plain = f.with_suffix("")
             plain.write_text(text)
-            r = subprocess.run([ptxas, "-v", f"--gpu-name=sm_{d['cc'].replace('.', '')}", str(plain),
-                                "-o", os.devnull], capture_output=True, text=True, timeout=60)
+            try:
+                r = subprocess.run([ptxas, "-v", f"--gpu-name=sm_{d['cc'].replace('.', '')}", str(plain),
+                                    "-o", os.devnull], capture_output=True, text=True,
+                                   timeout=max(1.0, deadline - time.perf_counter()))
+                said = (r.stdout + r.stderr)[-4000:]
+            except subprocess.TimeoutExpired:
+                said = "ptxas ran out of the part's time"
             plain.unlink()
-            rec.setdefault("ptxas_v", {})[f"{f.parent.name}/{f.name}"] = (r.stdout + r.stderr)[-4000:]
+            rec.setdefault("ptxas_v", {})[f"{f.parent.name}/{f.name}"] = said
         _write(path, rec)
+    if not files:
+        rec["errors"].append("no step kernel PTX under ptx/ (did a throughput part run?)")
     if ptxas is None:
         rec["ptxas_v"] = "n/a (no ptxas here)"
     call("cuCtxPopCurrent", ctypes.byref(ctypes.c_void_p()))
-    _write(path, rec)
-    return rec
 
 
 def part_parity(args, out: Path) -> dict:
@@ -373,11 +411,13 @@ def summary(probe: dict) -> str:
         if d:
             lines.append(f"  {d['name']} (cc {d['cc']}): {d['sms']} SMs, {d['max_threads_per_sm']} threads "
                          f"and {d['regs_per_sm']} registers per SM, L2 {d['l2_bytes'] / 2**20:.0f} MiB")
-        for x in k.get("kernels", []):
+        shown = [x for x in k.get("kernels", []) if "range_for" in x["entry"]] or k.get("kernels", [])
+        for x in shown:  # the worlds' loop (the serial task beside it only stores the loop bound)
             occ = ", ".join(f"block {b}: {o['blocks_per_sm']} blocks/{o['warps_per_sm']} warps per SM "
                             f"({100 * o['occupancy']:.0f} %)" for b, o in x["occupancy"].items())
-            lines.append(f"  {x['module']} {x['entry']}: {x['registers']} registers, {x['local_bytes']:,} "
-                         f"local bytes/thread, {x['shared_bytes']} shared; {occ}")
+            lines.append(f"  {x['module']} (block {x.get('compiled_for_block')}) {x['entry']}: "
+                         f"{x['registers']} registers, {x['local_bytes']:,} local bytes/thread, "
+                         f"{x['shared_bytes']} shared; {occ}")
             for ln in x.get("ptxas_info", []):
                 lines.append(f"    {ln.strip()}")
         for e in k.get("errors", []):
