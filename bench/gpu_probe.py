@@ -25,6 +25,7 @@ CUDA, ptx/ (the step kernels' PTX, gzipped).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import re
@@ -91,9 +92,60 @@ def _env_step(env, acts: list, t: list) -> None:
     t[0] += 1
 
 
+def _measure_size(args, rec: dict, path: Path, bodies, B: int, blocks: list, cpu: bool, takes_lanes: bool,
+                  deadline: float) -> None:
+    """The rows of batch size B: the bodies tiled to B, physics at each block size and lane count,
+    the env at the default block."""
+    import numpy as np
+
+    from tasks.bench import sinusoid
+    from tasks.env import BatchEnv
+
+    t0 = time.perf_counter()
+    env = BatchEnv("Walker-v0", _tiled(bodies, B), episode_steps=10_000)
+    build = time.perf_counter() - t0
+    A = env.sim.max_actuators
+    acts = [np.repeat(sinusoid(t, A)[None, :], B, 0) for t in range(20)]
+    sim = env.sim
+    for block in blocks:
+        for lanes in args.lanes:
+            row = {"B": B, "block": "1 (cpu)" if cpu else block, "lanes": lanes,
+                   "build_us_per_robot": 1e6 * build / B}
+            if lanes != 1 and not takes_lanes:
+                row["skipped"] = "no lanes kernel in this tree (#48 item 1)"
+                rec["rows"].append(row)
+                continue
+            if time.perf_counter() > deadline:
+                row["skipped"] = "out of time"
+                rec["rows"].append(row)
+                continue
+            kw = {} if cpu else {"gpu_block": block}
+            if takes_lanes:
+                kw["lanes"] = lanes
+            sim.choose_kernel(**kw)
+            env.reset()
+            t = [0]
+            physics = functools.partial(_physics_step, sim, acts, t)
+            ptx = os.environ.get("SGR_ARCH") == "cuda"  # the cwd is the part's PTX folder
+            before = set(os.listdir()) if ptx else set()
+            t1 = time.perf_counter()
+            physics()  # compiles this variant (or loads it from Taichi's cache)
+            row["first_step_s"] = time.perf_counter() - t1
+            if ptx:  # the PTX modules this variant's first step compiled
+                row["ptx"] = sorted(set(os.listdir()) - before)
+            s, n = _time_steps(physics, args.min_steps, args.step_seconds, deadline)
+            row.update(physics_robot_steps_per_s=B / s, physics_steps_timed=n)
+            if (cpu or block == DEFAULT_BLOCK) and lanes == 1 and time.perf_counter() < deadline:
+                env.reset()
+                s, n = _time_steps(functools.partial(_env_step, env, acts, t), args.min_steps,
+                                   args.step_seconds, deadline)
+                row.update(env_robot_steps_per_s=B / s, env_steps_timed=n)
+            rec["rows"].append(row)
+            _write(path, rec)
+
+
 def part_throughput(args, out: Path) -> dict:
     """Physics and env robot-steps/s of tiled batches at each size, block size and lane count."""
-    import functools
     import inspect
 
     import numpy as np
@@ -105,8 +157,6 @@ def part_throughput(args, out: Path) -> dict:
         ptx.mkdir(parents=True, exist_ok=True)
         os.chdir(ptx)
         ti.init = functools.partial(ti.init, print_kernel_asm=True)
-    from tasks.bench import sinusoid
-    from tasks.env import BatchEnv
     from tsim import runtime
     from tsim.sampling import sample_robots
     from tsim.sim import BatchSim
@@ -124,56 +174,19 @@ def part_throughput(args, out: Path) -> dict:
     bodies = sample_robots(BODIES if not args.quick else min(BODIES, max(args.sizes)), shape,
                            np.random.default_rng(0))
     rec["sample_us_per_robot"] = 1e6 * (time.perf_counter() - t0) / len(bodies)
-    blocks = [1] if cpu else args.blocks
+    blocks = [1] if cpu else sorted(args.blocks, key=lambda b: b != DEFAULT_BLOCK)  # the default first
     for B in args.sizes:
         if time.perf_counter() > deadline:
             rec["skipped"].append(f"B={B}: out of time")
             continue
-        t0 = time.perf_counter()
-        env = BatchEnv("Walker-v0", _tiled(bodies, B),
-                       episode_steps=10_000)
-        build = time.perf_counter() - t0
-        A = env.sim.max_actuators
-        acts = [np.repeat(sinusoid(t, A)[None, :], B, 0) for t in range(20)]
-        sim = env.sim
-        for block in blocks:
-            for lanes in args.lanes:
-                row = {"B": B, "block": "1 (cpu)" if cpu else block, "lanes": lanes,
-                       "build_us_per_robot": 1e6 * build / B}
-                if lanes != 1 and not takes_lanes:
-                    row["skipped"] = "no lanes kernel in this tree (#48 item 1)"
-                    rec["rows"].append(row)
-                    continue
-                if time.perf_counter() > deadline:
-                    row["skipped"] = "out of time"
-                    rec["rows"].append(row)
-                    continue
-                kw = {} if cpu else {"gpu_block": block}
-                if takes_lanes:
-                    kw["lanes"] = lanes
-                sim.choose_kernel(**kw)
-                env.reset()
-                t = [0]
-                physics = functools.partial(_physics_step, sim, acts, t)
-                before = set(os.listdir()) if not cpu else set()
-                t1 = time.perf_counter()
-                physics()  # compiles this variant (or loads it from Taichi's cache)
-                row["first_step_s"] = time.perf_counter() - t1
-                if not cpu:  # the PTX modules this variant's first step compiled
-                    row["ptx"] = sorted(set(os.listdir()) - before)
-                s, n = _time_steps(physics, args.min_steps, args.step_seconds, deadline)
-                row.update(physics_robot_steps_per_s=B / s, physics_steps_timed=n)
-                if (cpu or block == DEFAULT_BLOCK) and lanes == 1 and time.perf_counter() < deadline:
-                    env.reset()
-                    s, n = _time_steps(functools.partial(_env_step, env, acts, t), args.min_steps,
-                                       args.step_seconds, deadline)
-                    row.update(env_robot_steps_per_s=B / s, env_steps_timed=n)
-                rec["rows"].append(row)
-                _write(path, rec)
-        env = sim = None  # freed before the next size is built
+        try:
+            _measure_size(args, rec, path, bodies, B, blocks, cpu, takes_lanes, deadline)
+        except Exception as e:  # noqa: BLE001 -- e.g. a batch that does not fit: the next size still runs
+            rec["skipped"].append(f"B={B}: {type(e).__name__}: {str(e)[:300]}")
+            _write(path, rec)
     rec["done"] = True
     _write(path, rec)
-    if not cpu:
+    if os.environ.get("SGR_ARCH") == "cuda":
         _keep_step_ptx(out / "ptx" / args.part)
     return rec
 
@@ -270,6 +283,8 @@ def _kernel_attributes(call, args, out: Path, rec: dict) -> None:
     call("cuCtxPushCurrent", ctx)
     ptxas = shutil.which("ptxas")
     deadline = time.perf_counter() + args.limit - 5
+    for folder in sorted((out / "ptx").glob("*")):  # a part cut short left its PTX as it was written
+        _keep_step_ptx(folder)
     compiled_for = _ptx_blocks(out)
     files = sorted((out / "ptx").glob("*/*.ptx.gz"),  # the default block size's first
                    key=lambda f: (compiled_for.get(f"{f.parent.name}/{f.name}") != DEFAULT_BLOCK, str(f)))
@@ -403,8 +418,11 @@ def summary(probe: dict) -> str:
         for s in p.get("skipped", []):
             lines.append(f"  skipped {s}")
     k = probe["parts"].get("kernels", {})
-    lines.append(f"\nkernels: {k.get('status')}")
-    if isinstance(k.get("kernels"), str):
+    if k:
+        lines.append(f"\nkernels: {k.get('status')}")
+    if not k:
+        pass
+    elif isinstance(k.get("kernels"), str):
         lines.append(f"  {k['kernels']}")
     else:
         d = k.get("device", {})
@@ -423,6 +441,8 @@ def summary(probe: dict) -> str:
         for e in k.get("errors", []):
             lines.append(f"  error: {e}")
     q = probe["parts"].get("parity", {})
+    if not q:
+        return "\n".join(lines) + "\n"
     lines.append(f"\nparity ({probe['arch']} against cpu, {q.get('robots')} robots x {q.get('steps')} steps, "
                  f"tol {q.get('tol')}): {q.get('status')}")
     lines += [f"  {ln}" for ln in q.get("lines", [])]
