@@ -38,7 +38,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 # seconds per part on a GPU (--limit NAME=S overrides; --quick divides them)
-LIMITS = {"throughput_5x5": 80, "throughput_10x10": 120, "kernels": 45, "parity": 60}
+LIMITS = {"throughput_5x5": 80, "throughput_10x10": 110, "kernels": 45, "parity": 60}
+BUDGET = 300  # the whole probe: a part gets its limit or what is left, whichever is less
 SIZES = [8192, 32768, 65536, 131072]
 BLOCKS = [32, 64, 128]
 SHAPES = ["5x5", "10x10"]
@@ -443,6 +444,8 @@ def summary(probe: dict) -> str:
     q = probe["parts"].get("parity", {})
     if not q:
         return "\n".join(lines) + "\n"
+    if str(q.get("status", "")).startswith("skipped"):
+        return "\n".join([*lines, f"\nparity: {q['status']}"]) + "\n"
     lines.append(f"\nparity ({probe['arch']} against cpu, {q.get('robots')} robots x {q.get('steps')} steps, "
                  f"tol {q.get('tol')}): {q.get('status')}")
     lines += [f"  {ln}" for ln in q.get("lines", [])]
@@ -466,6 +469,8 @@ def main() -> int:
     ap.add_argument("--parts", nargs="+", default=["throughput", "kernels", "parity"], choices=list(PARTS))
     ap.add_argument("--limit", action="append", default=[], metavar="PART=S",
                     help=f"a part's time limit in seconds (defaults {LIMITS})")
+    ap.add_argument("--budget", type=float, help=f"seconds for all parts together (default {BUDGET}; "
+                    "--quick: a third)")
     ap.add_argument("--part", help=argparse.SUPPRESS)
     ap.add_argument("--part-limit", type=float, dest="part_limit", help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -495,10 +500,16 @@ def main() -> int:
     names += [p for p in ("kernels", "parity") if p in args.parts]
     t_start = time.perf_counter()
     probe: dict = {"arch": arch, "precision": os.environ.get("SGR_PRECISION", "f64"), "commit": commit,
+                   "budget_s": args.budget or BUDGET / (3 if args.quick else 1),
                    "args": {k: v for k, v in vars(args).items() if k not in ("part", "limit", "part_limit")},
                    "limits": limits, "parts": {}}
+    budget = args.budget or BUDGET / (3 if args.quick else 1)
     for name in names:
-        limit = limits[name]
+        limit = min(limits[name], budget - (time.perf_counter() - t_start) - 12)
+        if limit < 5:
+            probe["parts"][name] = {"status": "skipped: the probe's budget is spent", "s": 0.0}
+            print(f"gpu_probe: {name}: skipped, the probe's {budget:.0f} s are spent", flush=True)
+            continue
         cmd = [sys.executable, str(Path(__file__).resolve()), "--out", str(out), "--part", name,
                "--part-limit", str(limit), "--blocks", *map(str, args.blocks),
                "--lanes", *map(str, args.lanes), "--sizes", *map(str, args.sizes),

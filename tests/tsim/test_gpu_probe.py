@@ -56,7 +56,8 @@ def test_probe_rehearsal_writes_every_part_and_its_tables(tmp_path):
     out = tmp_path / "probe"
     env = {**os.environ, "SGR_ARCH": "cpu", "PYTHONPATH": str(ROOT)}
     r = subprocess.run([sys.executable, str(ROOT / "bench" / "gpu_probe.py"), "--quick", "--out", str(out),
-                        "--precision", "f32", "--sizes", "4", "8", "--shapes", "5x5", "--lanes", "1", "32"],
+                        "--precision", "f32", "--sizes", "4", "8", "--shapes", "5x5", "--lanes", "1", "32",
+                        "--budget", "280", "--limit", "throughput_5x5=120", "--limit", "parity=120"],
                        env=env, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stdout + r.stderr
     probe = json.loads((out / "probe.json").read_text())
