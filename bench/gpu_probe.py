@@ -71,7 +71,11 @@ def _tiled(bodies, n: int):
 
 def _time_steps(step, min_steps: int, seconds: float, deadline: float) -> tuple[float, int]:
     """Seconds per step of `step()`, run until `seconds` have passed (at least min_steps, fewer
-    only when the part's deadline comes first)."""
+    only when the part's deadline comes first); the device is synchronised before and after (a
+    step with numpy arguments is synchronous today, one on device arrays need not be)."""
+    import taichi as ti
+
+    ti.sync()
     t0 = time.perf_counter()
     n = 0
     while n < min_steps or time.perf_counter() - t0 < seconds:
@@ -79,6 +83,7 @@ def _time_steps(step, min_steps: int, seconds: float, deadline: float) -> tuple[
         n += 1
         if time.perf_counter() > deadline:
             break
+    ti.sync()
     return (time.perf_counter() - t0) / n, n
 
 
