@@ -7,6 +7,10 @@
 #    PYTHONPATH: nothing is built, nothing downloaded;
 # 2. `sgr bench` on Walker-v0 at B = 1024, 8192 and 32768 (robot-steps/s), each under BENCH_LIMIT
 #    seconds (a size that runs out is said in the summary, not failed);
+# 2b. bench/gpu_probe.py (PROBE=0 skips it): throughput by B / block size / lanes at 5x5 and
+#    10x10, registers, local bytes and occupancy of the step kernel, a 4-task parity table; under
+#    PROBE_LIMIT (330 s) per precision in PROBE_PRECISIONS (default f64), each part under its own
+#    limit; its files in $OUT/probe_<precision>/;
 # 3. the GPU against evogym's recorded data that travelled (`sgr validate` of each folder under
 #    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
 #    evogym| exceeds 1e-9 on the GPU;
@@ -16,6 +20,8 @@
 #    and says whether f64's bits matched: CUDA may fuse multiply-adds, see below). It comes last:
 #    on the H200 (2026-12-04) its f64 half took ~8 of a call's 9 minutes (CUDA compiles each
 #    task's kernels afresh), so a call cut short still brings back 2 and 3.
+#    With the probe (2b, ~5.5 min per precision) a 540 s call leaves ~3 min for 3 and 4: run
+#    `PROBE=0 bash bench/gpu_check.sh` in a second call for the whole comparison.
 # Everything goes to $OUT (default gpu-check/) as JSON and text, with a summary at the end; exit 1
 # on a failed check. Rehearsal on a CPU (what bench/gpu_rehearsal.sh does):
 #   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 DATA=tests/data/returns PY=python3.12 bash bench/gpu_check.sh
@@ -47,6 +53,19 @@ for B in ${SIZES:-1024 8192 32768}; do
     --steps 50 --json | tee "$OUT/bench_$B.json" \
     || echo "gpu_check: bench at B = $B failed or ran out of its ${BENCH_LIMIT:-120} s" | tee -a "$OUT/summary.txt"
 done
+# 2b. the probe (bench/gpu_probe.py): the step kernel by batch size (8k-128k), block size and lanes,
+# at 5x5 and 10x10, registers / local bytes / occupancy read from the compiled kernel, and a parity
+# table on the paper's four tasks; each of its parts has its own time limit inside PROBE_LIMIT.
+# PROBE=0 skips it; PROBE_PRECISIONS="f64 f32" runs it in both (~5 min each); on a CPU (the
+# rehearsal) it runs its --quick sizes. Files in $OUT/probe_<precision>/ (summary.txt first).
+if [ "${PROBE:-1}" != 0 ]; then
+  for prec in ${PROBE_PRECISIONS:-f64}; do
+    SGR_ARCH=$GPU timeout "${PROBE_LIMIT:-330}" "$PY" bench/gpu_probe.py --out "$OUT/probe_$prec" \
+      --precision "$prec" $([ "$GPU" = cpu ] && echo --quick) \
+      || echo "gpu_check: gpu_probe ($prec) failed or ran out of its ${PROBE_LIMIT:-330} s" \
+        | tee -a "$OUT/summary.txt"
+  done
+fi
 # 3. recorded evogym data that travelled
 for d in ${DATA:-tests/data/returns tests/data/traces tests/data/evogym32}; do
   [ -d "$d" ] || continue

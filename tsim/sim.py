@@ -125,6 +125,7 @@ class BatchSim:
         self.origin = (int(origin[0]), int(origin[1]))
         self.bodies = _as_bodies(bodies, passive_ok)  # a sequence of `Body`s (made when read)
         self.free_objects = world.free_objects
+        self._gpu_block = K.GPU_BLOCK  # worlds per thread block on a GPU (`choose_kernel`)
         self._build()
         self.reset()
 
@@ -467,14 +468,14 @@ class BatchSim:
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
             if self._spirv:  # maybe several launches per step (see tsim/spirv.py)
-                self._spirv_launcher.step((*args, K.GPU_BLOCK, spirv.batch_tier(self.n_worlds)))
+                self._spirv_launcher.step((*args, self._gpu_block, spirv.batch_tier(self.n_worlds)))
                 self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
                 continue
             if self._serial:
                 kernel = K.step_kernel_serial
             else:
                 kernel = K.step_kernel
-                args = (*args, 1 if self._arch == "cpu" else K.GPU_BLOCK)
+                args = (*args, 1 if self._arch == "cpu" else self._gpu_block)
             # the arguments rarely change between steps (arrays are updated in place), so after
             # the first launch the same launch context is reused (CPU only; see tsim/launch.py)
             cached = self._launch
@@ -492,13 +493,20 @@ class BatchSim:
         self.counts[sel, K.STATUS] = K.INACTIVE
 
     def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0,
-                      spirv_launch: bool | None = None, substeps_per_launch: int | None = None) -> None:
+                      spirv_launch: bool | None = None, substeps_per_launch: int | None = None,
+                      gpu_block: int | None = None) -> None:
         """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
         compare them; every variant gives the same bits): `serial` runs on the calling thread
         (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
         arrays that many tiers bigger than needed; `spirv_launch` takes (True) or leaves (False)
         the SPIR-V backends' launch (tsim/spirv.py) on any backend, and `substeps_per_launch`
-        splits its env steps into launches of that many substeps."""
+        splits its env steps into launches of that many substeps. `gpu_block` sets the worlds per
+        thread block on a GPU (default `GPU_BLOCK`, 64; a multiple of 32 up to 1,024; each block
+        size is its own compiled kernel; bench/gpu_probe.py compares them): the CPU keeps its 1."""
+        if gpu_block is not None:
+            if not (isinstance(gpu_block, int) and 32 <= gpu_block <= 1024 and gpu_block % 32 == 0):
+                raise ValueError(f"gpu_block must be a multiple of 32 from 32 to 1024, got {gpu_block!r}")
+            self._gpu_block = gpu_block
         if serial is not None:
             self._serial = bool(serial)
         if spirv_launch is not None:
