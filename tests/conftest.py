@@ -42,3 +42,27 @@ def pytest_collection_modifyitems(config, items) -> None:
             item.add_marker(pytest.mark.slow)
         rel = Path(str(item.path)).resolve().relative_to(root).as_posix()
         item.add_marker(pytest.mark.xdist_group(xdist_group(rel, marks)))
+
+
+@pytest.fixture(autouse=True)
+def _task_registry_as_found():
+    """Tasks registered and trust given in this process by one test (a script's `register`, an
+    in-process `main([..., "--trust-imports"])`) are gone after it: the tests a worker runs next
+    see sgr's own tasks and no trust, whatever ran before them on that worker."""
+    import sys
+
+    yield
+    registry = sys.modules.get("tasks.registry")
+    if registry is None:
+        return
+    import gymnasium as gym
+
+    from tasks.specs import BUILTIN, TASKS, forget_worlds
+
+    registry.trust_imports(False)
+    extra = [name for name in TASKS if name not in BUILTIN]
+    for name in extra:
+        del TASKS[name]
+        gym.registry.pop(f"sgr/{name}", None)
+    if extra:
+        forget_worlds()

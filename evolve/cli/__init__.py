@@ -50,9 +50,11 @@ def main(argv: list[str] | None = None) -> int:
     plus the path of a file holding its full traceback; any other exception keeps its traceback
     (exit 1). `--debug` lets every exception through with its traceback."""
     args = build_parser().parse_args(argv)
+    trusted = None  # --trust-imports holds for this command only, also when main() runs in-process
     if getattr(args, "trust_imports", False):
-        from tasks.registry import trust_imports
+        from tasks.registry import imports_trusted, trust_imports
 
+        trusted = imports_trusted()
         trust_imports()
     stdout, sys.stdout = sys.stdout, ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
     try:
@@ -69,6 +71,10 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     finally:
         sys.stdout = stdout
+        if trusted is not None:
+            from tasks.registry import trust_imports
+
+            trust_imports(trusted)
 
 
 def _write_traceback(exc: BaseException) -> str:

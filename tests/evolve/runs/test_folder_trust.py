@@ -258,3 +258,13 @@ def test_a_sweep_folder_naming_planted_code_runs_none_of_it(tmp_path):
     opened = Sweep.open(sw)
     opened.prepare(opened.runs[0])
     assert opened.run_dir(opened.runs[0]).has_checkpoint() and not marker.exists()
+
+
+def test_trust_imports_given_to_one_in_process_command_ends_with_it(tmp_path):
+    """`main([..., "--trust-imports"])` called from Python (a notebook, a test) trusts the folders
+    of that command only: the process trusts nothing afterwards, even when the command failed."""
+    from tasks.registry import imports_trusted
+
+    assert not imports_trusted()
+    assert main(["report", str(tmp_path / "nothing-here"), "--trust-imports"]) == 2
+    assert not imports_trusted()
