@@ -70,24 +70,24 @@ class DirectProblem(Problem):
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.gc = neat_config.genome_config
-        self.shape = tuple(cfg["robot_shape"])
+        self.shape = tuple(self.cfg.robot_shape)
         self.cells = cell_coordinates(self.shape)
-        self.per_cell = cfg.get("layout", "per_output") == "per_cell"
+        self.per_cell = self.cfg.layout == "per_cell"
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
         """`layout` must be per_output or per_cell."""
-        if cfg["layout"] not in LAYOUTS:
+        if cfg.layout not in LAYOUTS:
             raise SgrError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
-                           f"got {cfg['layout']!r}")
+                           f"got {cfg.layout!r}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
         """Inputs as `n_inputs`; outputs: 5 materials, then one per body cell (per_output) or one
         action (per_cell)."""
-        shape = tuple(cfg["robot_shape"])
-        n_control = 1 if cfg.get("layout", "per_output") == "per_cell" else shape[0] * shape[1]
-        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
+        shape = tuple(cfg.robot_shape)
+        n_control = 1 if cfg.layout == "per_cell" else shape[0] * shape[1]
+        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg.task, shape)),
                                   "num_outputs": str(N_TYPES + n_control)}}
 
     def decode(self, genome) -> DirectPhenotype:
@@ -112,7 +112,7 @@ class DirectProblem(Problem):
         output 5; per_cell also stores each actuator cell's (x, y))."""
         b = build_body(p.body)
         cell_inputs = self.cells[np.asarray(b.actuator_flat, dtype=np.int64)] if self.per_cell else None
-        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),
+        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg.task, b.n_points),
                                            N_COORDS, N_TYPES, b.actuator_flat, cell_inputs)
         return {"body": p.body.tolist(), "controller": ctrl.to_json()}
 

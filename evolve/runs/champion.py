@@ -42,9 +42,9 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     """champion.json's record of `genome` (decoded to `phenotype`) scored `fitness` as `evaluation`
     says (robust settings, seed, tag), found in `generation` (counted from 1); `problem` is the run's
     method (`Problem.champion` gives the body and controller)."""
-    champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
-             "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
-             "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
+    champ = {"format": "sgr-champion-1", "method": cfg.method, "task": cfg.task,
+             "episode_steps": cfg.episode_steps, "fitness": fitness, "generation": generation,
+             "precision": cfg.precision, "genome": genome_json(genome)}
     method_keys = problem.champion_of(genome, phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
@@ -56,7 +56,7 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
     fitness was scored: enough to score it again exactly (robust: the run's seed and the
     evaluation's tag give every episode's noise; the tag holds the search's own generation
     number, counted from 0)."""
-    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"]}
+    evaluation = {"robust": cfg.robust and cfg.robust.to_json(), "seed": cfg.seed}
     if "tags" in best:  # accumulated fitness: the mean of these evaluations' scores, in this order
         evaluation["tags"] = list(best["tags"])
     else:

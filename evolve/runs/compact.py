@@ -35,14 +35,14 @@ DENSE_FORMAT = "sgr-dense-controller-1"
 MALFORMED = (KeyError, TypeError, ValueError, IndexError)
 
 
-def decoder_settings(record: dict, config: dict | None) -> DecoderSettings:
-    """The SGR decoder settings a champion was decoded with: its run's config keys (the method's
-    defaults where absent) at the shape of its body."""
-    cfg = {k: default for k, (_, default) in SgrProblem.config_keys.items()} | dict(config or {})
+def decoder_settings(record: dict, raw: dict | None) -> DecoderSettings:
+    """The SGR decoder settings a champion was decoded with: its run's config.yaml keys (`raw`; the
+    method's defaults where absent) at the shape of its body."""
+    keys = {k: default for k, (_, default) in SgrProblem.config_keys.items()} | dict(raw or {})
     body = np.asarray(record["body"])
     return DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
-                           cppn_outputs=int(cfg["cppn_outputs"]), threshold=float(cfg["weight_threshold"]),
-                           max_weight=float(cfg["max_weight"]))
+                           cppn_outputs=int(keys["cppn_outputs"]), threshold=float(keys["weight_threshold"]),
+                           max_weight=float(keys["max_weight"]))
 
 
 def same_controller(a, b) -> bool:
@@ -56,8 +56,8 @@ def same_controller(a, b) -> bool:
     return False
 
 
-def compact_record(record: dict, config: dict | None = None) -> dict:
-    """`record` in today's layout (module docstring); `config` is its run's config.yaml, when
+def compact_record(record: dict, raw: dict | None = None) -> dict:
+    """`record` in today's layout (module docstring); `raw` is its run's config.yaml, when
     there is one (SGR's decoder settings). Raises nothing for a record it cannot improve: it comes
     back with what could not be rewritten exactly left as it was."""
     out = dict(record)
@@ -76,7 +76,7 @@ def compact_record(record: dict, config: dict | None = None) -> dict:
     try:
         before = controller_of(record)
         if fmt == DENSE_FORMAT and record.get("method") == "sgr" and "genome" in record:
-            candidate = sgr_record.to_json(before, decoder_settings(record, config))
+            candidate = sgr_record.to_json(before, decoder_settings(record, raw))
         elif fmt == GRAPH_FORMAT and record.get("method") == "direct" and "genome" in record:
             candidate = before.to_derived_json()
         else:
@@ -98,8 +98,8 @@ def compact_file(path: str | Path) -> tuple[int, int]:
     if not isinstance(record, dict):  # not a champion record: left as it is
         return len(text.encode()), len(text.encode())
     cfg_file = path.parent / "config.yaml"
-    config = read_yaml(cfg_file) if cfg_file.is_file() else None
-    new = record_json(compact_record(record, config if isinstance(config, dict) else None))
+    raw = read_yaml(cfg_file) if cfg_file.is_file() else None
+    new = record_json(compact_record(record, raw if isinstance(raw, dict) else None))
     if new == text:
         return len(text.encode()), len(text.encode())
     again = json.loads(new)

@@ -19,9 +19,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.runs.champion import champion_record, read_champion
-from evolve.runs.run_config import RunConfig
 from evolve.runs.rundir import RunDir
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config

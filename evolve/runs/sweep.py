@@ -401,5 +401,5 @@ def _wanted(sweep: Sweep, run: SweepRun) -> int:
     from evolve.runs.config import load_config
 
     path, overrides = run_config(sweep.sweep, run, named_in=sweep.named_in)
-    return int(load_config(path, overrides, sweep.named_in)["generations"])
+    return int(load_config(path, overrides, sweep.named_in).generations)
 

@@ -30,14 +30,14 @@ SMALL = {"sgr": {"neat_config": "configs/neat/sgr.ini", "pop_size": 12},
 
 
 def config(tmp_path: Path, repo_root: Path, method: str = "sgr") -> Path:
-    cfg = {"method": method, "task": "Walker-v0", "generations": 4, "seed": 5, "episode_steps": 8,
+    raw = {"method": method, "task": "Walker-v0", "generations": 4, "seed": 5, "episode_steps": 8,
            "checkpoint_every": 2, "render_champion": False, "workers": 1, "robust": None,
            "final_selection": None, **SMALL[method]}
     for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str(repo_root / cfg[key])
+        if key in raw:
+            raw[key] = str(repo_root / raw[key])
     p = tmp_path / f"{method}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
+    p.write_text(yaml.safe_dump(raw))
     return p
 
 
