@@ -122,6 +122,13 @@ class Problem:
         champion file holds the genome too."""
         return self.champion(phenotype)
 
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """An older champion `record`'s `controller` (as read) in the method's shortest exact
+        format, or None to keep it as it is; `raw`: its run's config.yaml, when there is one. What
+        `sgr migrate` writes, once it reads back as the same controller bit for bit."""
+        return None
+
     def state(self) -> dict:
         """The method's own run state for checkpoints (beyond the NEAT population), as JSON data:
         numbers, strings, lists and dicts only (checkpoints are JSON, never pickles)."""

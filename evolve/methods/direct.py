@@ -18,12 +18,13 @@ from functools import partial
 
 import numpy as np
 
+from evolve.methods import formats
 from evolve.methods.base import Problem
 from evolve.methods.sgr_decoder import is_valid_robot
 from evolve.methods.substrate import N_TYPES, cell_coordinates
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
-from evolve.nn.graph import GraphController
+from evolve.nn.graph import DERIVED_FORMAT, FORMAT, GraphController, graph_of_record
 from evolve.rollout.pool import RolloutPool
 from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
@@ -57,6 +58,15 @@ def direct_policy(env, genomes: Sequence, genome_config, cell_xy: np.ndarray | N
     cells = [b.actuator_flat for b in env.sim.bodies]
     return GraphPolicy(NetworkBatch(list(genomes), genome_config), cells, env.sim.max_actuators,
                        N_COORDS, N_TYPES, cell_xy=cell_xy)
+
+
+def _derived(record: dict) -> GraphController:
+    """direct's network recorded as its genome's compiled form: compiled again, checked."""
+    return GraphController.from_derived_json(record["controller"], record["genome"])
+
+
+formats.register(FORMAT, graph_of_record)
+formats.register(DERIVED_FORMAT, _derived)
 
 
 class DirectProblem(Problem):
@@ -128,3 +138,10 @@ class DirectProblem(Problem):
         except ValueError:
             return keys
         return {**keys, "controller": derived} if again.to_json() == keys["controller"] else keys
+
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """A network recorded in full, as the compiled form of the record's genome."""
+        if record["controller"].get("format") != FORMAT or "genome" not in record:
+            return None
+        return controller.to_derived_json()

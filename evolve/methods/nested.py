@@ -22,12 +22,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evolve.methods import formats
 from evolve.methods.base import Problem, positive
 from evolve.methods.sgr_decoder import is_valid_robot
 from evolve.methods.substrate import N_TYPES, cell_coordinates, controller_side
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
-from evolve.nn.graph import GraphController
+from evolve.nn.graph import FORMAT as GRAPH_FORMAT
+from evolve.nn.graph import GraphController, graph_of_record
 from evolve.rollout.pool import RolloutPool
 from evolve.search.neat_ini import neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -59,6 +61,9 @@ class ControllerPhenotype:
     genome: object
     body: np.ndarray
     valid: bool = True
+
+
+formats.register(GRAPH_FORMAT, graph_of_record)  # the best inner controller, in full
 
 
 def nested_policy(env, items: Sequence) -> GraphPolicy:

@@ -6,12 +6,24 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from evolve.methods import sgr_record
+from evolve.methods import formats, sgr_record
 from evolve.methods.base import Problem
 from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
+from evolve.nn.dense import FORMAT as DENSE_FORMAT
+from evolve.nn.dense import DenseController
 from evolve.rollout.episodes import dense_policy
 from evolve.rollout.pool import RolloutPool
 from tsim.errors import SgrError
+
+
+def _dense(record: dict) -> DenseController:
+    """SGR's controller recorded in full (dense layers)."""
+    return DenseController.from_json(record["controller"])
+
+
+formats.register(DENSE_FORMAT, _dense)
+formats.register(None, _dense)  # an older sgr's, untagged
+formats.register(sgr_record.FORMAT, sgr_record.rebuild)  # as its genome's decoding, checked
 
 
 class SgrProblem(Problem):
@@ -65,3 +77,18 @@ class SgrProblem(Problem):
         body = phenotype.body
         ctrl = sgr_record.recorded(genome, phenotype.controller, self.settings, body, self.cfg.task)
         return {"body": body.tolist(), "controller": ctrl}
+
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """A dense controller recorded in full, as its genome's decoding (`sgr_record`), with the
+        decoder settings of its run's config.yaml (`raw`; the defaults where absent) at its body's
+        shape."""
+        if record["controller"].get("format") != DENSE_FORMAT or "genome" not in record:
+            return None
+        keys = {k: default for k, (_, default) in cls.config_keys.items()} | dict(raw or {})
+        body = np.asarray(record["body"])
+        settings = DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
+                                   cppn_outputs=int(keys["cppn_outputs"]),
+                                   threshold=float(keys["weight_threshold"]),
+                                   max_weight=float(keys["max_weight"]))
+        return sgr_record.to_json(controller, settings)

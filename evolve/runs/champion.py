@@ -18,10 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.methods import sgr_record
+from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
-from evolve.nn.graph import DERIVED_FORMAT as GRAPH_DERIVED
-from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
@@ -63,20 +61,6 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
         evaluation["tag"] = f"{best['generation']}/{best['key']}"
     return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                            best["generation"] + 1, evaluation)
-
-
-def controller_of(champ: dict) -> DenseController | GraphController:
-    """The controller of a champion record, whatever its format: in full (SGR's dense layers, the
-    baselines' graphs), or as a function of the record's genome (SGR's `sgr_record`, direct's
-    `GraphController.to_derived_json`), rebuilt and checked against its digest. KeyError,
-    TypeError or ValueError when it is none of these."""
-    c = champ["controller"]
-    fmt = c.get("format") if isinstance(c, dict) else None
-    if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
-        return sgr_record.rebuild(champ)
-    if fmt == GRAPH_DERIVED:  # direct's network, recorded as its genome: compiled again, checked
-        return GraphController.from_derived_json(c, champ["genome"])
-    return GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
 
 
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
