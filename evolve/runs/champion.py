@@ -100,13 +100,23 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     if np.shape(actions) != (len(b.actuator_flat),):
         raise SgrError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
                        f"{len(b.actuator_flat)} actuators")
-    # its fitness is reproducible in the precision it was scored in (records without the key: f64)
-    try:
-        runtime.use_precision(champ.get("precision") or "f64")
-    except ValueError as exc:
-        raise SgrError(f"{f}: key 'precision': scored in {champ.get('precision') or 'f64'}, to be "
-                       f"replayed in it: {exc} (start a new process)") from None
+    # its fitness is reproducible in the precision it was scored in (records without the key: f64):
+    # its replays pass that precision down to the simulator they build (`precision_of`); reading
+    # the file only checks that this process can (it sets nothing: the file is data)
+    precision = precision_of(champ)
+    if precision not in runtime.PRECISIONS:
+        raise SgrError(f"{f}: key 'precision': unknown precision {precision!r}; use one of "
+                       f"{', '.join(runtime.PRECISIONS)}")
+    if (why := runtime.switch_problem(precision)) is not None:
+        raise SgrError(f"{f}: key 'precision': scored in {precision}, to be replayed in it: {why} "
+                       "(start a new process)")
     return champ, body, ctrl
+
+
+def precision_of(champ: dict) -> str:
+    """The real type a champion record was scored in, which its replays simulate in (f64 for a
+    record from before the key)."""
+    return champ.get("precision") or "f64"
 
 
 MEDIAN = "median"  # champion_gif's default replay: the verdict's typical perturbed episode
@@ -141,7 +151,8 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
         return a if extra is None else a + extra[0]
 
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
-                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
+                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]),
+                            precision=precision_of(champ))
     return write_animation(frames, out, fps=fps, mp4_beside=mp4_beside)
 
 
@@ -198,7 +209,7 @@ def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndar
     as one batch through evolution's own episode loop."""
     n_obs = obs_dim(champ["task"], build_body(body).n_points)
     return rollout_policy(champ["task"], [body] * len(noise.keys), lambda env: _SameController(ctrl, n_obs),
-                          champ["episode_steps"], noise)
+                          champ["episode_steps"], noise, precision=precision_of(champ))
 
 
 def rescore_champion(run_dir: str | Path) -> float:
@@ -287,15 +298,20 @@ class Champion:
         """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
         return self.controller.act(obs)
 
+    @property
+    def precision(self) -> str:
+        """The real type its fitness was scored in: its env and replays simulate in it."""
+        return precision_of(self.record)
+
     def env(self, **kwargs):
-        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>)`;
-        `kwargs` go to gymnasium.make."""
+        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>,
+        precision=<its precision>)`; `kwargs` go to gymnasium.make."""
         import gymnasium as gym
 
         import tasks  # noqa: F401  (registers the sgr/<task> ids)
 
         return gym.make(f"sgr/{self.task}", body=self.body,
-                        **{"max_episode_steps": self.episode_steps, **kwargs})
+                        **{"max_episode_steps": self.episode_steps, "precision": self.precision, **kwargs})
 
     def rollout(self, env=None) -> float:
         """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
@@ -326,7 +342,7 @@ class Champion:
         from tsim.render import write_gif
 
         frames = render_episode(self.task, self.body, lambda t, obs: self.policy(obs), self.episode_steps,
-                                width, height, indexed=True)
+                                width, height, indexed=True, precision=self.precision)
         return write_gif(frames, out, fps=fps)
 
 

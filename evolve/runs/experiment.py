@@ -31,7 +31,6 @@ from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat
 from evolve.search.neat_search import NeatSearch
 from tasks.registry import task_reference
 from tasks.specs import BUILTIN
-from tsim import runtime
 from tsim.backend import Backend
 from tsim.backend import get as get_backend
 from tsim.errors import SgrError
@@ -39,10 +38,10 @@ from tsim.errors import SgrError
 
 def start_backend(precision: str) -> Backend:
     """Start Taichi in this process on $SGR_ARCH in the run's `precision` (its rollout workers
-    follow: they read $SGR_ARCH and $SGR_PRECISION): a backend that cannot run here fails now,
-    in one line, before anything is written, and the run records what it runs on."""
-    runtime.use_precision(precision)
-    return get_backend()
+    follow: they are started with this process's precision, evolve/rollout/pool.py): a backend that
+    cannot run here fails now, in one line, before anything is written, and the run records what
+    it runs on. The precision is an argument: no environment variable is set."""
+    return get_backend(precision=precision)
 
 
 def _workers(workers: int | str) -> int | str:
@@ -75,8 +74,8 @@ class Experiment:
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self._warned_population = False  # `_warn_if_population_grew`
         self.reporters = ReporterSet(configured_reporters(cfg, run.path))  # evolve/runs/reporters.py
-        # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
-        runtime.use_precision(cfg.precision)
+        # the run's precision for this process and its rollout workers (started with this process's)
+        start_backend(cfg.precision)
         self.neat_config = load_neat_config(run.path / "neat.ini")
         self.pool = rollout_pool(cfg.workers if workers is None else workers)
         method = METHODS[cfg.method]
