@@ -10,7 +10,7 @@ of plain values on one line (`record_json`). Every other key is kept as it is, a
 would not come back exactly stays in full, so a rewritten file loads as the same robot, bit for bit,
 and replays to the same returns.
 
-    python -m evolve.runs.compact docs/paper/runs docs/robust   # every champion*.json below
+    sgr migrate docs   # every champion*.json below (or: python -m evolve.runs.compact PATH...)
 """
 
 from __future__ import annotations
@@ -106,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     """`python -m evolve.runs.compact PATH...`: rewrite every champion file there; prints the bytes
     before and after."""
     paths = argv if argv is not None else sys.argv[1:]
+    print("note: python -m evolve.runs.compact is an alias of: sgr migrate PATH (one folder; it also "
+          "converts an older sgr's pickles, with --trust-pickle)", file=sys.stderr)
     missing = [p for p in paths if not Path(p).exists()]
     if not paths or missing:
         what = "no such file or folder: " + ", ".join(missing) if missing else "name files or folders"

@@ -211,7 +211,7 @@ class RunDir:
             raise SgrError(f"{self.path / OLD_TASK_FILE}: an older sgr kept the run's task {task!r} as a "
                            "pickle, which sgr does not load (it can run any code); register the task in "
                            "your process first, or, if you trust this folder, convert it with: "
-                           f"sgr convert-checkpoints {self.path} --trust-pickle")
+                           f"sgr migrate {self.path} --trust-pickle")
         if task not in TASKS:
             raise SgrError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
                            f"file that registers it is imported: add imports: [that file] to {named_in}")
@@ -352,7 +352,7 @@ class RunDir:
                 f"{self.ckpt_dir} holds only pickled checkpoints of an older sgr "
                 f"({', '.join(f.name for f in self.pickled_checkpoints())}); sgr does not load "
                 "pickles, which can run any code; if you trust this folder, convert them with: "
-                f"sgr convert-checkpoints {self.path} --trust-pickle")
+                f"sgr migrate {self.path} --trust-pickle")
         damaged = []
         for f in ours:
             try:

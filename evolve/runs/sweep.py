@@ -198,7 +198,7 @@ class Sweep:
             raise SgrError(f"{len(old)} run(s) of {out} ({names}) "
                            "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
                            "which can run any code; if you trust this folder, convert them with: "
-                           f"sgr convert-checkpoints {out} --trust-pickle")
+                           f"sgr migrate {out} --trust-pickle")
         return sweep
 
     def run_dir(self, run: SweepRun) -> RunDir:

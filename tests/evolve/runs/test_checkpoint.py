@@ -128,7 +128,7 @@ def test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_
     assert main(["evolve", "--resume", str(old.path), "--generations", "4", "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "holds only pickled checkpoints of an older sgr" in err
-    assert err.rstrip().endswith(f"sgr convert-checkpoints {old.path} --trust-pickle"), err
+    assert err.rstrip().endswith(f"sgr migrate {old.path} --trust-pickle"), err
     assert main(["convert-checkpoints", str(old.path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "add --trust-pickle only if you trust" in err
@@ -157,7 +157,7 @@ def test_a_sweep_with_old_pickled_runs_is_refused_before_any_run_starts(tmp_path
     assert main(["sweep", "--resume", str(tmp_path / "sw"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sgr-Walker-v0-s0" in err
-    assert err.rstrip().endswith(f"sgr convert-checkpoints {tmp_path / 'sw'} --trust-pickle")
+    assert err.rstrip().endswith(f"sgr migrate {tmp_path / 'sw'} --trust-pickle")
 
 
 def _rewrite(f: Path, change) -> None:
