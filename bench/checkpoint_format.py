@@ -25,6 +25,7 @@ import yaml
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from evolve.config import RunConfig  # noqa: E402
 from evolve.runs.checkpoint import load_checkpoint  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
 from evolve.runs.files import atomic_write  # noqa: E402
@@ -35,7 +36,7 @@ from evolve.runs.rundir import RunDir, checkpoint_bytes  # noqa: E402
 def old_state(exp: Experiment) -> dict:
     """What an older sgr pickled: the search's objects and the method's state as objects."""
     problem = {}
-    if exp.cfg["method"] == "nested":
+    if exp.cfg.method == "nested":
         p = exp.problem
         problem = {"inner": {k: (s.state(), round(len(s.config.genome_config.input_keys) ** 0.5))
                              for k, s in p.inner.items()},
@@ -53,7 +54,7 @@ def best_time(fn, repeat: int) -> tuple[float, bytes]:
 
 
 def measure(run: RunDir, repeat: int) -> dict:
-    cfg = run.config()
+    cfg = RunConfig.of(run.config())
     pickles = run.pickled_checkpoints()
     if pickles and not run.checkpoints():
         state = load_trusted_pickle(pickles[-1])
@@ -74,7 +75,7 @@ def measure(run: RunDir, repeat: int) -> dict:
         exp.pool.close()
     genomes = len(exp.search.population) + sum(len(s.population) for s in
                                                getattr(exp.problem, "inner", {}).values())
-    return {"run": f"{cfg['method']} {cfg['task']} pop {cfg['pop_size']} gen {g}", "genomes": genomes,
+    return {"run": f"{cfg.method} {cfg.task} pop {cfg.pop_size} gen {g}", "genomes": genomes,
             "pickle_kib": len(b_old) / 1024, "json_kib": len(b_new) / 1024,
             "pickle_ms": 1e3 * t_old, "json_ms": 1e3 * t_new, "pickle_save_ms": 1e3 * t_old_w,
             "json_save_ms": 1e3 * t_new_w}
@@ -84,13 +85,13 @@ def fresh_runs(tmp: Path, generations: int) -> list[RunDir]:
     root = Path(__file__).resolve().parents[1] / "configs"
     runs = []
     for method in ("direct", "nested"):
-        cfg = yaml.safe_load((root / method / "Walker-v0.yaml").read_text())
+        raw = yaml.safe_load((root / method / "Walker-v0.yaml").read_text())
         for key in ("neat_config", "controller_neat_config"):
-            if key in cfg:
-                cfg[key] = str((root / method / cfg[key]).resolve())
-        cfg.update(generations=generations, episode_steps=20, render_champion=False, workers=2)
+            if key in raw:
+                raw[key] = str((root / method / raw[key]).resolve())
+        raw.update(generations=generations, episode_steps=20, render_champion=False, workers=2)
         p = tmp / f"{method}.yaml"
-        p.write_text(yaml.safe_dump(cfg))
+        p.write_text(yaml.safe_dump(raw))
         exp = Experiment.create(str(p), str(tmp / method), {}, quiet=True)
         exp.run_all()
         exp.close()

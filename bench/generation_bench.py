@@ -43,12 +43,12 @@ def main() -> None:
         wall = time.perf_counter() - t0
         exp.close()
     cfg = exp.cfg
-    steps = cfg["episode_steps"] or task_spec(cfg["task"]).paper_steps
+    steps = cfg.episode_steps or task_spec(cfg.task).paper_steps
     timed = rows[1:] or rows
     med = {k: statistics.median(r[k] for r in timed) for k in ("build_s", "sim_s", "neat_s", "total_s")}
     robot_steps = sum(r["episodes"] for r in timed) * steps  # upper bound: early terminations stop sooner
-    out = {"config": args.config, "method": cfg["method"], "task": cfg["task"], "pop": cfg["pop_size"],
-           "shape": list(cfg["robot_shape"]),
+    out = {"config": args.config, "method": cfg.method, "task": cfg.task, "pop": cfg.pop_size,
+           "shape": list(cfg.robot_shape),
            "workers": exp.pool.workers,
            "steps": steps, "generations": args.generations, "first_generation_s": rows[0]["total_s"],
            **{f"median_{k}": v for k, v in med.items()},
@@ -61,8 +61,8 @@ def main() -> None:
     if args.json:
         print(json.dumps(out))
     else:
-        print(f"{cfg['method']} {cfg['task']} {'x'.join(map(str, cfg['robot_shape']))} "
-              f"pop {cfg['pop_size']} x {steps} steps, "
+        print(f"{cfg.method} {cfg.task} {'x'.join(map(str, cfg.robot_shape))} "
+              f"pop {cfg.pop_size} x {steps} steps, "
               f"{exp.pool.workers} workers: median "
               f"{med['total_s']:.2f} s/generation (build {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
               f"neat {med['neat_s']:.2f}); first generation {rows[0]['total_s']:.1f} s; "

@@ -52,20 +52,20 @@ def rss_mib(pid: int | str = "self") -> float:
 
 def write_config(args: argparse.Namespace, path: Path) -> Path:
     src = Path(args.config or ROOT / f"configs/{args.method}/{args.task}.yaml")
-    cfg = yaml.safe_load(src.read_text())
+    raw = yaml.safe_load(src.read_text())
     for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str((src.parent / cfg[key]).resolve())
-    cfg.update(DEFAULTS.get(cfg["method"], {}))
+        if key in raw:
+            raw[key] = str((src.parent / raw[key]).resolve())
+    raw.update(DEFAULTS.get(raw["method"], {}))
     flags = {"pop_size": args.pop, "inner_pop_size": args.inner_pop_size,
              "inner_generations": args.inner_generations}
-    cfg.update({k: v for k, v in flags.items() if v is not None})
-    cfg.update(generations=args.generations, episode_steps=args.episode_steps, seed=args.seed,
+    raw.update({k: v for k, v in flags.items() if v is not None})
+    raw.update(generations=args.generations, episode_steps=args.episode_steps, seed=args.seed,
                checkpoint_every=args.every, workers=args.workers, render_champion=False)
     for item in args.set:
         key, _, value = item.partition("=")
-        cfg[key] = yaml.safe_load(value)
-    path.write_text(yaml.safe_dump(cfg, sort_keys=False))
+        raw[key] = yaml.safe_load(value)
+    path.write_text(yaml.safe_dump(raw, sort_keys=False))
     return path
 
 
@@ -101,8 +101,8 @@ def main() -> None:
     exp = Experiment.create(str(cfg_path), str(out / "run"), {}, quiet=True)
     rows: list[dict] = []
     clock = {"t": time.perf_counter(), "gen": 0}
-    print(f"{exp.cfg['method']} {exp.cfg['task']} pop {exp.cfg['pop_size']}, "
-          f"{exp.cfg['episode_steps']}-step episodes, {args.generations} generations, "
+    print(f"{exp.cfg.method} {exp.cfg.task} pop {exp.cfg.pop_size}, "
+          f"{exp.cfg.episode_steps}-step episodes, {args.generations} generations, "
           f"workers {exp.pool.workers}; run directory {out / 'run'}", flush=True)
     header = ("gen", "RSS MiB", "workers", "total", "ckpt KiB", "s/gen", "objects", "conns", "inner")
     print("{:>6} {:>8} {:>8} {:>8} {:>9} {:>7} {:>9} {:>6} {:>6}".format(*header), flush=True)

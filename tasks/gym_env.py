@@ -43,17 +43,18 @@ class SgrEnv(gym.Env):
 
     def __init__(self, task: str, body: Any, episode_steps: int | None = None,
                  render_mode: str | None = None, connections: Any = None,
-                 render_options: dict | None = None):
+                 render_options: dict | None = None, precision: str | None = None):
         """evogym's keyword arguments: `connections` (2, k) glue the body's voxels (default: every
         adjacent pair); `render_mode` 'rgb_array' / 'img' make `render()` return an image
-        (`render_options` {'hide_grid': True} drops the grid); windows: sgr.evogym's bare ids."""
+        (`render_options` {'hide_grid': True} drops the grid); windows: sgr.evogym's bare ids.
+        `precision`: the simulator's real type (None: the process's; `tsim.backend.get`)."""
         if render_mode not in (None, "rgb_array", "img"):
             raise ValueError(f"render_mode {render_mode!r} is not supported here (None, 'rgb_array', "
                              "'img'); for a window use the bare ids of sgr.evogym.envs")
         if connections is not None:
             body = build_body(np.asarray(body), np.asarray(connections))
         self._env = BatchEnv(task, [body], episode_steps=_NO_LIMIT if episode_steps is None
-                             else episode_steps)
+                             else episode_steps, precision=precision)
         self.render_mode = render_mode
         self._render_options = render_options or {}
         self._renderer: Renderer | None = None

@@ -15,7 +15,7 @@ sweep's config names follow the same rule (`import_tasks(named_in=...)`): import
 `trust_imports()`, and not at all when the tasks are registered already. Code the user names
 in the command itself (`sgr evolve --config my.yaml`, a script's `Experiment.from_config`) is
 imported as they asked. An older sgr's `task.pkl` (`OLD_TASK_FILE`) is never unpickled on
-reading: `sgr convert-checkpoints DIR --trust-pickle` turns it into a reference.
+reading: `sgr migrate DIR --trust-pickle` turns it into a reference.
 """
 
 from __future__ import annotations

@@ -13,17 +13,20 @@ from tsim.render import Renderer
 
 def render_episode(task: str, body: Body | object, policy: Callable[[int, np.ndarray], np.ndarray],
                    steps: int | None = None, width: int = 640, height: int = 320, *, every: int = 1,
-                   indexed: bool = False, start_shift: float = 0.0, **renderer_kw) -> list[np.ndarray]:
+                   indexed: bool = False, start_shift: float = 0.0, precision: str | None = None,
+                   **renderer_kw) -> list[np.ndarray]:
     """Simulate one robot on `task` for `steps` env steps (task default if None) with actions
     `policy(t, obs)` and return frames: the reset state, then every `every`-th step (and the last).
 
     Frames are RGB (H, W, 3), or `PALETTE` indices (H, W) with `indexed` (faster, same GIF). Stops
     early when the episode terminates (goal reached or unstable). `start_shift` starts the robot
-    that much right of its placement (`BatchEnv`'s robot_shift). `renderer_kw` go to `Renderer`.
+    that much right of its placement (`BatchEnv`'s robot_shift). `precision`: the real type to
+    simulate in (None: the process's). `renderer_kw` go to `Renderer`.
     """
     if every < 1:
         raise ValueError(f"every must be >= 1, got {every}")
-    env = BatchEnv(task, [body], episode_steps=steps, robot_shift=[start_shift] if start_shift else None)
+    env = BatchEnv(task, [body], episode_steps=steps, robot_shift=[start_shift] if start_shift else None,
+                   precision=precision)
     renderer = Renderer(env.sim.world, env.sim.bodies[0], width, height, **renderer_kw)
     names = [o.name for o in env.sim.free_objects]
     draw = renderer.frame_indexed if indexed else renderer.frame

@@ -89,3 +89,92 @@ def test_nothing_below_sgr_imports_it():
     bad = [f"{m} imports {n}" for m, deps in g.items() for n in deps
            if n.split(".")[0] == "sgr" and m.split(".")[0] != "sgr"]
     assert not bad, bad
+
+
+# Inside evolve/, each layer imports only its own and the layers before it, lazy (in-function)
+# imports included (the walk reads whole files). The order, from the code: own_modules (what the
+# worker processes may import) < nn and search (the networks and the NEAT search; each uses the
+# other's records, one layer) < rollout (episodes, worker pools, robust evaluation's noise) <
+# config (the RunConfig: it parses `robust` with the rollout's Robust) < methods (they read the
+# config and simulate through the rollout) < runs (a run's lifecycle and records, which build the
+# methods) < cli < the evolve package's face (evolve/__init__.py).
+EVOLVE_LAYERS = ("evolve.own_modules", ("evolve.nn", "evolve.search"), "evolve.rollout", "evolve.config",
+                 "evolve.methods", "evolve.runs", "evolve.cli", "evolve")
+
+
+def evolve_layer(module: str) -> int | None:
+    """The index in EVOLVE_LAYERS of the (deepest) layer `module` belongs to; None outside evolve."""
+    found = None
+    for i, layer in enumerate(EVOLVE_LAYERS):
+        for name in layer if isinstance(layer, tuple) else (layer,):
+            if module == name or module.startswith(name + ".") and name != "evolve":
+                found = i
+    return found if found is not None or module != "evolve" else len(EVOLVE_LAYERS) - 1
+
+
+def upward_imports(g: dict[str, set[str]]) -> list[str]:
+    """Every import inside evolve/ of a later layer than the importer's."""
+    def later(m: str, n: str) -> bool:
+        lm, ln = evolve_layer(m), evolve_layer(n)
+        return lm is not None and ln is not None and ln > lm
+
+    return [f"{m} imports {n}" for m, deps in g.items() for n in deps if later(m, n)]
+
+
+def test_inside_evolve_no_layer_imports_a_later_one():
+    """The config sits below the methods: no method imports the run's lifecycle (evolve.runs) to
+    read its config, not even inside a function."""
+    g = graph()
+    unplaced = [m for m in g if m.startswith("evolve") and evolve_layer(m) is None]
+    assert not unplaced, f"place these modules in EVOLVE_LAYERS: {unplaced}"
+    assert not upward_imports(g), upward_imports(g)
+
+
+def test_the_layer_walk_finds_an_upward_import():
+    """The check can fail: a method importing evolve.runs (as methods/base.py once did, lazily)."""
+    assert upward_imports({"evolve.methods.base": {"evolve.runs.run_config"}}) == \
+        ["evolve.methods.base imports evolve.runs.run_config"]
+    assert upward_imports({"evolve.runs.experiment": {"evolve.config", "evolve.methods"}}) == []
+    assert evolve_layer("evolve") == len(EVOLVE_LAYERS) - 1 and evolve_layer("evolve.nn.cppn") == 1
+
+
+# A run config is read by attribute (`cfg.task`), never as a mapping, outside evolve/config.py. The
+# rule: no subscript and no `.get(` on a name (or attribute) called cfg, config, run_cfg, run_config
+# or conf, nor on the result of a call that makes a RunConfig (load_config(...)["task"]); a raw YAML
+# mapping (a config.yaml read for a report) is named otherwise (`raw`).
+CONFIG_NAMES = {"cfg", "config", "run_cfg", "run_config", "conf"}
+CONFIG_MAKERS = {"load_config", "config_from_dict", "check_config", "of", "build", "replace"}
+
+
+def mapping_reads(source: str) -> list[str]:
+    """`cfg[...]` and `cfg.get(...)` on a config name in Python source, as (line: code)."""
+    def named(n: ast.AST) -> bool:
+        if isinstance(n, ast.Call):
+            f = n.func
+            return (isinstance(f, ast.Name) and f.id in CONFIG_MAKERS
+                    or isinstance(f, ast.Attribute) and f.attr in CONFIG_MAKERS and (
+                        f.attr != "replace" or named(f.value)))
+        return (isinstance(n, ast.Name) and n.id in CONFIG_NAMES
+                or isinstance(n, ast.Attribute) and n.attr in CONFIG_NAMES)
+
+    out = []
+    for n in ast.walk(ast.parse(source)):
+        if isinstance(n, ast.Subscript) and named(n.value) or (
+                isinstance(n, ast.Call) and isinstance(n.func, ast.Attribute) and n.func.attr == "get"
+                and named(n.func.value)):
+            out.append(f"{n.lineno}: {ast.unparse(n)[:60]}")
+    return out
+
+
+def test_the_run_config_is_read_by_attribute_everywhere():
+    files = [f for d in ("evolve", "tasks", "tsim", "sgr", "bench", "tools", "tests")
+             for f in (ROOT / d).rglob("*.py") if f != ROOT / "evolve" / "config.py"]
+    assert len(files) > 100
+    bad = [f"{f.relative_to(ROOT)}:{hit}" for f in files for hit in mapping_reads(f.read_text())]
+    assert not bad, bad
+
+
+def test_the_mapping_read_scan_finds_subscripts_and_get():
+    src = ('a = cfg["task"]\nb = self.cfg.get("seed")\nc = exp.cfg.task\nd = raw["task"]\nconfig[k] = 1\n'
+           'e = load_config(p)["seed"]\nf = RunConfig.of(raw).get("x")\ng = s.replace("a", "b")[0]\n')
+    assert [hit.split(":")[0] for hit in mapping_reads(src)] == ["1", "2", "5", "6", "7"]

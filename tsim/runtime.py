@@ -59,6 +59,14 @@ def use_precision(precision: str | None) -> str:
     return p
 
 
+def switch_problem(precision: str) -> str | None:
+    """Why this process cannot simulate in `precision` (Taichi already runs in another), or None.
+    Asks only: nothing is started or set."""
+    if _PRECISION is not None and precision != _PRECISION:
+        return f"Taichi already runs in {_PRECISION}; cannot switch to {precision} in one process"
+    return None
+
+
 def check_real_type(arch: str, precision: str, arch_from_env: bool = False,
                     precision_from_env: bool = False) -> None:
     """ValueError, one line saying what is missing and what to use, when `arch` has no floats of

@@ -1,8 +1,8 @@
 """`sgr` command line: the dispatcher. Each of evolve's commands is a module of this package with
 `register(subparsers)` (its options) and `run(args)`: evolve (evolve_cmd), sweep, report,
-select-champion, render, plot, convert-checkpoints and decode; the task and simulator commands (demo,
-validate, bench) come from tasks/cli.py. Options shared by commands are built once in common.py.
-The dispatcher lives in evolve, the only layer that may import all three."""
+select-champion, render, plot, migrate (alias: convert-checkpoints) and decode; the task and
+simulator commands (demo, validate, bench) come from tasks/cli.py. Options shared by commands are
+built once in common.py. The dispatcher lives in evolve, the only layer that may import all three."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ import tempfile
 import time
 import traceback
 
-from evolve.cli import convert_checkpoints, decode, evolve_cmd, plot, render, report, select_champion, sweep
+from evolve.cli import decode, evolve_cmd, migrate, plot, render, report, select_champion, sweep
 from evolve.cli.common import ClosedStdoutTolerant, add_trust_imports, parse_body, workers_arg
 from tasks.cli import register_task_commands
 from tsim.errors import SgrError
@@ -32,7 +32,7 @@ def build_parser() -> argparse.ArgumentParser:
     sc = select_champion.register(sub)
     r = render.register(sub)
     plot.register(sub)
-    convert_checkpoints.register(sub)
+    migrate.register(sub)
     dc = decode.register(sub)
     for parser in (e, sw, rp, r, sc, dc):
         add_trust_imports(parser)

@@ -99,7 +99,7 @@ def run(args: argparse.Namespace) -> int:
                                 generations=args.generations)
         print(runtime.describe())  # the backend it started (it records it: segments.json)
         print(f"resuming {args.resume} after generation {exp.search.generation}")
-        if args.tensorboard and not exp.cfg.get("tensorboard"):
+        if args.tensorboard and not exp.cfg.tensorboard:
             from evolve.runs.reporters import configured_reporters
             for reporter in configured_reporters({"tensorboard": True}, exp.run.path):
                 exp.add_reporter(reporter)
@@ -117,11 +117,11 @@ def run(args: argparse.Namespace) -> int:
         # the first line names the backend; one that cannot start fails here, before the run exists
         print(start_backend(cfg.precision).line(), flush=True)
         if name is None:
-            name = f"{cfg['method']}-{config.stem}" if config.stem != cfg["method"] else config.stem
+            name = f"{cfg.method}-{config.stem}" if config.stem != cfg.method else config.stem
             if shape and not config.stem.endswith(f"-{shape[0]}x{shape[1]}"):
                 name += f"-{shape[0]}x{shape[1]}"
         stamp = time.strftime("%Y%m%d-%H%M%S")
-        out = args.out or str(Path("runs") / f"{name}-seed{cfg['seed']}-{stamp}")
+        out = args.out or str(Path("runs") / f"{name}-seed{cfg.seed}-{stamp}")
         output_path(out, folder=True)
         exp = Experiment.create(config, out, overrides, quiet=args.quiet, named_in=named_in)
         print(f"run directory: {out}")
@@ -162,7 +162,7 @@ def run_experiment(exp) -> int:
             exp.run_all()
             exp.finish()
     except KeyboardInterrupt as exc:
-        done, want = exp.search.generation, exp.cfg["generations"]
+        done, want = exp.search.generation, exp.cfg.generations
         ckpt = exp.run.last_checkpoint_generation()
         where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
                  f"stopped during generation {done + 1} of {want}; its last checkpoint is after "

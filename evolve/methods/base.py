@@ -12,16 +12,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol
+from typing import Any, ClassVar, Protocol
 
 import numpy as np
 
+from evolve.config import RunConfig
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
 from tsim.errors import SgrError
-
-if TYPE_CHECKING:
-    from evolve.runs.run_config import RunConfig
 
 # config key -> (type or tuple of types, default)
 Schema = dict[str, tuple[Any, Any]]
@@ -43,22 +41,30 @@ class Problem:
     # keys holding files (relative to the YAML that names them) -> default file in configs/neat/
     default_files: ClassVar[dict[str, str]] = {}
     reevaluate_elites: ClassVar[bool] = False  # True when evaluation changes state (nested's inner search)
+    # what a key of `config_keys` that an older run's config.yaml lacks meant, where that is not its
+    # default (the key did not exist then)
+    absent_before: ClassVar[dict[str, Any]] = {}
 
     def __init__(self, cfg: RunConfig | Mapping, neat_config, pool: RolloutPool | None = None):
         """`cfg` is the run's config (`RunConfig`; a resolved config mapping is read as one);
-        `pool` simulates episodes."""
-        from evolve.runs.run_config import RunConfig  # (here: evolve.runs imports the methods)
-
-        self.cfg = RunConfig.of(cfg)
+        `pool` simulates episodes. The method's keys an older run lacks read as they meant then
+        (`absent_before`, else the key's default)."""
+        absent = {k: self.absent_before.get(k, d) for k, (_, d) in self.config_keys.items()}
+        self.cfg = RunConfig.of(cfg).with_own(absent)
         self.neat_config = neat_config
         self.pool = pool or RolloutPool(1)
 
+    def body_distance_weight(self) -> float:
+        """The body's weight in speciation's genome distance (the `body_distance_weight` key of sgr
+        and direct; a method without it: plain NEAT speciation)."""
+        return self.cfg.body_distance_weight if "body_distance_weight" in self.config_keys else 0.0
+
     @classmethod
-    def validate(cls, cfg: dict, source: str) -> None:
+    def validate(cls, cfg: RunConfig, source: str) -> None:
         """Value checks beyond the schema's types; raise ValueError naming `source` and the key."""
 
     @classmethod
-    def neat_overrides(cls, cfg: dict) -> dict[str, dict[str, str]]:
+    def neat_overrides(cls, cfg: RunConfig) -> dict[str, dict[str, str]]:
         """INI values the method fixes, by section (e.g. the network's input and output counts)."""
         return {}
 
@@ -83,13 +89,13 @@ class Problem:
         cfg = self.cfg
         robust = cfg.robust  # parsed once, with the config
         if robust is None:
-            return self.pool.run(cfg["task"], bodies, items, factory, cfg["episode_steps"]), len(bodies)
+            return self.pool.run(cfg.task, bodies, items, factory, cfg.episode_steps), len(bodies)
         n, k = len(bodies), robust.episodes
         if n == 0:
             return np.zeros(0), 0
         tags = [str(i) for i in range(n)] if tags is None else list(tags)
-        returns = self.pool.run(cfg["task"], list(bodies) * k, list(items) * k, factory,
-                                cfg["episode_steps"], robust.noise(cfg["seed"], tags))
+        returns = self.pool.run(cfg.task, list(bodies) * k, list(items) * k, factory,
+                                cfg.episode_steps, robust.noise(cfg.seed, tags))
         return robust.score(returns.reshape(k, n)), n * k
 
     @contextmanager
@@ -116,13 +122,20 @@ class Problem:
         champion file holds the genome too."""
         return self.champion(phenotype)
 
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """An older champion `record`'s `controller` (as read) in the method's shortest exact
+        format, or None to keep it as it is; `raw`: its run's config.yaml, when there is one. What
+        `sgr migrate` writes, once it reads back as the same controller bit for bit."""
+        return None
+
     def state(self) -> dict:
         """The method's own run state for checkpoints (beyond the NEAT population), as JSON data:
         numbers, strings, lists and dicts only (checkpoints are JSON, never pickles)."""
         return {}
 
     @classmethod
-    def decode_state(cls, data, cfg: dict) -> dict:
+    def decode_state(cls, data, cfg: RunConfig) -> dict:
         """`state`'s data read back from a checkpoint, checked (ValueError naming the bad field)
         and made into what `restore` takes; must build nothing from names in the data."""
         if data != {}:
@@ -133,8 +146,8 @@ class Problem:
         """Take back what `decode_state` returned, in a fresh process."""
 
 
-def positive(cfg: dict, source: str, *keys: str) -> None:
+def positive(cfg: RunConfig, source: str, *keys: str) -> None:
     """Raise naming the first of `keys` whose value is below 1."""
     for key in keys:
-        if cfg[key] < 1:
-            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
+        if getattr(cfg, key) < 1:
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {getattr(cfg, key)}")

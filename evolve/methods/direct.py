@@ -18,12 +18,13 @@ from functools import partial
 
 import numpy as np
 
+from evolve.methods import formats
 from evolve.methods.base import Problem
 from evolve.methods.sgr_decoder import is_valid_robot
 from evolve.methods.substrate import N_TYPES, cell_coordinates
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
-from evolve.nn.graph import GraphController
+from evolve.nn.graph import DERIVED_FORMAT, FORMAT, GraphController, graph_of_record
 from evolve.rollout.pool import RolloutPool
 from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
@@ -59,6 +60,15 @@ def direct_policy(env, genomes: Sequence, genome_config, cell_xy: np.ndarray | N
                        N_COORDS, N_TYPES, cell_xy=cell_xy)
 
 
+def _derived(record: dict) -> GraphController:
+    """direct's network recorded as its genome's compiled form: compiled again, checked."""
+    return GraphController.from_derived_json(record["controller"], record["genome"])
+
+
+formats.register(FORMAT, graph_of_record)
+formats.register(DERIVED_FORMAT, _derived)
+
+
 class DirectProblem(Problem):
     """The paper's direct-encoding baseline: one NEAT network is both body generator and
     controller (layouts in the module docstring)."""
@@ -70,24 +80,24 @@ class DirectProblem(Problem):
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.gc = neat_config.genome_config
-        self.shape = tuple(cfg["robot_shape"])
+        self.shape = tuple(self.cfg.robot_shape)
         self.cells = cell_coordinates(self.shape)
-        self.per_cell = cfg.get("layout", "per_output") == "per_cell"
+        self.per_cell = self.cfg.layout == "per_cell"
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
         """`layout` must be per_output or per_cell."""
-        if cfg["layout"] not in LAYOUTS:
+        if cfg.layout not in LAYOUTS:
             raise SgrError(f"{source}: key 'layout' must be 'per_output' or 'per_cell', "
-                           f"got {cfg['layout']!r}")
+                           f"got {cfg.layout!r}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
         """Inputs as `n_inputs`; outputs: 5 materials, then one per body cell (per_output) or one
         action (per_cell)."""
-        shape = tuple(cfg["robot_shape"])
-        n_control = 1 if cfg.get("layout", "per_output") == "per_cell" else shape[0] * shape[1]
-        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg["task"], shape)),
+        shape = tuple(cfg.robot_shape)
+        n_control = 1 if cfg.layout == "per_cell" else shape[0] * shape[1]
+        return {"DefaultGenome": {"num_inputs": str(n_inputs(cfg.task, shape)),
                                   "num_outputs": str(N_TYPES + n_control)}}
 
     def decode(self, genome) -> DirectPhenotype:
@@ -112,7 +122,7 @@ class DirectProblem(Problem):
         output 5; per_cell also stores each actuator cell's (x, y))."""
         b = build_body(p.body)
         cell_inputs = self.cells[np.asarray(b.actuator_flat, dtype=np.int64)] if self.per_cell else None
-        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg["task"], b.n_points),
+        ctrl = GraphController.from_genome(p.genome, self.gc, obs_dim(self.cfg.task, b.n_points),
                                            N_COORDS, N_TYPES, b.actuator_flat, cell_inputs)
         return {"body": p.body.tolist(), "controller": ctrl.to_json()}
 
@@ -128,3 +138,10 @@ class DirectProblem(Problem):
         except ValueError:
             return keys
         return {**keys, "controller": derived} if again.to_json() == keys["controller"] else keys
+
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """A network recorded in full, as the compiled form of the record's genome."""
+        if record["controller"].get("format") != FORMAT or "genome" not in record:
+            return None
+        return controller.to_derived_json()

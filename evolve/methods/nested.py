@@ -22,12 +22,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evolve.methods import formats
 from evolve.methods.base import Problem, positive
 from evolve.methods.sgr_decoder import is_valid_robot
 from evolve.methods.substrate import N_TYPES, cell_coordinates, controller_side
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
-from evolve.nn.graph import GraphController
+from evolve.nn.graph import FORMAT as GRAPH_FORMAT
+from evolve.nn.graph import GraphController, graph_of_record
 from evolve.rollout.pool import RolloutPool
 from evolve.search.neat_ini import neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -61,6 +63,9 @@ class ControllerPhenotype:
     valid: bool = True
 
 
+formats.register(GRAPH_FORMAT, graph_of_record)  # the best inner controller, in full
+
+
 def nested_policy(env, items: Sequence) -> GraphPolicy:
     """Inner controller networks, items = (genome, genome config), driving the robots of env."""
     nets = NetworkBatch([g for g, _ in items], [c for _, c in items])
@@ -81,16 +86,17 @@ class NestedProblem(Problem):
     config_keys = {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
                    "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)}
     default_files = {"neat_config": "nested-body.ini", "controller_neat_config": "nested-controller.ini"}
+    absent_before = {"inner_keep_generations": None}  # an older run never forgot an inner search
     reevaluate_elites = True  # a body's fitness is its inner search's best, which goes on improving
 
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.gc = neat_config.genome_config
-        self.shape = tuple(cfg["robot_shape"])
+        self.shape = tuple(self.cfg.robot_shape)
         self.cells = cell_coordinates(self.shape)
         self._configs: dict[int, object] = {}
         self.inner: dict[bytes, NeatSearch] = {}
-        self.keep_generations: int | None = cfg.get("inner_keep_generations")
+        self.keep_generations: int | None = self.cfg.inner_keep_generations
         self.generation = 0  # outer generations evaluated
         self.last_seen: dict[bytes, int] = {}  # body -> last outer generation it was in
         self.pinned: bytes | None = None  # body of the latest champion() call
@@ -105,7 +111,7 @@ class NestedProblem(Problem):
         """Also loads controller_neat_config: a bad one fails before a run starts, rather than at
         the first body of its first generation."""
         positive(cfg, source, "inner_pop_size", "inner_generations")
-        keep = cfg["inner_keep_generations"]
+        keep = cfg.inner_keep_generations
         if keep is not None and keep < 1:
             raise SgrError(f"{source}: key 'inner_keep_generations' must be a positive int or null "
                            f"(never forget), got {keep}")
@@ -114,10 +120,10 @@ class NestedProblem(Problem):
     @staticmethod
     def controller_config(cfg: dict, k: int):
         """neat-python config of the inner controllers for a k x k input grid."""
-        n_cells = cfg["robot_shape"][0] * cfg["robot_shape"][1]
-        ini = neat_ini_text(cfg["controller_neat_config"], {"pop_size": cfg["inner_pop_size"]},
+        n_cells = cfg.robot_shape[0] * cfg.robot_shape[1]
+        ini = neat_ini_text(cfg.controller_neat_config, cfg.inner_pop_size,
                             {"DefaultGenome": {"num_inputs": str(k * k), "num_outputs": str(n_cells)}})
-        return neat_config_from_text(ini, cfg["controller_neat_config"])
+        return neat_config_from_text(ini, cfg.controller_neat_config)
 
     def _controller_config(self, k: int):
         if k not in self._configs:
@@ -134,7 +140,7 @@ class NestedProblem(Problem):
     def _inner_for(self, body: np.ndarray) -> NeatSearch:
         key = body.tobytes()
         if key not in self.inner:
-            k = controller_side(obs_dim(self.cfg["task"], build_body(body).n_points))
+            k = controller_side(obs_dim(self.cfg.task, build_body(body).n_points))
             self.inner[key] = NeatSearch(self._controller_config(k),
                                          lambda g, b=body: ControllerPhenotype(g, b), None, seed=None)
         return self.inner[key]
@@ -148,7 +154,7 @@ class NestedProblem(Problem):
         bodies = {p.body.tobytes(): p.body for p in phenotypes}
         searches = [self._inner_for(b) for b in bodies.values()]
         episodes = 0
-        for _ in range(self.cfg["inner_generations"]):
+        for _ in range(self.cfg.inner_generations):
             asks = [s.ask() for s in searches]
             flat = [p for a in asks for _, p in a]
             tags = [_tag(b, s.generation, k) for b, s, a in zip(bodies, searches, asks, strict=True)
@@ -191,7 +197,7 @@ class NestedProblem(Problem):
         self.pinned = key
         b = build_body(p.body)
         ctrl = GraphController.from_genome(s.best["genome"], s.config.genome_config,
-                                           obs_dim(self.cfg["task"], b.n_points), 0, 0, b.actuator_flat)
+                                           obs_dim(self.cfg.task, b.n_points), 0, 0, b.actuator_flat)
         return {"body": p.body.tolist(), "controller": ctrl.to_json(),
                 "evaluation": {"tag": _tag(key, s.best["generation"], s.best["key"])}}
 
@@ -213,7 +219,7 @@ class NestedProblem(Problem):
     def decode_state(cls, data, cfg: dict) -> dict:
         """`state`'s data checked and rebuilt: bodies of the run's robot_shape with material codes,
         each inner search decoded with the controller config of its k."""
-        shape = tuple(cfg["robot_shape"])
+        shape = tuple(cfg.robot_shape)
 
         def key(b, path: str) -> bytes:
             arr = np.asarray(check(b, path, "list"), dtype=object)

@@ -6,12 +6,24 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from evolve.methods import sgr_record
+from evolve.methods import formats, sgr_record
 from evolve.methods.base import Problem
 from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
+from evolve.nn.dense import FORMAT as DENSE_FORMAT
+from evolve.nn.dense import DenseController
 from evolve.rollout.episodes import dense_policy
 from evolve.rollout.pool import RolloutPool
 from tsim.errors import SgrError
+
+
+def _dense(record: dict) -> DenseController:
+    """SGR's controller recorded in full (dense layers)."""
+    return DenseController.from_json(record["controller"])
+
+
+formats.register(DENSE_FORMAT, _dense)
+formats.register(None, _dense)  # an older sgr's, untagged
+formats.register(sgr_record.FORMAT, sgr_record.rebuild)  # as its genome's decoding, checked
 
 
 class SgrProblem(Problem):
@@ -22,28 +34,30 @@ class SgrProblem(Problem):
     config_keys = {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
                    "body_distance_weight": (float, 0.1)}
     default_files = {"neat_config": "sgr.ini"}
+    absent_before = {"body_distance_weight": 0.0}  # an older run speciated by the genome alone
 
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.genome_config = neat_config.genome_config
-        self.settings = DecoderSettings(shape=tuple(cfg["robot_shape"]), cppn_outputs=cfg["cppn_outputs"],
-                                        threshold=cfg["weight_threshold"], max_weight=cfg["max_weight"])
+        self.settings = DecoderSettings(shape=tuple(self.cfg.robot_shape),
+                                        cppn_outputs=self.cfg.cppn_outputs,
+                                        threshold=self.cfg.weight_threshold, max_weight=self.cfg.max_weight)
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
         """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller)."""
-        if cfg["cppn_outputs"] not in (1, 2):
-            raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg['cppn_outputs']}")
+        if cfg.cppn_outputs not in (1, 2):
+            raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg.cppn_outputs}")
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
         """The CPPN: 7 inputs (x1, y1, z1, x2, y2, z2, bias) and `cppn_outputs` outputs."""
-        return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(cfg["cppn_outputs"])}}
+        return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(cfg.cppn_outputs)}}
 
     def decode(self, genome) -> Phenotype:
         """Body and dense controller from the CPPN (`sgr_decoder.decode`); an invalid body gets no
         controller."""
-        return decode(genome, self.genome_config, self.cfg["task"], self.settings)
+        return decode(genome, self.genome_config, self.cfg.task, self.settings)
 
     def evaluate(self, phenotypes: Sequence[Phenotype],
                  tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
@@ -61,5 +75,20 @@ class SgrProblem(Problem):
         `sgr_record`; a few hundred bytes instead of ~0.5 MB at 10x10), in full where decoding the
         genome's record would not give it back bit for bit."""
         body = phenotype.body
-        ctrl = sgr_record.recorded(genome, phenotype.controller, self.settings, body, self.cfg["task"])
+        ctrl = sgr_record.recorded(genome, phenotype.controller, self.settings, body, self.cfg.task)
         return {"body": body.tolist(), "controller": ctrl}
+
+    @classmethod
+    def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
+        """A dense controller recorded in full, as its genome's decoding (`sgr_record`), with the
+        decoder settings of its run's config.yaml (`raw`; the defaults where absent) at its body's
+        shape."""
+        if record["controller"].get("format") != DENSE_FORMAT or "genome" not in record:
+            return None
+        keys = {k: default for k, (_, default) in cls.config_keys.items()} | dict(raw or {})
+        body = np.asarray(record["body"])
+        settings = DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
+                                   cppn_outputs=int(keys["cppn_outputs"]),
+                                   threshold=float(keys["weight_threshold"]),
+                                   max_weight=float(keys["max_weight"]))
+        return sgr_record.to_json(controller, settings)

@@ -15,6 +15,8 @@ import numpy as np
 
 from evolve.nn.activations import PLAIN_ACTIVATIONS, to_action
 
+FORMAT = "sgr-dense-controller-1"  # `to_json`
+
 
 @dataclass
 class DenseController:
@@ -55,7 +57,7 @@ class DenseController:
     def to_json(self) -> dict:
         """Self-contained JSON (format sgr-dense-controller-1, with a `doc` of the semantics),
         runnable with numpy alone."""
-        return {"format": "sgr-dense-controller-1",
+        return {"format": FORMAT,
                 "input_size": self.input_size,
                 "input_padding": int(self.weights[0].shape[0]) - self.input_size,
                 "layers": [{"weights": W.tolist(), "biases": b.tolist(), "activation": a}

@@ -141,3 +141,9 @@ class GraphController:
         return cls(list(d["input_keys"]), list(d["output_keys"]), list(d["nodes"]), int(d["input_size"]),
                    int(d["input_offset"]), int(d["output_offset"]), np.asarray(d["action_cells"]),
                    None if cells is None else np.asarray(cells, dtype=np.float64))
+
+
+def graph_of_record(record: dict) -> GraphController:
+    """A champion record's controller recorded in full (FORMAT): the reader direct and nested
+    register (evolve/methods/formats.py)."""
+    return GraphController.from_json(record["controller"])

@@ -22,18 +22,20 @@ class BatchPolicy(Protocol):
 
 
 def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callable[[BatchEnv], BatchPolicy],
-                   episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
+                   episode_steps: int | str | None = None, noise: EpisodeNoise | None = None, *,
+                   precision: str | None = None) -> np.ndarray:
     """Episode return of every body driven by the batched policy built for the env's layout;
     `noise` perturbs each world's episode (robust evaluation, evolve/rollout/robust.py).
 
     Every world's random stream starts from the same seed (0): a task with per-episode randomness
     (BidirectionalWalker-v0's goals) then gives every robot the same episode, so a robot's fitness
     depends on the robot alone, not on its slot in the batch or the worker count, and a champion
-    replayed alone (world 0, seed 0) scores what it scored in evolution."""
+    replayed alone (world 0, seed 0) scores what it scored in evolution. `precision`: the real type
+    to simulate in (a champion's replay passes its own; None: the process's)."""
     if len(bodies) == 0:
         return np.zeros(0)
     env = BatchEnv(task, list(bodies), episode_steps=episode_steps, seeds=[0] * len(bodies),
-                   robot_shift=None if noise is None else noise.shifts())
+                   robot_shift=None if noise is None else noise.shifts(), precision=precision)
     policy = make_policy(env)
     obs = env.observe()  # the constructed env's episode: its stream's first draw, as in a replay
     total = np.zeros(env.n_worlds)

@@ -29,6 +29,7 @@ from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
 from tasks.env import BatchEnv
+from tsim import runtime
 from tsim.errors import SgrError
 
 # factory(env, items) -> batched policy for the robots of env; items[i] drives robot i. With
@@ -189,7 +190,8 @@ class RolloutPool(BasePool):
 
     def _spawn(self) -> subprocess.Popen:
         # -P and sgr's folder first: a tasks.py in the working folder is never imported there
-        env = child_env(SGR_THREADS="1")  # one Taichi thread per worker process
+        # one Taichi thread per worker process, simulating in this process's precision (passed to it)
+        env = child_env(SGR_THREADS="1", SGR_PRECISION=runtime.precision())
         return subprocess.Popen(python_command("evolve.rollout"), stdin=subprocess.PIPE,
                                 stdout=subprocess.PIPE, env=env)
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from evolve.own_modules import ROOT
 from evolve.rollout.pool import BasePool
+from tsim import runtime
 from tsim.errors import SgrError
 
 INSTALL = 'pip install "sgr[ray]"'
@@ -146,10 +147,10 @@ class RayRolloutPool(BasePool):
         return out
 
     def _new_actor(self, ray):
-        env = {"SGR_THREADS": "1"}  # one Taichi thread per actor
-        for key in ("SGR_ARCH", "SGR_PRECISION"):  # actors simulate where and as this process would
-            if os.environ.get(key):
-                env[key] = os.environ[key]
+        # one Taichi thread per actor; actors simulate where and in the precision this process does
+        env = {"SGR_THREADS": "1", "SGR_PRECISION": runtime.precision()}
+        if os.environ.get("SGR_ARCH"):
+            env["SGR_ARCH"] = os.environ["SGR_ARCH"]
         # the environment is set before the actor's process starts: Taichi reads it at its start
         cls = ray.remote(_RolloutActor).options(num_cpus=1, max_restarts=0, max_task_retries=0,
                                                 runtime_env={"env_vars": env})

@@ -18,10 +18,8 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.methods import sgr_record
+from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
-from evolve.nn.graph import DERIVED_FORMAT as GRAPH_DERIVED
-from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
@@ -42,9 +40,9 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     """champion.json's record of `genome` (decoded to `phenotype`) scored `fitness` as `evaluation`
     says (robust settings, seed, tag), found in `generation` (counted from 1); `problem` is the run's
     method (`Problem.champion` gives the body and controller)."""
-    champ = {"format": "sgr-champion-1", "method": cfg["method"], "task": cfg["task"],
-             "episode_steps": cfg["episode_steps"], "fitness": fitness, "generation": generation,
-             "precision": cfg.get("precision") or "f64", "genome": genome_json(genome)}
+    champ = {"format": "sgr-champion-1", "method": cfg.method, "task": cfg.task,
+             "episode_steps": cfg.episode_steps, "fitness": fitness, "generation": generation,
+             "precision": cfg.precision, "genome": genome_json(genome)}
     method_keys = problem.champion_of(genome, phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)
@@ -56,27 +54,13 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
     fitness was scored: enough to score it again exactly (robust: the run's seed and the
     evaluation's tag give every episode's noise; the tag holds the search's own generation
     number, counted from 0)."""
-    evaluation = {"robust": cfg.get("robust"), "seed": cfg["seed"]}
+    evaluation = {"robust": cfg.robust and cfg.robust.to_json(), "seed": cfg.seed}
     if "tags" in best:  # accumulated fitness: the mean of these evaluations' scores, in this order
         evaluation["tags"] = list(best["tags"])
     else:
         evaluation["tag"] = f"{best['generation']}/{best['key']}"
     return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
                            best["generation"] + 1, evaluation)
-
-
-def controller_of(champ: dict) -> DenseController | GraphController:
-    """The controller of a champion record, whatever its format: in full (SGR's dense layers, the
-    baselines' graphs), or as a function of the record's genome (SGR's `sgr_record`, direct's
-    `GraphController.to_derived_json`), rebuilt and checked against its digest. KeyError,
-    TypeError or ValueError when it is none of these."""
-    c = champ["controller"]
-    fmt = c.get("format") if isinstance(c, dict) else None
-    if fmt == sgr_record.FORMAT:  # SGR's, recorded as its genome's decoding: decoded again, checked
-        return sgr_record.rebuild(champ)
-    if fmt == GRAPH_DERIVED:  # direct's network, recorded as its genome: compiled again, checked
-        return GraphController.from_derived_json(c, champ["genome"])
-    return GraphController.from_json(c) if fmt == GRAPH_FORMAT else DenseController.from_json(c)
 
 
 def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
@@ -116,13 +100,23 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
     if np.shape(actions) != (len(b.actuator_flat),):
         raise SgrError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
                        f"{len(b.actuator_flat)} actuators")
-    # its fitness is reproducible in the precision it was scored in (records without the key: f64)
-    try:
-        runtime.use_precision(champ.get("precision") or "f64")
-    except ValueError as exc:
-        raise SgrError(f"{f}: key 'precision': scored in {champ.get('precision') or 'f64'}, to be "
-                       f"replayed in it: {exc} (start a new process)") from None
+    # its fitness is reproducible in the precision it was scored in (records without the key: f64):
+    # its replays pass that precision down to the simulator they build (`precision_of`); reading
+    # the file only checks that this process can (it sets nothing: the file is data)
+    precision = precision_of(champ)
+    if precision not in runtime.PRECISIONS:
+        raise SgrError(f"{f}: key 'precision': unknown precision {precision!r}; use one of "
+                       f"{', '.join(runtime.PRECISIONS)}")
+    if (why := runtime.switch_problem(precision)) is not None:
+        raise SgrError(f"{f}: key 'precision': scored in {precision}, to be replayed in it: {why} "
+                       "(start a new process)")
     return champ, body, ctrl
+
+
+def precision_of(champ: dict) -> str:
+    """The real type a champion record was scored in, which its replays simulate in (f64 for a
+    record from before the key)."""
+    return champ.get("precision") or "f64"
 
 
 MEDIAN = "median"  # champion_gif's default replay: the verdict's typical perturbed episode
@@ -157,7 +151,8 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
         return a if extra is None else a + extra[0]
 
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
-                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]))
+                            every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]),
+                            precision=precision_of(champ))
     return write_animation(frames, out, fps=fps, mp4_beside=mp4_beside)
 
 
@@ -214,7 +209,7 @@ def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndar
     as one batch through evolution's own episode loop."""
     n_obs = obs_dim(champ["task"], build_body(body).n_points)
     return rollout_policy(champ["task"], [body] * len(noise.keys), lambda env: _SameController(ctrl, n_obs),
-                          champ["episode_steps"], noise)
+                          champ["episode_steps"], noise, precision=precision_of(champ))
 
 
 def rescore_champion(run_dir: str | Path) -> float:
@@ -303,15 +298,20 @@ class Champion:
         """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
         return self.controller.act(obs)
 
+    @property
+    def precision(self) -> str:
+        """The real type its fitness was scored in: its env and replays simulate in it."""
+        return precision_of(self.record)
+
     def env(self, **kwargs):
-        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>)`;
-        `kwargs` go to gymnasium.make."""
+        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>,
+        precision=<its precision>)`; `kwargs` go to gymnasium.make."""
         import gymnasium as gym
 
         import tasks  # noqa: F401  (registers the sgr/<task> ids)
 
         return gym.make(f"sgr/{self.task}", body=self.body,
-                        **{"max_episode_steps": self.episode_steps, **kwargs})
+                        **{"max_episode_steps": self.episode_steps, "precision": self.precision, **kwargs})
 
     def rollout(self, env=None) -> float:
         """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
@@ -342,7 +342,7 @@ class Champion:
         from tsim.render import write_gif
 
         frames = render_episode(self.task, self.body, lambda t, obs: self.policy(obs), self.episode_steps,
-                                width, height, indexed=True)
+                                width, height, indexed=True, precision=self.precision)
         return write_gif(frames, out, fps=fps)
 
 

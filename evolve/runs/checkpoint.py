@@ -11,6 +11,9 @@ hold numbers, strings and lists, not code.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
+
+from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.runs.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config
@@ -24,22 +27,23 @@ def checkpoint_data(search, problem) -> dict:
             "problem": problem.state()}
 
 
-def decode_checkpoint(data: dict, cfg: dict, neat_config) -> dict:
+def decode_checkpoint(data: dict, cfg: RunConfig | Mapping, neat_config) -> dict:
     """A checkpoint's data as the state `Experiment` restores from: the search's (neat-python
     objects rebuilt from `neat_config`) with the method's under "problem"; StateError naming the
-    first field that is not as written."""
-    if data.get("method") != cfg["method"]:
-        raise StateError(f"checkpoint of method {data.get('method')!r}, the run's is {cfg['method']!r}")
+    first field that is not as written. `cfg`: the run's config (config.yaml as read: `RunConfig.of`)."""
+    cfg = RunConfig.of(cfg)
+    if data.get("method") != cfg.method:
+        raise StateError(f"checkpoint of method {data.get('method')!r}, the run's is {cfg.method!r}")
     state = decode_search_state(data.get("search"), neat_config)
     if state["generation"] != data["generation"]:
         raise StateError("search.generation differs from the checkpoint's generation")
-    state["problem"] = METHODS[cfg["method"]].decode_state(data.get("problem"), cfg)
+    state["problem"] = METHODS[cfg.method].decode_state(data.get("problem"), cfg)
     return state
 
 
-def load_checkpoint(run: RunDir, cfg: dict | None = None) -> dict | None:
+def load_checkpoint(run: RunDir, cfg: RunConfig | None = None) -> dict | None:
     """The newest usable checkpoint of `run`, decoded (RunDir.latest_checkpoint: damaged ones are
     skipped with one warning line); None when there is none."""
-    cfg = run.config() if cfg is None else cfg
+    cfg = RunConfig.of(run.config()) if cfg is None else cfg
     neat_config = load_neat_config(run.path / "neat.ini")
     return run.latest_checkpoint(lambda data: decode_checkpoint(data, cfg, neat_config))

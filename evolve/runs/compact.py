@@ -2,7 +2,7 @@
 
 Older champion files hold SGR's controller as JSON numbers (~45 KB at 5x5, ~0.5 MB at 10x10),
 direct NEAT's network node by node, and the genome as an object per gene, one value per line. They
-load as they are (`evolve.runs.champion.controller_of` reads every format). This rewrites them as
+load as they are (`evolve.methods.formats.controller_of` reads every format). This rewrites them as
 sgr now writes them, for a tree that must stay small (tests/test_tree_size.py): the controller as
 its genome's decoding (SGR, evolve/methods/sgr_record.py) or compiled form (direct,
 `GraphController.to_derived_json`) where that gives it back exactly, the genome by columns, lists
@@ -10,7 +10,7 @@ of plain values on one line (`record_json`). Every other key is kept as it is, a
 would not come back exactly stays in full, so a rewritten file loads as the same robot, bit for bit,
 and replays to the same returns.
 
-    python -m evolve.runs.compact docs/paper/runs docs/robust   # every champion*.json below
+    sgr migrate docs   # every champion*.json below (or: python -m evolve.runs.compact PATH...)
 """
 
 from __future__ import annotations
@@ -19,30 +19,14 @@ import json
 import sys
 from pathlib import Path
 
-import numpy as np
-
-from evolve.methods import sgr_record
-from evolve.methods.sgr import SgrProblem
-from evolve.methods.sgr_decoder import DecoderSettings
+from evolve.methods import METHODS, sgr_record
+from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
-from evolve.nn.graph import FORMAT as GRAPH_FORMAT
 from evolve.nn.graph import GraphController
-from evolve.runs.champion import controller_of
 from evolve.runs.files import atomic_write, read_yaml, record_json
 from evolve.search.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 
-DENSE_FORMAT = "sgr-dense-controller-1"
 MALFORMED = (KeyError, TypeError, ValueError, IndexError)
-
-
-def decoder_settings(record: dict, config: dict | None) -> DecoderSettings:
-    """The SGR decoder settings a champion was decoded with: its run's config keys (the method's
-    defaults where absent) at the shape of its body."""
-    cfg = {k: default for k, (_, default) in SgrProblem.config_keys.items()} | dict(config or {})
-    body = np.asarray(record["body"])
-    return DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
-                           cppn_outputs=int(cfg["cppn_outputs"]), threshold=float(cfg["weight_threshold"]),
-                           max_weight=float(cfg["max_weight"]))
 
 
 def same_controller(a, b) -> bool:
@@ -56,8 +40,8 @@ def same_controller(a, b) -> bool:
     return False
 
 
-def compact_record(record: dict, config: dict | None = None) -> dict:
-    """`record` in today's layout (module docstring); `config` is its run's config.yaml, when
+def compact_record(record: dict, raw: dict | None = None) -> dict:
+    """`record` in today's layout (module docstring); `raw` is its run's config.yaml, when
     there is one (SGR's decoder settings). Raises nothing for a record it cannot improve: it comes
     back with what could not be rewritten exactly left as it was."""
     out = dict(record)
@@ -71,15 +55,11 @@ def compact_record(record: dict, config: dict | None = None) -> dict:
                 out["genome"] = cols
         except MALFORMED:
             pass
-    c = record.get("controller")
-    fmt = c.get("format") if isinstance(c, dict) else None
+    method = METHODS.get(record.get("method")) if isinstance(record.get("method"), str) else None
     try:
         before = controller_of(record)
-        if fmt == DENSE_FORMAT and record.get("method") == "sgr" and "genome" in record:
-            candidate = sgr_record.to_json(before, decoder_settings(record, config))
-        elif fmt == GRAPH_FORMAT and record.get("method") == "direct" and "genome" in record:
-            candidate = before.to_derived_json()
-        else:
+        candidate = None if method is None else method.compact_controller(record, before, raw)
+        if candidate is None:  # the method's format is as short as it gets, or none is known
             return out
         if same_controller(before, controller_of({**out, "controller": candidate})):
             out["controller"] = candidate
@@ -98,8 +78,8 @@ def compact_file(path: str | Path) -> tuple[int, int]:
     if not isinstance(record, dict):  # not a champion record: left as it is
         return len(text.encode()), len(text.encode())
     cfg_file = path.parent / "config.yaml"
-    config = read_yaml(cfg_file) if cfg_file.is_file() else None
-    new = record_json(compact_record(record, config if isinstance(config, dict) else None))
+    raw = read_yaml(cfg_file) if cfg_file.is_file() else None
+    new = record_json(compact_record(record, raw if isinstance(raw, dict) else None))
     if new == text:
         return len(text.encode()), len(text.encode())
     again = json.loads(new)
@@ -126,6 +106,8 @@ def main(argv: list[str] | None = None) -> int:
     """`python -m evolve.runs.compact PATH...`: rewrite every champion file there; prints the bytes
     before and after."""
     paths = argv if argv is not None else sys.argv[1:]
+    print("note: python -m evolve.runs.compact is an alias of: sgr migrate PATH (one folder; it also "
+          "converts an older sgr's pickles, with --trust-pickle)", file=sys.stderr)
     missing = [p for p in paths if not Path(p).exists()]
     if not paths or missing:
         what = "no such file or folder: " + ", ".join(missing) if missing else "name files or folders"

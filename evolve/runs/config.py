@@ -12,7 +12,7 @@ run directory stores (config.yaml), with the run's precision; `arch` is the one 
 the config was checked, not written to config.yaml (segments.json records where each part of a run
 ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
 (keys missing, `episode_steps` null) included. Left out, `robust` and `final_selection` are the
-honest evaluation that `sgr evolve` runs by default (evolve/runs/run_config.py, `HONEST_ROBUST`);
+honest evaluation that `sgr evolve` runs by default (evolve/config.py, `HONEST_ROBUST`);
 null is the paper's nominal one.
 
 `imports` lists modules (names, or .py files relative to the config) that register tasks of your own
@@ -24,12 +24,12 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+from evolve.config import COMMON, FinalSelection, RunConfig, default
 from evolve.methods import METHODS
 from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from evolve.runs.files import read_yaml
-from evolve.runs.final_selection import FinalSelection, not_for
-from evolve.runs.run_config import COMMON, RunConfig, default
+from evolve.runs.final_selection import not_for
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
 from tsim import runtime
@@ -73,12 +73,12 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
         if key not in schema:
             raise SgrError(f"{source}: unknown key {key!r} for method {method!r}; "
                            f"known keys: {', '.join(sorted(schema))}")
-    cfg = {}
+    values = {}
     for key, (typ, fallback) in schema.items():
         if key not in raw:
             if key == "task":
                 raise SgrError(f"{source}: missing required key {key!r}")
-            cfg[key] = default(key, problem.reevaluate_elites) if key in COMMON else fallback
+            values[key] = default(key, problem.reevaluate_elites) if key in COMMON else fallback
             continue
         val = raw[key]
         if typ is float and isinstance(val, int) and not isinstance(val, bool):
@@ -87,36 +87,36 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
         ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
             raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
-        cfg[key] = val
-    imports = cfg["imports"]
+        values[key] = val
+    imports = values["imports"]
     if not all(isinstance(m, str) for m in imports):
         raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
                        f"got {imports!r}")
-    for ref in imports if named_in is None or cfg["task"] not in TASKS else ():  # the user's tasks
+    for ref in imports if named_in is None or values["task"] not in TASKS else ():  # the user's tasks
         try:
             import_tasks(ref, named_in=named_in)
         except ValueError as exc:
             raise SgrError(f"{source}: key 'imports': {exc}") from None
-    if cfg["task"] not in TASKS:
-        raise SgrError(f"{source}: key 'task': {unknown_task(cfg['task'])}")
+    if values["task"] not in TASKS:
+        raise SgrError(f"{source}: key 'task': {unknown_task(values['task'])}")
     for key in ("generations", "pop_size", "checkpoint_every"):
-        if cfg[key] < 1:
-            raise SgrError(f"{source}: key {key!r} must be >= 1, got {cfg[key]}")
-    shape = cfg["robot_shape"]
+        if values[key] < 1:
+            raise SgrError(f"{source}: key {key!r} must be >= 1, got {values[key]}")
+    shape = values["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
         raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
-    if (why := body_fit_problem(cfg["task"], (shape[0], shape[1]))) is not None:
+    if (why := body_fit_problem(values["task"], (shape[0], shape[1]))) is not None:
         raise SgrError(f"{source}: key 'robot_shape' {list(shape)}: {why}")
-    steps = cfg["episode_steps"]
+    steps = values["episode_steps"]
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                        f"got {steps!r}")
     # the run records the episode length it uses, not a rule for it
-    cfg["episode_steps"] = TASKS[cfg["task"]].episode_length(steps)
-    if (why := workers_problem(cfg["workers"])) is not None:
+    values["episode_steps"] = TASKS[values["task"]].episode_length(steps)
+    if (why := workers_problem(values["workers"])) is not None:
         raise SgrError(f"{source}: key 'workers' {why}")
     try:  # robust.py raises ValueError naming the key: the user's to fix
-        robust = Robust.from_config(cfg["robust"], source)
+        robust = Robust.from_config(values["robust"], source)
     except SgrError:
         raise
     except ValueError as exc:
@@ -128,23 +128,24 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
         precision = runtime.requested_precision(asked_precision)
     except ValueError as exc:
         raise SgrError(f"{source}: key 'precision': {exc}") from None
-    selection = FinalSelection.from_config(cfg["final_selection"], source)
+    selection = FinalSelection.from_config(values["final_selection"], source)
     if selection is not None and problem.reevaluate_elites:
         raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
-    if cfg["start_from"] is not None:
-        from evolve.runs.continuation import check_start_from
-
-        cfg["start_from"] = check_start_from(cfg, source)
     for key, name in problem.default_files.items():
-        if cfg[key] is None:
-            cfg[key] = str(configs_dir() / "neat" / name)
-        if not Path(cfg[key]).is_file():
-            raise SgrError(f"{source}: key {key!r}: file not found: {cfg[key]}")
-    problem.validate(cfg, source)
+        if values[key] is None:
+            values[key] = str(configs_dir() / "neat" / name)
+        if not Path(values[key]).is_file():
+            raise SgrError(f"{source}: key {key!r}: file not found: {values[key]}")
     from tsim.runtime import requested_arch
 
-    return RunConfig.build(cfg, problem.config_keys, arch=requested_arch(), precision=precision,
-                           robust=robust, selection=selection)
+    cfg = RunConfig.build(values, problem.config_keys, arch=requested_arch(), precision=precision,
+                          robust=robust, selection=selection)
+    if cfg.start_from is not None:
+        from evolve.runs.continuation import check_start_from
+
+        cfg = cfg.replace(start_from=check_start_from(cfg, source))
+    problem.validate(cfg, source)
+    return cfg
 
 
 def load_config(path: str | Path, overrides: dict | None = None, named_in: Path | None = None) -> RunConfig:

@@ -17,21 +17,22 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from evolve.config import RunConfig
 from evolve.runs.rundir import RunDir, checkpoint_generation, read_checkpoint_file
 from evolve.search.state_codec import decode_search_state
 from tsim.errors import SgrError
 
 
-def check_start_from(cfg: dict, source: str) -> dict:
+def check_start_from(cfg: RunConfig, source: str) -> dict:
     """`start_from` checked against the run it names and resolved to {run: absolute path,
     generation: G}; SgrError naming the key otherwise."""
     key = f"{source}: key 'start_from'"
-    start = cfg["start_from"]
+    start = cfg.start_from
     if set(start) - {"run", "generation"} or not isinstance(start.get("run"), str):
         raise SgrError(f"{key} must be {{run: PATH, generation: G}} (generation optional), got {start!r}")
-    if cfg["method"] != "sgr":
+    if cfg.method != "sgr":
         raise SgrError(f"{key}: only sgr runs start from another run's population (its genomes are "
-                       f"CPPNs, free of the body's size); a {cfg['method']} run continues with "
+                       f"CPPNs, free of the body's size); a {cfg.method} run continues with "
                        "sgr evolve --resume")
     run = RunDir(Path(start["run"]).resolve())
     if not (run.path / "config.yaml").is_file():
@@ -39,9 +40,9 @@ def check_start_from(cfg: dict, source: str) -> dict:
     src = run.config()
     if src.get("method") != "sgr":
         raise SgrError(f"{key}: {start['run']} is a {src.get('method')} run, not an sgr one")
-    if src.get("cppn_outputs", 1) != cfg["cppn_outputs"]:
+    if src.get("cppn_outputs", 1) != cfg.cppn_outputs:
         raise SgrError(f"{key}: {start['run']} evolved CPPNs with {src.get('cppn_outputs', 1)} outputs, "
-                       f"this config has cppn_outputs {cfg['cppn_outputs']}")
+                       f"this config has cppn_outputs {cfg.cppn_outputs}")
     generation = start.get("generation", run.last_checkpoint_generation())
     if generation is None:
         raise SgrError(f"{key}: {start['run']} has no checkpoint to start from")
@@ -50,9 +51,9 @@ def check_start_from(cfg: dict, source: str) -> dict:
         kept = ", ".join(str(checkpoint_generation(f)) for f in run.checkpoints()) or "none"
         raise SgrError(f"{key}: {start['run']} has no checkpoint after generation {generation!r} "
                        f"(it keeps: {kept})")
-    if cfg["generations"] <= generation:
+    if cfg.generations <= generation:
         raise SgrError(f"{source}: key 'generations' counts from the start of {start['run']}, which "
-                       f"has run {generation}: it must be above {generation}, got {cfg['generations']}")
+                       f"has run {generation}: it must be above {generation}, got {cfg.generations}")
     return {"run": str(run.path), "generation": generation}
 
 

@@ -19,13 +19,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.runs.champion import champion_record, read_champion
-from evolve.runs.run_config import RunConfig
+from evolve.runs.champion import champion_record, precision_of, read_champion
 from evolve.runs.rundir import RunDir
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tasks.specs import body_fit_problem
+from tsim.backend import get as get_backend
 from tsim.errors import SgrError
 
 
@@ -48,6 +49,7 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     if (why := body_fit_problem(cfg.task, shape)) is not None:
         raise SgrError(f"--shape {size}: {why}")
     record, _, _ = read_champion(run.path)
+    get_backend(precision=precision_of(record))  # scored in the champion's precision, as its run did
     if "genome" not in record:
         raise SgrError(f"{run.path / 'champion.json'}: no 'genome' record to decode")
     neat_config = load_neat_config(run.path / "neat.ini")

@@ -15,11 +15,12 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
 from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
-from evolve.runs.config import RunConfig, config_from_dict, load_config
+from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
 from evolve.runs.reporters import ReporterSet, configured_reporters
@@ -30,7 +31,6 @@ from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat
 from evolve.search.neat_search import NeatSearch
 from tasks.registry import task_reference
 from tasks.specs import BUILTIN
-from tsim import runtime
 from tsim.backend import Backend
 from tsim.backend import get as get_backend
 from tsim.errors import SgrError
@@ -38,10 +38,10 @@ from tsim.errors import SgrError
 
 def start_backend(precision: str) -> Backend:
     """Start Taichi in this process on $SGR_ARCH in the run's `precision` (its rollout workers
-    follow: they read $SGR_ARCH and $SGR_PRECISION): a backend that cannot run here fails now,
-    in one line, before anything is written, and the run records what it runs on."""
-    runtime.use_precision(precision)
-    return get_backend()
+    follow: they are started with this process's precision, evolve/rollout/pool.py): a backend that
+    cannot run here fails now, in one line, before anything is written, and the run records what
+    it runs on. The precision is an argument: no environment variable is set."""
+    return get_backend(precision=precision)
 
 
 def _workers(workers: int | str) -> int | str:
@@ -74,8 +74,8 @@ class Experiment:
         self.run, self.cfg, self.quiet = run, cfg, quiet
         self._warned_population = False  # `_warn_if_population_grew`
         self.reporters = ReporterSet(configured_reporters(cfg, run.path))  # evolve/runs/reporters.py
-        # the run's precision for this process and its rollout workers (they read $SGR_PRECISION)
-        runtime.use_precision(cfg.get("precision"))
+        # the run's precision for this process and its rollout workers (started with this process's)
+        start_backend(cfg.precision)
         self.neat_config = load_neat_config(run.path / "neat.ini")
         self.pool = rollout_pool(cfg.workers if workers is None else workers)
         method = METHODS[cfg.method]
@@ -86,7 +86,7 @@ class Experiment:
         robust = cfg.robust
         # (body_distance_weight is a key of sgr and direct; nested has none: plain NEAT speciation)
         self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
-                                 seed=cfg.seed, body_distance_weight=cfg.get("body_distance_weight", 0.0),
+                                 seed=cfg.seed, body_distance_weight=self.problem.body_distance_weight(),
                                  state=state, reevaluate=method.reevaluate_elites
                                  or (robust is not None and robust.reevaluate),
                                  accumulate=robust is not None and robust.accumulate,
@@ -108,8 +108,8 @@ class Experiment:
 
     @classmethod
     def _start(cls, cfg: RunConfig, out: str | Path, quiet: bool) -> Experiment:
-        ini = neat_ini_text(cfg["neat_config"], cfg, METHODS[cfg["method"]].neat_overrides(cfg))
-        neat_config_from_text(ini, cfg["neat_config"])  # a bad INI must fail before the run exists
+        ini = neat_ini_text(cfg.neat_config, cfg.pop_size, METHODS[cfg.method].neat_overrides(cfg))
+        neat_config_from_text(ini, cfg.neat_config)  # a bad INI must fail before the run exists
         if cfg.workers == "ray":
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")
@@ -118,8 +118,8 @@ class Experiment:
         with run.locked_unless_it_fails():
             run.create(cfg, ini)
             record_segment(run.path, 0, here.record(), _workers(cfg.workers))
-            if cfg["task"] not in BUILTIN and not cfg.get("imports"):  # registered in a script
-                run.save_task(task_reference(cfg["task"]))
+            if cfg.task not in BUILTIN and not cfg.imports:  # registered in a script
+                run.save_task(task_reference(cfg.task))
             state = None
             if cfg.start_from is not None:  # another run's population (evolve/runs/continuation.py)
                 state = continued_state(cfg.start_from, load_neat_config(run.path / "neat.ini"))
@@ -133,9 +133,10 @@ class Experiment:
         """Continue a run from its newest usable checkpoint; `generations` extends a run (finished
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
-        cfg = run.config()
-        run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
-        here = start_backend(cfg.get("precision") or "f64")  # the run's; the arch: this process's
+        raw = run.config()
+        run.load_task(raw)  # the run's own task: its imports, or the one a script registered
+        cfg = RunConfig.of(raw)
+        here = start_backend(cfg.precision)  # the run's; the arch: this process's
         with run.locked_unless_it_fails():
             state = load_checkpoint(run, cfg)
             if state is None:
@@ -145,11 +146,11 @@ class Experiment:
                 if generations < done:
                     raise SgrError(f"{out} has already run {done} generations; --generations must be "
                                    f">= {done}")
-                if generations != cfg["generations"]:
-                    cfg = {**cfg, "generations": generations}
-                    run.update_config(cfg)
-            if done >= cfg["generations"] and not run.end_files_pending():
-                raise SgrError(f"{out} is finished ({done} of {cfg['generations']} generations); "
+                if generations != cfg.generations:
+                    cfg = cfg.replace(generations=generations)
+                    run.update_config({**raw, "generations": generations})  # its keys as they were
+            if done >= cfg.generations and not run.end_files_pending():
+                raise SgrError(f"{out} is finished ({done} of {cfg.generations} generations); "
                                "add --generations N to extend it")
             run.truncate_rows(done)
             exp = cls(run, cfg, state=state, quiet=quiet, workers=workers)
@@ -174,16 +175,16 @@ class Experiment:
         cfg, search = self.cfg, self.search
         t_start = time.perf_counter()
         with stop_after_generation() as stop, self.reporters.running(self):
-            while search.generation < cfg["generations"]:
+            while search.generation < cfg.generations:
                 row = search.step()
-                final = self.selection is not None and search.generation == cfg["generations"]
+                final = self.selection is not None and search.generation == cfg.generations
                 if final:  # before the row: a run killed while choosing runs its last generation again
                     chosen = self._select_champion()
                 self.run.append_row({**row, "generation": row["generation"] + 1})  # counted from 1
                 if not final:
                     self._write_champion()
                 g = search.generation
-                if g % cfg["checkpoint_every"] == 0 or g == cfg["generations"] or stop.is_set():
+                if g % cfg.checkpoint_every == 0 or g == cfg.generations or stop.is_set():
                     self.run.save_checkpoint(search.generation, self.state())
                 self._progress(row, time.perf_counter() - t_start)
                 self._warn_if_population_grew(row)
@@ -192,7 +193,7 @@ class Experiment:
                     print(chosen, flush=True)
                 if after_generation is not None:
                     after_generation(self)
-                if stop.is_set() and search.generation < cfg["generations"]:
+                if stop.is_set() and search.generation < cfg.generations:
                     raise Interrupted(stop.signum)
 
     def _write_champion(self) -> None:
@@ -213,7 +214,7 @@ class Experiment:
         neat-python keeps each species' elites whatever pop_size says, so a speciation that
         splits nearly every genome off grows the population (and each generation's cost) without
         bound."""
-        n, pop = row["n_valid"] + row["n_invalid"], int(self.cfg["pop_size"])
+        n, pop = row["n_valid"] + row["n_invalid"], int(self.cfg.pop_size)
         if self._warned_population or n <= 1.25 * pop:
             return
         self._warned_population = True
@@ -226,7 +227,7 @@ class Experiment:
         if self.quiet:
             return
         best = self.search.best["fitness"] if self.search.best else math.nan
-        print(f"gen {row['generation'] + 1:>4}/{self.cfg['generations']}  best {row['best']:8.3f}  "
+        print(f"gen {row['generation'] + 1:>4}/{self.cfg.generations}  best {row['best']:8.3f}  "
               f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
               f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
               f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
@@ -279,7 +280,7 @@ class Experiment:
             print(f"champion {verdict.line()}", flush=True)
 
 
-def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:
+def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
     """The files drawn from a run's results: fitness.png (with its champion) always, champion.gif
     when `render_champion` is set (or the run has one: it must show the champion of
     champion.json). Each is written whole or not at all, and while they are written the run is
@@ -289,7 +290,7 @@ def write_end_files(run: RunDir, cfg: dict, champion: bool = True) -> None:
 
     run.begin_end_files()
     plot_run(run.path, run.path / "fitness.png")
-    if champion and (cfg.get("render_champion", True) or (run.path / "champion.gif").exists()):
+    if champion and (cfg.render_champion or (run.path / "champion.gif").exists()):
         champion_gif(run.path)
     run.end_files_written()
 
@@ -300,15 +301,17 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
     select-champion`): the run's own `final_selection` (else the defaults) with `overrides`; then
     the files drawn from the champion (champion.gif, fitness.png) are drawn again."""
     run = RunDir(run_dir)
-    cfg = run.config()
-    run.load_task(cfg)  # the run's own task: its imports, or the one a script registered
+    raw = run.config()
+    run.load_task(raw)  # the run's own task: its imports, or the one a script registered
+    cfg = RunConfig.of(raw)
     state = load_checkpoint(run, cfg)
     if state is None:
         raise SgrError(f"{run_dir} has no checkpoint")
-    if state["generation"] < cfg["generations"]:
-        raise SgrError(f"{run_dir} is not finished ({state['generation']} of {cfg['generations']} "
+    if state["generation"] < cfg.generations:
+        raise SgrError(f"{run_dir} is not finished ({state['generation']} of {cfg.generations} "
                        "generations): resume it first")
-    settings = FinalSelection.from_config({**(cfg.get("final_selection") or {}), **(overrides or {})},
+    settings = FinalSelection.from_config({**(cfg.final_selection.to_json() if cfg.final_selection else {}),
+                                           **(overrides or {})},
                                           "sgr select-champion")
     with run.locked_unless_it_fails():
         exp = Experiment(run, cfg, state=state, quiet=True, workers=workers)

@@ -65,103 +65,23 @@ best-ever genome was dropped or ranked below).
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
+from evolve.config import (
+    AUTO,
+    COUNTS,
+    SHARE,
+    FinalSelection,
+    run_episodes,
+    selection_episodes,
+)
 from evolve.runs.champion import best_ever_record, champion_record
 from evolve.runs.files import atomic_write, record_json
 from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"
 TAG = "final"
-RANKS = ("min", "score", "pooled")
-AUTO = "auto"
-SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
-MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
-FLOORS = {"candidates": 2, "episodes": 8, "confirm": 8}  # ... and the least it shrinks to
-COUNTS = ("candidates", "episodes", "confirm", "holdout")
-
-
-@dataclass(frozen=True)
-class FinalSelection:
-    """The `final_selection` config key (null: the champion is the best-ever genome). The counts
-    may be "auto": sized by the run's length (`sized`, module docstring)."""
-    candidates: int | str = AUTO  # the top final elites by recorded fitness, plus the best-ever genome
-    episodes: int | str = AUTO
-    statistic: str = "mean"
-    tolerance: float = 0.05  # holds: score >= nominal return - tolerance x |nominal return|
-    rank: str = "min"  # among those that hold: min(score, nominal return), "score" alone, or "pooled"
-    confirm: int | str = 0  # > 0: the hold judged again on this many fresh episodes
-    holdout: int | str = AUTO  # fresh episodes of the champion alone that give its fitness
-
-    def to_json(self) -> dict:
-        """The config mapping (every key)."""
-        return asdict(self)
-
-    def robust(self, run_robust: dict | None, episodes: int | None = None) -> Robust:
-        """How candidates are scored: the run's perturbation (uniform(+-1e-3) on a nominal run),
-        this selection's episodes (or `episodes`: the confirmation's, the holdout's) and
-        statistic, no re-evaluation."""
-        base = Robust.from_config(run_robust) or Robust()
-        return Robust(episodes or self.episodes, base.action_noise, base.action_scale, base.offset,
-                      self.statistic)
-
-    def sized(self, run_episodes: int) -> FinalSelection:
-        """This selection with every "auto" count resolved for a run that asks for `run_episodes`
-        episodes (`run_episodes`): the maxima shrunk by one common factor until the selection's
-        episodes fit `SHARE` of them, never below the floors (module docstring)."""
-        budget = int(SHARE * run_episodes)
-        fixed = {k: getattr(self, k) for k in COUNTS if getattr(self, k) != AUTO}
-
-        def at(step: int) -> dict:
-            v = {k: fixed.get(k, max(FLOORS[k], MAXIMA[k] * step // 64)) for k in MAXIMA}
-            v["holdout"] = fixed.get("holdout", v["episodes"])
-            return v
-
-        for step in range(64, 0, -1):
-            counts = at(step)
-            if selection_episodes(counts) <= budget:
-                break
-        return FinalSelection(**{**self.to_json(), **counts})
-
-    @classmethod
-    def from_config(cls, raw: object, source: str = "config") -> FinalSelection | None:
-        """The checked mapping; None stays None. ValueError naming `source` and the key."""
-        if raw is None:
-            return None
-        name = f"{source}: key 'final_selection"
-        sel = config_dataclass(cls, raw, name)
-        for key, least in (("candidates", 1), ("episodes", 1), ("confirm", 0), ("holdout", 1)):
-            v = getattr(sel, key)
-            if v != AUTO and (not isinstance(v, int) or isinstance(v, bool) or v < least):
-                raise SgrError(f"{name}.{key}' must be an int >= {least} or auto, got {v!r}")
-        try:
-            Robust.from_config({"statistic": sel.statistic}, source)
-        except ValueError:
-            raise SgrError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, "
-                           f"got {sel.statistic!r}") from None
-        h = sel.tolerance
-        if isinstance(h, bool) or not isinstance(h, int | float) or not (0 <= h <= 1):
-            raise SgrError(f"{name}.tolerance' must be a number in [0, 1], got {h!r}")
-        if sel.rank not in RANKS:
-            raise SgrError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
-        return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank, sel.confirm, sel.holdout)
-
-
-def run_episodes(cfg) -> int:
-    """The episodes a run asks for: generations x pop_size x its robust episodes (1 when nominal).
-    From the config alone, so a resumed run sizes its selection as the uninterrupted one did."""
-    robust = Robust.from_config(cfg.get("robust"))
-    return int(cfg["generations"]) * int(cfg["pop_size"]) * (robust.episodes if robust else 1)
-
-
-def selection_episodes(counts: dict) -> int:
-    """The episodes a selection of these counts simulates at most (+1s: the best-ever genome, the
-    exact episode)."""
-    return ((counts["candidates"] + 1) * (counts["episodes"] + 1 + counts["confirm"])
-            + counts["holdout"])
 
 
 def not_for(method: str) -> str:
@@ -216,14 +136,14 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     run's length first (`FinalSelection.sized`)."""
     cfg, search, problem = exp.cfg, exp.search, exp.problem
     if type(problem).reevaluate_elites:
-        raise SgrError(f"final_selection {not_for(cfg['method'])}")
+        raise SgrError(f"final_selection {not_for(cfg.method)}")
     if search.best is None:
         raise SgrError(f"{exp.run.path} has no champion to choose from yet")
     asked = settings
     settings = settings.sized(run_episodes(cfg))
     cands = candidates(search, settings.candidates)
     phenotypes = [search.decode(g) for _, g in cands]
-    robust = settings.robust(cfg.get("robust"))
+    robust = settings.robust(cfg.robust)
     tags = [f"{TAG}/{k}" for k, _ in cands]
     with problem.scored_with(robust.to_json()):
         scores = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
@@ -232,12 +152,12 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     confirmed = None
     if settings.confirm:
         confirm_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
-        with problem.scored_with(settings.robust(cfg.get("robust"), settings.confirm).to_json()):
+        with problem.scored_with(settings.robust(cfg.robust, settings.confirm).to_json()):
             confirmed = np.asarray(problem.evaluate(phenotypes, confirm_tags)[0], dtype=float)
     i, holds = choose(scores, nominal, settings.tolerance, settings.rank, confirmed,
                       (settings.episodes, settings.confirm))
     # the headline: the chosen genome alone, on fresh episodes that took no part in the choice
-    fit_robust = settings.robust(cfg.get("robust"), settings.holdout)
+    fit_robust = settings.robust(cfg.robust, settings.holdout)
     fit_tag = f"{TAG}-holdout/{cands[i][0]}"
     with problem.scored_with(fit_robust.to_json()):
         fit = float(np.asarray(problem.evaluate([phenotypes[i]], [fit_tag])[0], dtype=float)[0])
@@ -245,7 +165,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]
     champ = champion_record(cfg, problem, genome, phenotypes[i], fit, search.generation,
-                            {"robust": fit_robust.to_json(), "seed": cfg["seed"], "tag": fit_tag})
+                            {"robust": fit_robust.to_json(), "seed": cfg.seed, "tag": fit_tag})
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
              "score": float(s), "nominal": float(n), "holds": bool(h)}
             for (k, g), s, n, h in zip(cands, scores, nominal, holds, strict=True)]

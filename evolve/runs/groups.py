@@ -124,10 +124,10 @@ def _not_a_run(folder: Path, need_config: bool) -> str | None:
         if "config.yaml" not in has:
             return "generations.csv but no config.yaml" if need_config else None
         try:
-            cfg = yaml.safe_load((folder / "config.yaml").read_text())
+            raw = yaml.safe_load((folder / "config.yaml").read_text())
         except (yaml.YAMLError, UnicodeDecodeError):
             return "config.yaml is not valid YAML"
-        return None if isinstance(cfg, dict) else "config.yaml is not a mapping of settings"
+        return None if isinstance(raw, dict) else "config.yaml is not a mapping of settings"
     if "config.yaml" in has:
         return "config.yaml but no generations.csv (a run that never started?)"
     if "champion.json" in has:
@@ -141,60 +141,60 @@ def read_config(run_dir: Path) -> dict:
     if not f.is_file():
         return {}
     try:
-        cfg = yaml.safe_load(f.read_text())
+        raw = yaml.safe_load(f.read_text())
     except UnicodeDecodeError:
         raise SgrError(f"{f}: not a text file") from None
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         raise SgrError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
-    return cfg if isinstance(cfg, dict) else {}
+    return raw if isinstance(raw, dict) else {}
 
 
-def episode_length(cfg: dict, task: str) -> int | None:
+def episode_length(raw: dict, task: str) -> int | None:
     """The episode length a run used: its config's (runs record it), or for a config that left it
     out (null: the paper's, "evogym": evogym's) the task's; None for a task not registered here."""
     from tasks.specs import TASKS
 
-    steps = cfg.get("episode_steps")
+    steps = raw.get("episode_steps")
     if isinstance(steps, int):
         return steps
     spec = TASKS.get(task)
     return None if spec is None else spec.episode_length(steps)
 
 
-def run_settings(run_dir: Path, cfg: dict | None = None) -> dict[str, str]:
+def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
     """The value of each of SETTINGS for a run, as text; a run without config.yaml (plots take
     those) has its method from its parent folder's name and "?" for the rest."""
-    cfg = read_config(run_dir) if cfg is None else cfg
-    method = str(cfg.get("method") or (Path(run_dir).resolve().parent.name or UNKNOWN))
-    if cfg.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own method
-        method = f"{method} ({cfg['layout']})"
-    task = str(cfg.get("task") or UNKNOWN)
-    if not cfg:
+    raw = read_config(run_dir) if raw is None else raw
+    method = str(raw.get("method") or (Path(run_dir).resolve().parent.name or UNKNOWN))
+    if raw.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own method
+        method = f"{method} ({raw['layout']})"
+    task = str(raw.get("task") or UNKNOWN)
+    if not raw:
         return {"method": method, "task": task, **{k: "?" for k in POOLABLE}}
-    shape = cfg.get("robot_shape") or [5, 5]
+    shape = raw.get("robot_shape") or [5, 5]
     try:
-        steps = episode_length(cfg, task)
+        steps = episode_length(raw, task)
     except (TypeError, ValueError):
         steps = None
-    start = cfg.get("start_from")
+    start = raw.get("start_from")
     return {"method": method, "task": task,
             "shape": "x".join(map(str, shape)) if isinstance(shape, list) else str(shape),
-            "pop": str(cfg.get("pop_size", 128)), "generations": str(cfg.get("generations", 250)),
+            "pop": str(raw.get("pop_size", 128)), "generations": str(raw.get("generations", 250)),
             "steps": "?" if steps is None else str(steps),
-            "evaluation": _evaluation(cfg.get("robust")), "selection": _selection(cfg.get("final_selection")),
-            "precision": str(cfg.get("precision") or "f64"), "arch": _arches(run_dir, cfg),
+            "evaluation": _evaluation(raw.get("robust")), "selection": _selection(raw.get("final_selection")),
+            "precision": str(raw.get("precision") or "f64"), "arch": _arches(run_dir, raw),
             "start": f"from g{start.get('generation', '?')}" if isinstance(start, dict) else "fresh"}
 
 
-def _arches(run_dir: Path, cfg: dict) -> str:
+def _arches(run_dir: Path, raw: dict) -> str:
     """The arch(s) the run ran on, in the order of its segments (segments.json: "cuda, then cpu" for
     a run resumed elsewhere); an older run's config.yaml `arch`; "not recorded" otherwise."""
     from evolve.runs.segments import segments
 
     arches = list(dict.fromkeys(str(s.get("arch")) for s in segments(run_dir)))
-    if not arches and isinstance(cfg.get("arch"), str):
-        arches = [cfg["arch"]]
+    if not arches and isinstance(raw.get("arch"), str):
+        arches = [raw["arch"]]
     return ", then ".join(arches) or "not recorded"
 
 

@@ -3,7 +3,7 @@ checkpoints, and the pickled spec of a script's task (task.pkl) to a task refere
 the task's name, the file its reward was defined in and that file's sha256; tasks/registry.py).
 
 This is the one place where sgr unpickles a file, and it runs only when the user says that they
-trust the folder (`sgr convert-checkpoints DIR --trust-pickle`): a pickle can run any code when it
+trust the folder (`sgr migrate DIR --trust-pickle`): a pickle can run any code when it
 is loaded. Resuming never comes here; it refuses a run holding only pickles with the command above.
 A converted checkpoint holds the same state, so the run resumes from it as it would have from the
 pickle; each pickle is deleted once its JSON replacement is written.
@@ -81,7 +81,7 @@ def convert_run(run: RunDir) -> list[str]:
     written = []
     cfg = run.config()
     if run.pickled_checkpoints():
-        run.load_task(cfg)  # a task of the user's (the folder is trusted: `sgr convert-checkpoints`)
+        run.load_task(cfg)  # a task of the user's (the folder is trusted: `sgr migrate`)
     run.lock()
     try:
         for f in run.pickled_checkpoints():

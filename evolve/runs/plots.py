@@ -84,7 +84,7 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     evaluation), "sgr 10x10" (a body size other than the paper's 5x5), "sgr 10x10 from g50" (a run
     that started from another run's generation 50: `start_from`)."""
     run_dir = Path(run_dir)
-    cfg: dict = {}
+    raw: dict = {}
     f = run_dir / "config.yaml"
     if f.is_file():
         try:
@@ -94,20 +94,20 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
         except yaml.YAMLError as exc:
             mark = getattr(exc, "problem_mark", None)
             raise SgrError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
-        cfg = loaded if isinstance(loaded, dict) else {}
+        raw = loaded if isinstance(loaded, dict) else {}
     parent = run_dir.resolve().parent.name or UNKNOWN
-    method = str(cfg.get("method") or parent)
-    if cfg.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own group
-        method = f"{method} ({cfg['layout']})"
-    if cfg.get("robust"):  # scored by robust evaluation: another quantity, its own group
+    method = str(raw.get("method") or parent)
+    if raw.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own group
+        method = f"{method} ({raw['layout']})"
+    if raw.get("robust"):  # scored by robust evaluation: another quantity, its own group
         method = f"{method} robust"
-    shape = cfg.get("robot_shape")
+    shape = raw.get("robot_shape")
     if isinstance(shape, list) and len(shape) == 2 and list(shape) != [5, 5]:  # the paper's size unsaid
         method = f"{method} {shape[0]}x{shape[1]}"
-    start = cfg.get("start_from")
+    start = raw.get("start_from")
     if isinstance(start, dict):  # grown from another run's population: its own group
         method = f"{method} from g{start.get('generation', '?')}"
-    return method, str(cfg.get("task") or UNKNOWN)
+    return method, str(raw.get("task") or UNKNOWN)
 
 
 def summarize_runs(run_dirs: Sequence[str | Path], column: str = "best",

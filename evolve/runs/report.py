@@ -154,12 +154,12 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
     rows = []
     for d in runs:
         g = group_of[d]
-        cfg = yaml.safe_load((d / "config.yaml").read_text()) or {}
+        raw = yaml.safe_load((d / "config.yaml").read_text()) or {}
         best = best_so_far(d)
         cols = read_generations(d)
-        row = {"method": g.label, "task": g.task, "seed": cfg.get("seed"), "generations": len(best),
+        row = {"method": g.label, "task": g.task, "seed": raw.get("seed"), "generations": len(best),
                "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
-               "episode_steps": episode_length(cfg, g.task), "settings": g.settings, "classic": g.classic,
+               "episode_steps": episode_length(raw, g.task), "settings": g.settings, "classic": g.classic,
                "path": d}
         fitness = _recorded_fitness(d)
         if fitness is not None:

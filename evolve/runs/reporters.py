@@ -114,7 +114,7 @@ def configured_reporters(cfg: Any, run_path: Path) -> list[Any]:
     """The reporters a run's config asks for: `tensorboard: true` a TensorBoardReporter in
     RUN/tensorboard (without tensorboardX: one line saying how to install it, and the run goes on
     without it)."""
-    if not cfg.get("tensorboard"):
+    if not cfg.tensorboard:
         return []
     try:
         return [TensorBoardReporter(run_path / "tensorboard")]

@@ -33,6 +33,7 @@ from pathlib import Path
 
 import yaml
 
+from evolve.config import RunConfig
 from evolve.runs.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
 
@@ -155,7 +156,7 @@ class RunDir:
             raise
 
     # ------------------------------------------------------------------ creation
-    def create(self, cfg: dict, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
+    def create(self, cfg: RunConfig, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
         """Write a new run's config.yaml, neat.ini, any `extra_files` and an empty generations.csv;
         ValueError when the directory already holds a run."""
         if (self.path / "generations.csv").exists():
@@ -163,7 +164,7 @@ class RunDir:
                            "or another --out")
         self.ckpt_dir.mkdir(parents=True, exist_ok=True)
         # the arch is not the config's: segments.json records where each part of the run ran
-        atomic_write(self.path / "config.yaml", yaml.safe_dump({k: v for k, v in dict(cfg).items()
+        atomic_write(self.path / "config.yaml", yaml.safe_dump({k: v for k, v in cfg.to_yaml().items()
                                                                 if k != "arch"}, sort_keys=False).encode())
         atomic_write(self.path / "neat.ini", neat_ini.encode())
         for name, text in (extra_files or {}).items():
@@ -175,10 +176,10 @@ class RunDir:
         f = self.path / "config.yaml"
         if not f.is_file():
             raise SgrError(f"{self.path} is not a run directory (no config.yaml)")
-        cfg = read_yaml(f)
-        if not isinstance(cfg, dict) or "method" not in cfg:
+        raw = read_yaml(f)
+        if not isinstance(raw, dict) or "method" not in raw:
             raise SgrError(f"{f}: not a run config (no 'method' key)")
-        return cfg
+        return raw
 
     def save_task(self, reference: dict) -> None:
         """Keep the reference to a task registered in a script (no `imports:` names it): its name,
@@ -188,7 +189,7 @@ class RunDir:
 
         atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode())
 
-    def load_task(self, cfg: dict) -> None:
+    def load_task(self, raw: dict) -> None:
         """Register the run's own task in this process, unless it is sgr's or registered already:
         import the modules its config names (`imports:`), else the file its task reference names
         (a script's); either only after --trust-imports (tasks/registry.py). Reading the folder
@@ -198,10 +199,10 @@ class RunDir:
         from tasks.specs import TASKS, unknown_task
 
         named_in = self.path / "config.yaml"
-        task = cfg.get("task")
+        task = raw.get("task")
         if not isinstance(task, str) or task in TASKS:
             return
-        refs = cfg.get("imports") or ()
+        refs = raw.get("imports") or ()
         for ref in refs:
             import_tasks(ref, named_in=named_in)
         if not refs and (self.path / TASK_FILE).is_file():
@@ -210,14 +211,14 @@ class RunDir:
             raise SgrError(f"{self.path / OLD_TASK_FILE}: an older sgr kept the run's task {task!r} as a "
                            "pickle, which sgr does not load (it can run any code); register the task in "
                            "your process first, or, if you trust this folder, convert it with: "
-                           f"sgr convert-checkpoints {self.path} --trust-pickle")
+                           f"sgr migrate {self.path} --trust-pickle")
         if task not in TASKS:
             raise SgrError(f"{self.path}: {unknown_task(task)}; a task of your own is known once the "
                            f"file that registers it is imported: add imports: [that file] to {named_in}")
 
-    def update_config(self, cfg: dict) -> None:
-        """Replace config.yaml atomically (a resume that extends `generations` does)."""
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(cfg), sort_keys=False).encode())
+    def update_config(self, raw: dict) -> None:
+        """Replace config.yaml atomically with `raw` (a resume that extends `generations` does)."""
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(raw), sort_keys=False).encode())
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
@@ -351,7 +352,7 @@ class RunDir:
                 f"{self.ckpt_dir} holds only pickled checkpoints of an older sgr "
                 f"({', '.join(f.name for f in self.pickled_checkpoints())}); sgr does not load "
                 "pickles, which can run any code; if you trust this folder, convert them with: "
-                f"sgr convert-checkpoints {self.path} --trust-pickle")
+                f"sgr migrate {self.path} --trust-pickle")
         damaged = []
         for f in ours:
             try:

@@ -32,12 +32,12 @@ def segments(run: str | Path) -> list[dict]:
             return []
         return [s for s in data if isinstance(s, dict)] if isinstance(data, list) else []
     try:
-        cfg = yaml.safe_load((Path(run) / "config.yaml").read_text())
+        raw = yaml.safe_load((Path(run) / "config.yaml").read_text())
     except (OSError, yaml.YAMLError):
         return []
-    if isinstance(cfg, dict) and isinstance(cfg.get("arch"), str):  # an older sgr's record
-        return [{"after_generation": 0, "arch": cfg["arch"], "device": None, "software": None,
-                 "precision": cfg.get("precision") or "f64", "workers": cfg.get("workers"), "started": None}]
+    if isinstance(raw, dict) and isinstance(raw.get("arch"), str):  # an older sgr's record
+        return [{"after_generation": 0, "arch": raw["arch"], "device": None, "software": None,
+                 "precision": raw.get("precision") or "f64", "workers": raw.get("workers"), "started": None}]
     return []
 
 
@@ -55,9 +55,9 @@ def record_segment(run: str | Path, after_generation: int, backend: dict, worker
     found.append(entry)
     atomic_write(run / SEGMENTS_FILE, (json.dumps(found, indent=1) + "\n").encode())
     cfg_file = run / "config.yaml"
-    cfg = yaml.safe_load(cfg_file.read_text())
-    if isinstance(cfg, dict) and "arch" in cfg:  # recorded above now, where it stays true
-        atomic_write(cfg_file, yaml.safe_dump({k: v for k, v in cfg.items() if k != "arch"},
+    raw = yaml.safe_load(cfg_file.read_text())
+    if isinstance(raw, dict) and "arch" in raw:  # recorded above now, where it stays true
+        atomic_write(cfg_file, yaml.safe_dump({k: v for k, v in raw.items() if k != "arch"},
                                               sort_keys=False).encode())
     return found
 

@@ -198,7 +198,7 @@ class Sweep:
             raise SgrError(f"{len(old)} run(s) of {out} ({names}) "
                            "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
                            "which can run any code; if you trust this folder, convert them with: "
-                           f"sgr convert-checkpoints {out} --trust-pickle")
+                           f"sgr migrate {out} --trust-pickle")
         return sweep
 
     def run_dir(self, run: SweepRun) -> RunDir:
@@ -401,5 +401,5 @@ def _wanted(sweep: Sweep, run: SweepRun) -> int:
     from evolve.runs.config import load_config
 
     path, overrides = run_config(sweep.sweep, run, named_in=sweep.named_in)
-    return int(load_config(path, overrides, sweep.named_in)["generations"])
+    return int(load_config(path, overrides, sweep.named_in).generations)
 

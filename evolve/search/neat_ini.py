@@ -35,8 +35,8 @@ def ini_problem(exc: configparser.Error) -> str:
     return " ".join(str(exc).split())
 
 
-def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
-    """The neat-python INI with pop_size and method-specific values taken from the YAML config."""
+def neat_ini_text(path: str, pop_size: int, overrides: dict) -> str:
+    """The neat-python INI with the config's `pop_size` and method-specific values (`overrides`)."""
     cp = configparser.ConfigParser()
     try:
         if not cp.read(path):
@@ -48,7 +48,7 @@ def neat_ini_text(path: str, cfg: dict, overrides: dict) -> str:
     for section in ("NEAT", *SECTIONS):
         if section not in cp:
             raise SgrError(f"{path}: neat config lacks the [{section}] section")
-    cp["NEAT"]["pop_size"] = str(cfg["pop_size"])
+    cp["NEAT"]["pop_size"] = str(pop_size)
     # neat-python reads each section under its class's name
     for default, ours in SECTIONS.items():
         cp[ours] = dict(cp[default])

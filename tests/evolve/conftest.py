@@ -11,8 +11,7 @@ from evolve.search.neat_ini import load_neat_config, neat_ini_text
 def neat_config(tmp_path, repo_root):
     """The SGR neat config with the given pop size and CPPN outputs, as `sgr evolve` builds it."""
     def make(pop: int = 16, outputs: int = 1) -> neat.Config:
-        cfg = {"pop_size": pop}
-        ini = neat_ini_text(str(repo_root / "configs/neat/sgr.ini"), cfg,
+        ini = neat_ini_text(str(repo_root / "configs/neat/sgr.ini"), pop,
                             {"DefaultGenome": {"num_outputs": str(outputs)}})
         p = tmp_path / f"neat-{pop}-{outputs}.ini"
         p.write_text(ini)
@@ -25,13 +24,13 @@ def shipped_config(tmp_path, repo_root):
     """A shipped `configs/<method>/<task>.yaml` with `changes`, its neat ini paths made absolute,
     written to tmp_path (a tiny run of the real config)."""
     def make(method: str, task: str = "Walker-v0", **changes):
-        cfg = yaml.safe_load((repo_root / f"configs/{method}/{task}.yaml").read_text())
-        cfg.update(changes)
+        raw = yaml.safe_load((repo_root / f"configs/{method}/{task}.yaml").read_text())
+        raw.update(changes)
         for key in ("neat_config", "controller_neat_config"):
-            if key in cfg:
-                cfg[key] = str((repo_root / f"configs/{method}" / cfg[key]).resolve())
+            if key in raw:
+                raw[key] = str((repo_root / f"configs/{method}" / raw[key]).resolve())
         p = tmp_path / f"{method}-{task}.yaml"
-        p.write_text(yaml.safe_dump(cfg))
+        p.write_text(yaml.safe_dump(raw))
         return p
     return make
 

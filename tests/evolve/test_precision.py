@@ -11,11 +11,11 @@ from evolve.runs.config import config_from_dict
 def test_precision_key_is_checked_and_recorded(monkeypatch):
     monkeypatch.delenv("SGR_PRECISION", raising=False)
     base = {"method": "sgr", "task": "Walker-v0"}
-    assert config_from_dict(base)["precision"] == "f64"  # recorded, not null: a resume keeps it
-    assert config_from_dict({**base, "precision": "f32"})["precision"] == "f32"
+    assert config_from_dict(base).precision == "f64"  # recorded, not null: a resume keeps it
+    assert config_from_dict({**base, "precision": "f32"}).precision == "f32"
     monkeypatch.setenv("SGR_PRECISION", "f32")
-    assert config_from_dict(base)["precision"] == "f32"  # null: $SGR_PRECISION
-    assert config_from_dict({**base, "precision": "f64"})["precision"] == "f64"  # the key wins
+    assert config_from_dict(base).precision == "f32"  # null: $SGR_PRECISION
+    assert config_from_dict({**base, "precision": "f64"}).precision == "f64"  # the key wins
     with pytest.raises(ValueError, match=r"^config: key 'precision': unknown precision 'f16'; use one of "
                                          r"f64, f32$"):
         config_from_dict({**base, "precision": "f16"})

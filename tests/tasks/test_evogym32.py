@@ -220,8 +220,8 @@ def test_gymnasium_env_checker(task):
 def test_every_task_has_an_sgr_config_with_evogyms_episode_length(repo_root):
     import yaml
     for name in NEW_TASKS:
-        cfg = yaml.safe_load((repo_root / "configs" / "sgr" / f"{name}.yaml").read_text())
-        assert cfg["task"] == name and cfg["episode_steps"] == TASKS[name].evogym_steps
+        raw = yaml.safe_load((repo_root / "configs" / "sgr" / f"{name}.yaml").read_text())
+        assert raw["task"] == name and raw["episode_steps"] == TASKS[name].evogym_steps
 
 
 # BridgeWalker-v0's soft span sags onto the fixed base at step 26: its middle point lands exactly on

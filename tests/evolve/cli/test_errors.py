@@ -148,17 +148,17 @@ def test_missing_neat_ini(tmp_path, repo_root, capsys):
 
 @pytest.mark.parametrize("ini", ["garbage\n", None, "missing"])
 def test_broken_nested_controller_ini(tmp_path, repo_root, capsys, ini):
-    cfg = yaml.safe_load((repo_root / "configs/nested/Walker-v0.yaml").read_text())
-    cfg["neat_config"] = str(repo_root / "configs/neat/nested-body.ini")
+    raw = yaml.safe_load((repo_root / "configs/nested/Walker-v0.yaml").read_text())
+    raw["neat_config"] = str(repo_root / "configs/neat/nested-body.ini")
     ctrl = tmp_path / "ctrl.ini"
     if ini is None:  # valid INI, a value neat-python rejects
         ini = (repo_root / "configs/neat/nested-controller.ini").read_text()
         ini = with_value(ini, "bias_init_mean", "x")
     if ini != "missing":
         ctrl.write_text(ini)
-    cfg.update(controller_neat_config=str(ctrl), generations=1)
+    raw.update(controller_neat_config=str(ctrl), generations=1)
     p = tmp_path / "nested.yaml"
-    p.write_text(yaml.safe_dump(cfg))
+    p.write_text(yaml.safe_dump(raw))
     in_process(capsys, "evolve", "--config", str(p), "--out", str(tmp_path / "r"), names=[ctrl])
     assert not (tmp_path / "r").exists()
 

@@ -13,7 +13,8 @@ def _actions(parser: argparse.ArgumentParser) -> dict[str, dict[str, argparse.Ac
 
 def test_every_command_is_registered():
     assert set(_actions(build_parser())) == {"evolve", "sweep", "report", "select-champion", "render", "plot",
-                                             "convert-checkpoints", "decode", "demo", "validate", "bench"}
+                                             "migrate", "convert-checkpoints", "decode", "demo", "validate",
+                                             "bench"}
 
 
 def test_noise_and_workers_are_typed_the_same_way_in_every_command():

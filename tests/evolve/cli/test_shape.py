@@ -24,8 +24,8 @@ def test_the_shipped_10x10_config_is_picked_and_holds_a_10x10_body(method, task)
     cfg, base = load_config(path), load_config(configs_dir() / method / f"{task}.yaml")
     assert cfg.robot_shape == (10, 10) and base.robot_shape == (5, 5)
     # a copy of the 5x5 config but for its size
-    assert {k: v for k, v in dict(cfg).items() if k != "robot_shape"} == \
-        {k: v for k, v in dict(base).items() if k != "robot_shape"}
+    assert {k: v for k, v in cfg.to_yaml().items() if k != "robot_shape"} == \
+        {k: v for k, v in base.to_yaml().items() if k != "robot_shape"}
 
 
 def test_without_a_shipped_size_the_tasks_config_is_used_at_that_size():
@@ -72,17 +72,17 @@ def test_a_10x10_run_starts_from_any_folder(tmp_path, monkeypatch):
     configs = tmp_path / "configs"
     shutil.copytree(configs_dir(), configs)
     cfg_file = configs / "sgr" / "Walker-v0-10x10.yaml"
-    cfg = yaml.safe_load(cfg_file.read_text())
-    assert cfg["robot_shape"] == [10, 10] and cfg["final_selection"]  # the shipped file, as shipped
-    cfg.update(episode_steps=40, final_selection={**cfg["final_selection"], "candidates": 2,
+    raw = yaml.safe_load(cfg_file.read_text())
+    assert raw["robot_shape"] == [10, 10] and raw["final_selection"]  # the shipped file, as shipped
+    raw.update(episode_steps=40, final_selection={**raw["final_selection"], "candidates": 2,
                                                   "episodes": 2, "confirm": 2})
-    cfg_file.write_text(yaml.safe_dump(cfg))
+    cfg_file.write_text(yaml.safe_dump(raw))
     monkeypatch.setattr(run_config, "configs_dir", lambda: configs)  # the CLI imports it when called
     monkeypatch.chdir(tmp_path)
     out = tmp_path / "r"
     assert main(["evolve", "--task", "Walker-v0", "--shape", "10x10", "--generations", "1", "--pop", "4",
                  "--workers", "1", "--quiet", "--out", str(out)]) == 0
-    run_cfg = yaml.safe_load((out / "config.yaml").read_text())
-    assert run_cfg["robot_shape"] == [10, 10] and run_cfg["episode_steps"] == 40  # that file's
+    run_raw = yaml.safe_load((out / "config.yaml").read_text())
+    assert run_raw["robot_shape"] == [10, 10] and run_raw["episode_steps"] == 40  # that file's
     body = json.loads((out / "champion.json").read_text())["body"]
     assert len(body) == 10 and all(len(row) == 10 for row in body)

@@ -141,7 +141,7 @@ def test_nested_champion_body_is_pinned_while_absent_bodies_are_forgotten(repo_r
     cfg = load_config(repo_root / "configs/nested/Walker-v0.yaml",
                       {"inner_pop_size": 4, "inner_generations": 1, "episode_steps": 4,
                        "inner_keep_generations": 2})
-    neat_config = neat_config_from_text(neat_ini_text(cfg["neat_config"], cfg,
+    neat_config = neat_config_from_text(neat_ini_text(cfg.neat_config, cfg.pop_size,
                                                       NestedProblem.neat_overrides(cfg)))
     problem = NestedProblem(cfg, neat_config)
     champ, other, third = (np.full((5, 5), 3), np.full((5, 5), 4), np.full((5, 5), 1))
@@ -163,5 +163,5 @@ def test_nested_champion_body_is_pinned_while_absent_bodies_are_forgotten(repo_r
     assert problem.inner[other.tobytes()].generation == 1
     problem.pool.close()
     # a run whose config.yaml predates the key (resumed from its raw config) forgets nothing
-    old = {k: v for k, v in cfg.items() if k != "inner_keep_generations"}
+    old = {k: v for k, v in cfg.to_yaml().items() if k != "inner_keep_generations"}
     assert NestedProblem(old, neat_config).keep_generations is None

@@ -43,11 +43,11 @@ class GaitProblem(Problem):
 
     def decode(self, genome):
         y = CompiledCPPN(genome, self.neat_config.genome_config)(np.ones((1, 1)))[0, 0]
-        return Gait(WALKER, float(np.clip(y, -1, 1)) * self.cfg["max_amplitude"])
+        return Gait(WALKER, float(np.clip(y, -1, 1)) * self.cfg.max_amplitude)
 
     def evaluate(self, phenotypes):
-        fit = self.pool.run(self.cfg["task"], [p.body for p in phenotypes], [p.amplitude for p in phenotypes],
-                            ConstantPolicy, self.cfg["episode_steps"])
+        fit = self.pool.run(self.cfg.task, [p.body for p in phenotypes], [p.amplitude for p in phenotypes],
+                            ConstantPolicy, self.cfg.episode_steps)
         return fit, len(phenotypes)
 
     def champion(self, p):

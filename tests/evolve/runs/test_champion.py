@@ -32,10 +32,10 @@ def test_runs_record_the_episode_length_they_use():
     """null stands for the paper's length (Climber-v2: 400 steps), "evogym" for evogym's (1000);
     the resolved config, which the run stores, holds the number."""
     base = {"method": "sgr", "task": "Climber-v2"}
-    assert config_from_dict(base)["episode_steps"] == 400
-    assert config_from_dict({**base, "episode_steps": None})["episode_steps"] == 400
-    assert config_from_dict({**base, "episode_steps": "evogym"})["episode_steps"] == 1000
-    assert config_from_dict({**base, "episode_steps": 7})["episode_steps"] == 7
+    assert config_from_dict(base).episode_steps == 400
+    assert config_from_dict({**base, "episode_steps": None}).episode_steps == 400
+    assert config_from_dict({**base, "episode_steps": "evogym"}).episode_steps == 1000
+    assert config_from_dict({**base, "episode_steps": 7}).episode_steps == 7
 
 
 def test_an_old_champion_with_a_null_episode_length_still_loads(tmp_path):

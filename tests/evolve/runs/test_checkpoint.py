@@ -30,14 +30,14 @@ SMALL = {"sgr": {"neat_config": "configs/neat/sgr.ini", "pop_size": 12},
 
 
 def config(tmp_path: Path, repo_root: Path, method: str = "sgr") -> Path:
-    cfg = {"method": method, "task": "Walker-v0", "generations": 4, "seed": 5, "episode_steps": 8,
+    raw = {"method": method, "task": "Walker-v0", "generations": 4, "seed": 5, "episode_steps": 8,
            "checkpoint_every": 2, "render_champion": False, "workers": 1, "robust": None,
            "final_selection": None, **SMALL[method]}
     for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str(repo_root / cfg[key])
+        if key in raw:
+            raw[key] = str(repo_root / raw[key])
     p = tmp_path / f"{method}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
+    p.write_text(yaml.safe_dump(raw))
     return p
 
 
@@ -131,7 +131,7 @@ def test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_
     assert main(["evolve", "--resume", str(old.path), "--generations", "4", "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "holds only pickled checkpoints of an older sgr" in err
-    assert err.rstrip().endswith(f"sgr convert-checkpoints {old.path} --trust-pickle"), err
+    assert err.rstrip().endswith(f"sgr migrate {old.path} --trust-pickle"), err
     assert main(["convert-checkpoints", str(old.path)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "add --trust-pickle only if you trust" in err
@@ -160,7 +160,7 @@ def test_a_sweep_with_old_pickled_runs_is_refused_before_any_run_starts(tmp_path
     assert main(["sweep", "--resume", str(tmp_path / "sw"), "--quiet"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "sgr-Walker-v0-s0" in err
-    assert err.rstrip().endswith(f"sgr convert-checkpoints {tmp_path / 'sw'} --trust-pickle")
+    assert err.rstrip().endswith(f"sgr migrate {tmp_path / 'sw'} --trust-pickle")
 
 
 def _rewrite(f: Path, change) -> None:

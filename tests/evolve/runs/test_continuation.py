@@ -27,9 +27,9 @@ def test_the_continuation_records_its_origin_and_evolves_that_population_at_the_
     out = tmp_path / "cont"
     assert main(["evolve", "--from", str(source), "--shape", "8x8", "--generations", "4",
                  "--out", str(out), "--quiet"]) == 0
-    cfg = yaml.safe_load((out / "config.yaml").read_text())
-    assert cfg["start_from"] == {"run": str(source.resolve()), "generation": 2}
-    assert cfg["robot_shape"] == [8, 8] and cfg["generations"] == 4
+    raw = yaml.safe_load((out / "config.yaml").read_text())
+    assert raw["start_from"] == {"run": str(source.resolve()), "generation": 2}
+    assert raw["robot_shape"] == [8, 8] and raw["generations"] == 4
     rows = (out / "generations.csv").read_text().splitlines()[1:]
     assert [r.split(",")[0] for r in rows] == ["3", "4"]  # counted on from the source's generation 2
     assert len(json.loads((out / "champion.json").read_text())["body"]) == 8

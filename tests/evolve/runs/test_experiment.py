@@ -178,7 +178,7 @@ def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_pa
                  "--workers", "1", "--quiet"]) == 0
     (run,) = (tmp_path / "runs").iterdir()
     assert run.name.startswith("direct-Walker-v0-seed0-")
-    cfg = RunDir(run).config()
-    assert cfg["method"] == "direct" and cfg["task"] == "Walker-v0" and cfg["episode_steps"] == 500
+    raw = RunDir(run).config()
+    assert raw["method"] == "direct" and raw["task"] == "Walker-v0" and raw["episode_steps"] == 500
     out = capsys.readouterr().out.splitlines()  # the first line names the backend (issue 45)
     assert out[0].startswith("backend: cpu (") and out[1] == f"run directory: {Path('runs') / run.name}"

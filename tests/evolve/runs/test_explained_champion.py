@@ -157,9 +157,9 @@ def test_champion_gif_shows_the_median_replay_and_the_exact_episode_is_one_flag_
 def test_the_quick_run_spends_at_most_a_fifth_of_its_episodes_choosing(repo_root):
     """configs/sgr/quick.yaml asks for 20 x 48 one-episode evaluations; its final selection's
     (candidates + 1) x (episodes + 1 + confirm) + holdout fits in 192."""
-    cfg = yaml.safe_load((repo_root / "configs" / "sgr" / "quick.yaml").read_text())
-    assert cfg["generations"] * cfg["pop_size"] * cfg["robust"]["episodes"] == run_episodes(cfg) == 960
-    sized = FinalSelection.from_config(cfg["final_selection"]).sized(run_episodes(cfg))
+    raw = yaml.safe_load((repo_root / "configs" / "sgr" / "quick.yaml").read_text())
+    assert raw["generations"] * raw["pop_size"] * raw["robust"]["episodes"] == run_episodes(raw) == 960
+    sized = FinalSelection.from_config(raw["final_selection"]).sized(run_episodes(raw))
     counts = sized.to_json()
     total = (counts["candidates"] + 1) * (counts["episodes"] + 1 + counts["confirm"]) + counts["holdout"]
     assert total == selection_episodes(counts) <= 960 / 5

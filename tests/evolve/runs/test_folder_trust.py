@@ -145,7 +145,7 @@ def test_a_planted_task_pkl_runs_nothing_and_each_reader_says_how_to_convert_it(
         r = sgr(*args, cwd=tmp_path)
         lines = r.stderr.strip().splitlines()
         assert r.returncode == 2 and len(lines) == 1, (args, r.stderr)
-        assert "task.pkl" in lines[0] and "sgr convert-checkpoints" in lines[0] \
+        assert "task.pkl" in lines[0] and "sgr migrate" in lines[0] \
             and "--trust-pickle" in lines[0], lines
         assert not marker.exists(), args
     with pytest.raises(SgrError) as err:

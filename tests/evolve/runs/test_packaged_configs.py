@@ -65,8 +65,8 @@ def test_a_copied_config_takes_the_packaged_neat_files_saying_so(tmp_path, capsy
     shutil.copy(configs_dir() / "nested" / "Jumper-v0.yaml", copy)  # ../neat/nested-*.ini: not here
     cfg = load_config(copy)
     err = capsys.readouterr().err.splitlines()
-    assert cfg["neat_config"] == str((configs_dir() / "neat" / "nested-body.ini").resolve())
-    assert cfg["controller_neat_config"] == str((configs_dir() / "neat" / "nested-controller.ini").resolve())
+    assert cfg.neat_config == str((configs_dir() / "neat" / "nested-body.ini").resolve())
+    assert cfg.controller_neat_config == str((configs_dir() / "neat" / "nested-controller.ini").resolve())
     assert len(err) == 2 and all("mine.yaml" in line and "packaged" in line for line in err)
     assert "neat_config ../neat/nested-body.ini" in err[0]
     assert "controller_neat_config ../neat/nested-controller.ini" in err[1]
@@ -78,7 +78,7 @@ def test_a_file_beside_the_config_wins_over_the_packaged_one(tmp_path, capsys):
     ini = tmp_path / "neat" / "sgr.ini"
     ini.write_text((configs_dir() / "neat" / "sgr.ini").read_text())
     shutil.copy(configs_dir() / "sgr" / "Jumper-v0.yaml", tmp_path / "cfg" / "c.yaml")
-    assert load_config(tmp_path / "cfg" / "c.yaml")["neat_config"] == str(ini.resolve())
+    assert load_config(tmp_path / "cfg" / "c.yaml").neat_config == str(ini.resolve())
     assert capsys.readouterr().err == ""
 
 

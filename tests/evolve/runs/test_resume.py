@@ -36,14 +36,14 @@ METHODS = {
 
 
 def write_config(tmp_path: Path, repo_root: Path, method: str, **changes) -> Path:
-    cfg = {"method": method, "task": "Walker-v0", "generations": GENERATIONS, "seed": 3,
+    raw = {"method": method, "task": "Walker-v0", "generations": GENERATIONS, "seed": 3,
            "episode_steps": 12, "checkpoint_every": 3, "render_champion": False, "workers": 1,
            "robust": None, "final_selection": None, **METHODS[method], **changes}
     for key in ("neat_config", "controller_neat_config"):
-        if key in cfg:
-            cfg[key] = str(repo_root / cfg[key])
+        if key in raw:
+            raw[key] = str(repo_root / raw[key])
     p = tmp_path / f"{method}.yaml"
-    p.write_text(yaml.safe_dump(cfg))
+    p.write_text(yaml.safe_dump(raw))
     return p
 
 

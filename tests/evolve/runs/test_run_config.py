@@ -3,17 +3,18 @@ again), the `workers` rule written once, the run folder recording arch and preci
 existing run folder (docs' sweeps, tests' data) read back."""
 
 import dataclasses
+from collections.abc import Mapping
 from pathlib import Path
 
 import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.config import RunConfig
 from evolve.rollout.pool import RolloutPool
 from evolve.rollout.robust import Robust
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.experiment import Experiment
-from evolve.runs.run_config import RunConfig
 from evolve.runs.rundir import RunDir
 
 ROOT = Path(__file__).resolve().parents[3]
@@ -25,15 +26,19 @@ def tiny(repo_root, **changes) -> dict:
             "robust": None, "final_selection": None, **changes}
 
 
-def test_a_config_is_frozen_typed_and_reads_as_its_yaml(repo_root):
+def test_a_config_is_frozen_typed_read_by_attribute_and_writes_its_yaml(repo_root):
     cfg = config_from_dict(tiny(repo_root, robust={"episodes": 2}, episode_steps=None))
     with pytest.raises(dataclasses.FrozenInstanceError):
         cfg.generations = 3
     assert isinstance(cfg.robust, Robust) and cfg.robust.episodes == 2
-    assert cfg.robot_shape == (5, 5) and cfg["robot_shape"] == [5, 5]
-    assert cfg.episode_steps == 500 == cfg["episode_steps"]  # Walker-v0's paper length, resolved once
-    assert cfg["robust"] == Robust(episodes=2).to_json() and cfg["cppn_outputs"] == 1
-    assert dict(cfg)["arch"] == "cpu" and list(cfg)[:2] == ["method", "task"]
+    yaml_values = cfg.to_yaml()
+    assert cfg.robot_shape == (5, 5) and yaml_values["robot_shape"] == [5, 5]
+    assert cfg.episode_steps == 500 == yaml_values["episode_steps"]  # Walker-v0's, resolved once
+    assert yaml_values["robust"] == Robust(episodes=2).to_json() and cfg.cppn_outputs == 1  # a method's key
+    assert yaml_values["arch"] == "cpu" and list(yaml_values)[:2] == ["method", "task"]
+    assert not isinstance(cfg, Mapping) and not hasattr(cfg, "__getitem__")  # one way to read it
+    with pytest.raises(AttributeError, match="no key 'not_a_key'"):
+        _ = cfg.not_a_key
 
 
 def test_robust_is_parsed_once_not_at_every_evaluation(tmp_path, repo_root, monkeypatch):
@@ -43,7 +48,7 @@ def test_robust_is_parsed_once_not_at_every_evaluation(tmp_path, repo_root, monk
                                                            parse(cls, *a, **k)))
     cfg = config_from_dict(tiny(repo_root, robust={"episodes": 2}))
     assert len(calls) == 1
-    with Experiment.from_config(dict(cfg), tmp_path / "r", quiet=True) as exp:
+    with Experiment.from_config(cfg.to_yaml(), tmp_path / "r", quiet=True) as exp:
         exp.run_all()
     assert len(RunDir(tmp_path / "r").rows()) == 2
     assert len(calls) == 2  # from_config(dict) checked the config once more; the 2 generations: never
@@ -87,8 +92,10 @@ def test_every_existing_run_folder_reads_back(repo_root):
         assert isinstance(cfg.episode_steps, int) and cfg.episode_steps > 0, path
         assert cfg.arch == raw.get("arch") and cfg.precision == raw.get("precision", "f64"), path
         assert cfg.robust == Robust.from_config(raw.get("robust")), path
+        yaml_values = cfg.to_yaml()
         for key, value in raw.items():  # every key as written (episode_steps: resolved)
-            assert cfg[key] == value or key == "episode_steps" and value in (None, "evogym"), (path, key)
+            assert yaml_values[key] == value or key == "episode_steps" and value in (None, "evogym"), \
+                (path, key)
 
 
 @pytest.mark.parametrize("method", ["sgr", "direct", "nested"])

@@ -79,8 +79,8 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
         a, b = fitness(tmp_path / "whole" / "runs" / name), fitness(cut / "runs" / name)
         assert len(a) == 4 and a == b, name
     # every run is an ordinary run directory with the sweep's overrides and its own seed
-    cfg = RunDir(cut / "runs" / "nested-Walker-v0-s4").config()
-    assert (cfg["seed"], cfg["pop_size"], cfg["inner_pop_size"], cfg["generations"]) == (4, 4, 4, 4)
+    raw = RunDir(cut / "runs" / "nested-Walker-v0-s4").config()
+    assert (raw["seed"], raw["pop_size"], raw["inner_pop_size"], raw["generations"]) == (4, 4, 4, 4)
     stored = yaml.safe_load((cut / "sweep.yaml").read_text())
     assert stored["seeds"] == [0, 4] and Path(stored["configs"]).is_absolute()
 

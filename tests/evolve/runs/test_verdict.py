@@ -59,11 +59,11 @@ def test_a_short_default_run_ends_with_a_champion_that_holds_and_says_so(tmp_pat
 
     from evolve.cli import main
 
-    cfg = yaml.safe_load((repo_root / "configs" / "sgr" / "quick.yaml").read_text())
-    assert cfg["robust"]["accumulate"] and cfg["final_selection"] is not None  # honest by default
-    cfg.update(generations=3, pop_size=16, episode_steps=100, render_champion=False, workers=1,
+    raw = yaml.safe_load((repo_root / "configs" / "sgr" / "quick.yaml").read_text())
+    assert raw["robust"]["accumulate"] and raw["final_selection"] is not None  # honest by default
+    raw.update(generations=3, pop_size=16, episode_steps=100, render_champion=False, workers=1,
                neat_config=str(repo_root / "configs" / "neat" / "sgr.ini"))
-    (tmp_path / "c.yaml").write_text(yaml.safe_dump(cfg))
+    (tmp_path / "c.yaml").write_text(yaml.safe_dump(raw))
     assert main(["evolve", "--config", str(tmp_path / "c.yaml"), "--out", str(tmp_path / "run")]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     champ = load_champion(tmp_path / "run")
