@@ -166,13 +166,13 @@ def main() -> int:
                         "parts": table(diff, wb - wa, cb - ca)})
     commit = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
                             cwd=ROOT).stdout.strip()
-    out = {"config": args.config, "task": cfg["task"], "pop": args.pop, "generations": args.generations,
-           "episode_steps": cfg["episode_steps"], "threads": runtime.threads(), "commit": commit,
+    out = {"config": args.config, "task": cfg.task, "pop": args.pop, "generations": args.generations,
+           "episode_steps": cfg.episode_steps, "threads": runtime.threads(), "commit": commit,
            "wall_s": round(wall, 3), "cpu_s": round(cpu, 3), "total": table(dict(_ACC), wall, cpu),
            "per_generation": per_gen}
     if args.json:
         Path(args.json).write_text(json.dumps(out, indent=1))
-    print(f"{cfg['task']} pop {args.pop}, {args.generations} generation(s), "
+    print(f"{cfg.task} pop {args.pop}, {args.generations} generation(s), "
           f"{runtime.threads()} thread(s), commit {commit}: {wall:.1f} s wall, {cpu:.1f} s CPU")
     print(f"{'part':58s} {'wall s':>9s} {'CPU s':>9s} {'% CPU':>6s}")
     for k, v in out["total"].items():
