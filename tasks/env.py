@@ -88,11 +88,15 @@ class BatchEnv:
         points when the spec's rewards read them, the observation's blocks around the points."""
         B, N = self._mask.shape
         self._npts = self.n_points.astype(np.int32)
+        # on the calling thread where the simulator runs so (one CPU thread: no pool hand-off)
+        self._serial = self.sim._serial
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
         shape = (B, N, 2) if self.spec.reads_points else (1, 1, 2)
         self._points_buf = (np.empty(shape, dtype=self.dtype), np.empty(shape, dtype=self.dtype))
         self._points_flip = 0
+        # (BatchSim.state_version, com, vcom, points) of the last measurement (`step`)
+        self._last: tuple | None = None
         blocks = self.spec.observation
         k = next(i for i, b in enumerate(blocks) if b.width < 0)
         self._head_blocks, self._tail_blocks = blocks[:k], blocks[k + 1:]
@@ -173,8 +177,10 @@ class BatchEnv:
         B = self.n_worlds
         com, vcom = np.empty((B, 2)), np.empty((B, 2))
         pts = self._points_out()
-        EK.robot_coms(self.sim.state, self._npts, self.sim.max_robot_points, self._masked, com, vcom,
-                      self.spec.reads_points, pts)
+        sim = self.sim
+        EK.robot_coms(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
+                      self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
+                      pts.reshape(-1), self._serial)
         return com, vcom, pts if self.spec.reads_points else None
 
     def _fused_observe(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
@@ -184,8 +190,10 @@ class BatchEnv:
         com, vcom = np.empty((B, 2)), np.empty((B, 2))
         obs = np.empty((B, self.max_obs_dim), dtype=self.dtype)
         pts = self._points_out()
-        EK.observe(self.sim.state, self._npts, self.sim.max_robot_points, self._masked, com, vcom,
-                   self.spec.reads_points, pts, self._head, obs)
+        sim = self.sim
+        EK.observe(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
+                   self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
+                   pts.reshape(-1), self._head, self.max_obs_dim, obs.reshape(-1), self._serial)
         return obs, com, vcom, pts if self.spec.reads_points else None
 
     def _fused_blocks(self, obs: np.ndarray, com: np.ndarray, vcom: np.ndarray) -> None:
@@ -203,7 +211,7 @@ class BatchEnv:
             for block in self._tail_blocks:
                 values[:, col:col + block.width] = block.fn(scene)
                 col += block.width
-            EK.tail(self._npts, self._head, values, obs)
+            EK.tail(self._npts, self._head, values, self.max_obs_dim, obs.reshape(-1), self._serial)
 
     def _scene(self, com: np.ndarray, vcom: np.ndarray) -> O.Scene:
         pos, vel = self._robot()
@@ -290,8 +298,12 @@ class BatchEnv:
         self.sim.set_actions(actions)
         self._points_now.clear()  # the caller may have written the state since the last step
         if self.fused:
-            com_before, _, pts = self._fused_coms()
-            before = self._measure(com_before, pts)
+            # the last measurement (after the last step, a reset or `observe`) while the state
+            # is the one it measured (`BatchSim.state_version`), else a new one
+            last = self._last
+            if last is None or last[0] != self.sim.state_version:
+                last = (0, *self._fused_coms())
+            before = self._measure(last[1], last[3])
         else:
             before = self._measure(self._robot_coms()[0])
         active = ~self.terminated
@@ -325,6 +337,7 @@ class BatchEnv:
         if self.fused:
             self._fused_blocks(obs, com_after, vcom_after)
             self._obs = obs
+            self._last = (self.sim.state_version, com_after, vcom_after, pts)
         else:
             self._obs = self._observe(com_after, vcom_after)
         truncated = (self.elapsed >= self.episode_steps) & ~self.terminated
@@ -346,8 +359,9 @@ class BatchEnv:
         """Observations of the current state, the spec's blocks in order; `com`, `vcom` from
         `_robot_coms` if already known."""
         if self.fused:
-            obs, com, vcom, _ = self._fused_observe()
+            obs, com, vcom, pts = self._fused_observe()
             self._fused_blocks(obs, com, vcom)
+            self._last = (self.sim.state_version, com, vcom, pts)
             return obs
         if com is None or vcom is None:
             com, vcom = self._robot_coms()
