@@ -90,6 +90,7 @@ class BatchEnv:
         self._npts = self.n_points.astype(np.int32)
         # on the calling thread where the simulator runs so (one CPU thread: no pool hand-off)
         self._serial = self.sim._serial
+        self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
         shape = (B, N, 2) if self.spec.reads_points else (1, 1, 2)
@@ -193,7 +194,8 @@ class BatchEnv:
         sim = self.sim
         EK.observe(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
                    self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
-                   pts.reshape(-1), self._head, self.max_obs_dim, obs.reshape(-1), self._serial)
+                   pts.reshape(-1), self._head, self.max_obs_dim, obs.reshape(-1), self._ti_real,
+                   self._serial)
         return obs, com, vcom, pts if self.spec.reads_points else None
 
     def _fused_blocks(self, obs: np.ndarray, com: np.ndarray, vcom: np.ndarray) -> None:

@@ -85,10 +85,11 @@ def robot_coms(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.temp
 @ti.kernel
 def observe(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.template(), com: F64_1,
             vcom: F64_1, copy: ti.template(), points: REAL_1, head: ti.i32, W: ti.i32, obs: REAL_1,
-            serial: ti.template()):
+            real: ti.template(), serial: ti.template()):
     """`robot_coms`, then each observation row (obs: flat (B, W)) from column `head` on: the
     robot's points relative to its COM (x of every point, then y), zeros to the row's end (`tail`
-    writes the blocks after the points). Columns before `head` are the caller's."""
+    writes the blocks after the points), rounded to `real` (obs's type). Columns before `head` are
+    the caller's."""
     ns = ti.static(state_columns())
     ti.loop_config(serialize=serial)
     for b in range(npts.shape[0]):
@@ -97,10 +98,10 @@ def observe(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.templat
         n = npts[b]
         o = b * W + head
         for p in range(n):
-            obs[o + p] = ti.cast(state[so + p * ns], ti.f64) - c[0]
-            obs[o + n + p] = ti.cast(state[so + p * ns + 1], ti.f64) - c[1]
+            obs[o + p] = ti.cast(ti.cast(state[so + p * ns], ti.f64) - c[0], real)
+            obs[o + n + p] = ti.cast(ti.cast(state[so + p * ns + 1], ti.f64) - c[1], real)
         for k in range(head + 2 * n, W):
-            obs[b * W + k] = 0.0
+            obs[b * W + k] = ti.cast(0.0, real)
 
 
 @ti.kernel
