@@ -13,10 +13,8 @@ numpy's bits (`BatchEnv(..., fused=False)` keeps the numpy path as the test orac
 Everything else of a step (the (B,)-sized rewards, termination, the head blocks) stays in numpy.
 """
 
-
-from tsim.runtime import ti
-
 from tsim.kernels.layout import state_columns
+from tsim.runtime import ti
 
 REAL_1 = ti.types.ndarray(ndim=1)
 REAL_2 = ti.types.ndarray(ndim=2)
