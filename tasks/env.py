@@ -102,6 +102,7 @@ class BatchEnv:
         k = next(i for i, b in enumerate(blocks) if b.width < 0)
         self._head_blocks, self._tail_blocks = blocks[:k], blocks[k + 1:]
         self._tail_width = sum(b.width for b in self._tail_blocks)
+        self._obs_buf = np.zeros((B, self.max_obs_dim), dtype=self.dtype) if self.fused else None
         self._no_tail = np.zeros((B, 0), dtype=self.dtype)
 
     # ------------------------------------------------------------------ layout helpers
@@ -189,7 +190,7 @@ class BatchEnv:
         points and padding written, its other blocks left to `_fused_blocks`."""
         B = self.n_worlds
         com, vcom = np.empty((B, 2)), np.empty((B, 2))
-        obs = np.empty((B, self.max_obs_dim), dtype=self.dtype)
+        obs = self._obs_buf  # the env's own (the caller gets copies): its memory stays mapped
         pts = self._points_out()
         sim = self.sim
         EK.observe(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
