@@ -19,6 +19,7 @@ from tasks import kernels as EK
 from tasks import observations as O
 from tasks.spec import Measure
 from tasks.specs import task_spec, task_world
+from tsim import constants as C
 from tsim.body import Body
 from tsim.sim import BatchSim
 
@@ -91,6 +92,7 @@ class BatchEnv:
         # on the calling thread where the simulator runs so (one CPU thread: no pool hand-off)
         self._serial = self.sim._serial
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
+        self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
         shape = (B, N, 2) if self.spec.reads_points else (1, 1, 2)
@@ -168,6 +170,20 @@ class BatchEnv:
             points = self._robot()[0].copy()
         return Measure(com, objects, points=points, mask=self._mask, pos0=self._pos0,
                        state=self.task_state)
+
+    def _set_actions(self, actions) -> None:
+        """`BatchSim.set_actions`; on the kernel path a (B, max_actuators) array of finite actions
+        by `tasks.kernels.clip_actions` (the same values). Anything else goes to `set_actions`
+        itself (which raises its errors)."""
+        sim = self.sim
+        if (self.fused and isinstance(actions, np.ndarray) and actions.dtype != object
+                and actions.shape == (self.n_worlds, sim.max_actuators)):
+            a = np.ascontiguousarray(actions, dtype=np.float64)
+            if np.isfinite(a).all():
+                EK.clip_actions(a, self._n_act, C.ACTION_MIN, C.ACTION_MAX, self._ti_real, sim.actions,
+                                self._serial)
+                return
+        sim.set_actions(actions)
 
     def _points_out(self) -> np.ndarray:
         """The next of the two points buffers (`_init_fused`)."""
@@ -298,7 +314,7 @@ class BatchEnv:
         earns 0 from then on. RuntimeError once any world reached `episode_steps`, until `reset`."""
         if (self.elapsed >= self.episode_steps).any():
             raise RuntimeError("episode is over (truncated); call reset()")
-        self.sim.set_actions(actions)
+        self._set_actions(actions)
         self._points_now.clear()  # the caller may have written the state since the last step
         if self.fused:
             # the last measurement (after the last step, a reset or `observe`) while the state

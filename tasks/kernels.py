@@ -20,6 +20,7 @@ REAL_1 = ti.types.ndarray(ndim=1)
 REAL_2 = ti.types.ndarray(ndim=2)
 I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
 F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+F64_2 = ti.types.ndarray(dtype=ti.f64, ndim=2)
 
 # Arrays are flat 1-D views with strides known when compiling (the state's columns) or passed as
 # ints, as the physics kernels address theirs (`tsim.kernels.layout`): with Taichi's ndarray
@@ -111,3 +112,15 @@ def tail(npts: I32_1, head: ti.i32, values: REAL_2, W: ti.i32, obs: REAL_1, seri
         o = b * W + head + 2 * npts[b]
         for j in range(values.shape[1]):
             obs[o + j] = values[b, j]
+
+
+@ti.kernel
+def clip_actions(a: F64_2, n_act: I32_1, lo: ti.f64, hi: ti.f64, real: ti.template(), out: REAL_2,
+                 serial: ti.template()):
+    """`BatchSim.set_actions` for a (B, max_actuators) float64 array of finite actions: robot b's
+    first n_act[b] clipped to [lo, hi] (max, then min: numpy's `minimum(maximum(a, lo), hi)`) into
+    out, rounded to `real`."""
+    ti.loop_config(serialize=serial)
+    for b in range(n_act.shape[0]):
+        for j in range(n_act[b]):
+            out[b, j] = ti.cast(ti.min(ti.max(a[b, j], lo), hi), real)
