@@ -90,7 +90,8 @@ class BatchEnv:
         B, N = self._mask.shape
         self._npts = self.n_points.astype(np.int32)
         # on the calling thread where the simulator runs so (one CPU thread: no pool hand-off)
-        self._serial = self.sim._serial
+        backend = self.sim.backend
+        self._serial = backend.arch == "cpu" and (backend.threads == 1 or B == 1)
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)

@@ -537,6 +537,7 @@ class BatchSim:
 
     @state.setter
     def state(self, value: np.ndarray) -> None:
+        """A new state array (rarely: the kernel's flat view keeps the old one's memory)."""
         self.state_version += 1
         self._state = value
 
