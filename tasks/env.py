@@ -99,7 +99,7 @@ class BatchEnv:
         shape = (B, N, 2) if self.spec.reads_points else (1, 1, 2)
         self._points_buf = (np.empty(shape, dtype=self.dtype), np.empty(shape, dtype=self.dtype))
         self._points_flip = 0
-        # (BatchSim.state_version, com, vcom, points) of the last measurement (`step`)
+        # (BatchSim.state_version, com, vcom, points, Measure or None) of the last measurement
         self._last: tuple | None = None
         blocks = self.spec.observation
         k = next(i for i, b in enumerate(blocks) if b.width < 0)
@@ -216,11 +216,13 @@ class BatchEnv:
                    self._serial)
         return obs, com, vcom, pts if self.spec.reads_points else None
 
-    def _fused_blocks(self, obs: np.ndarray, com: np.ndarray, vcom: np.ndarray) -> None:
-        """The observation's blocks other than the points, into `obs` (`_fused_observe`)."""
+    def _fused_blocks(self, obs: np.ndarray, com: np.ndarray, vcom: np.ndarray,
+                      measure: Measure | None = None) -> None:
+        """The observation's blocks other than the points, into `obs` (`_fused_observe`);
+        `measure`, of the same state, lends them what it computed (the orientation)."""
         if not self._head_blocks and not self._tail_blocks:
             return
-        scene = self._scene(com, vcom)
+        scene = self._scene(com, vcom, measure)
         col = 0
         for block in self._head_blocks:
             obs[:, col:col + block.width] = block.fn(scene)
@@ -233,12 +235,12 @@ class BatchEnv:
                 col += block.width
             EK.tail(self._npts, self._head, values, self.max_obs_dim, obs.reshape(-1), self._serial)
 
-    def _scene(self, com: np.ndarray, vcom: np.ndarray) -> O.Scene:
+    def _scene(self, com: np.ndarray, vcom: np.ndarray, measure: Measure | None = None) -> O.Scene:
         pos, vel = self._robot()
         return O.Scene(pos=pos, vel=vel, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
                        object_pos0=self._object_pos0, state=self.task_state,
-                       object_now=self._object_now)
+                       object_now=self._object_now, measure=measure)
 
     # ------------------------------------------------------------------ task state
     def seed(self, seeds: Sequence[int] | int | None = None) -> None:
@@ -321,9 +323,12 @@ class BatchEnv:
             # the last measurement (after the last step, a reset or `observe`) while the state
             # is the one it measured (`BatchSim.state_version`), else a new one
             last = self._last
-            if last is None or last[0] != self.sim.state_version:
-                last = (0, *self._fused_coms())
-            before = self._measure(last[1], last[3])
+            if last is not None and last[0] == self.sim.state_version and last[4] is not None:
+                before = last[4]  # the last step's `after`, its lazily computed parts included
+            else:
+                if last is None or last[0] != self.sim.state_version:
+                    last = (0, *self._fused_coms(), None)
+                before = self._measure(last[1], last[3])
         else:
             before = self._measure(self._robot_coms()[0])
         active = ~self.terminated
@@ -355,9 +360,9 @@ class BatchEnv:
         self.terminated |= done
         self.sim.deactivate(self.terminated)
         if self.fused:
-            self._fused_blocks(obs, com_after, vcom_after)
+            self._fused_blocks(obs, com_after, vcom_after, after)
             self._obs = obs
-            self._last = (self.sim.state_version, com_after, vcom_after, pts)
+            self._last = (self.sim.state_version, com_after, vcom_after, pts, after)
         else:
             self._obs = self._observe(com_after, vcom_after)
         truncated = (self.elapsed >= self.episode_steps) & ~self.terminated
@@ -381,7 +386,7 @@ class BatchEnv:
         if self.fused:
             obs, com, vcom, pts = self._fused_observe()
             self._fused_blocks(obs, com, vcom)
-            self._last = (self.sim.state_version, com, vcom, pts)
+            self._last = (self.sim.state_version, com, vcom, pts, None)
             return obs
         if com is None or vcom is None:
             com, vcom = self._robot_coms()

@@ -35,6 +35,9 @@ class Scene:
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
     # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
     object_now: Callable[[str], np.ndarray] | None = None
+    # the `Measure` of this same state when the env has one (after a step): its orientation, if the
+    # reward or termination asked for it, is not computed twice
+    measure: object | None = None
 
 
 
@@ -96,8 +99,15 @@ def terrain_sight(com_vox: np.ndarray, terrain: np.ndarray, sight_dist: int, *, 
 
 
 # ---------------------------------------------------------------------- observation blocks
+def _orientation(s: Scene) -> np.ndarray:
+    m = s.measure
+    if m is not None and m.points is not None:
+        return m.orientation[:, None]  # the same points, pos0 and mask: the same bits
+    return orientation(s.pos, s.pos0, s.mask)[:, None]
+
+
 VCOM = Block("robot velocity COM", 2, lambda s: s.vcom)
-ORIENTATION = Block("robot orientation", 1, lambda s: orientation(s.pos, s.pos0, s.mask)[:, None])
+ORIENTATION = Block("robot orientation", 1, _orientation)
 POINTS = Block("robot points relative to its COM (x of every point, then y)", -1, lambda s: None)
 
 
