@@ -92,6 +92,8 @@ class BatchEnv:
         # on the calling thread where the simulator runs so (one CPU thread: no pool hand-off)
         backend = self.sim.backend
         self._serial = backend.arch == "cpu" and (backend.threads == 1 or B == 1)
+        # elsewhere numpy arguments travel to a device and back (Vulkan: only those a kernel reads)
+        self._cpu = backend.arch == "cpu"
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
@@ -105,6 +107,8 @@ class BatchEnv:
         k = next(i for i, b in enumerate(blocks) if b.width < 0)
         self._head_blocks, self._tail_blocks = blocks[:k], blocks[k + 1:]
         self._tail_width = sum(b.width for b in self._tail_blocks)
+        # the static terrain in voxel units as `O.terrain_sight` divides it (x row, y row)
+        self._terrain_vox = np.ascontiguousarray(self._terrain / C.CELL)
         self._obs_buf = np.zeros((B, self.max_obs_dim), dtype=self.dtype) if self.fused else None
         self._no_tail = np.zeros((B, 0), dtype=self.dtype)
 
@@ -173,11 +177,12 @@ class BatchEnv:
                        state=self.task_state)
 
     def _set_actions(self, actions) -> None:
-        """`BatchSim.set_actions`; on the kernel path a (B, max_actuators) array of finite actions
-        by `tasks.kernels.clip_actions` (the same values). Anything else goes to `set_actions`
-        itself (which raises its errors)."""
+        """`BatchSim.set_actions`; on the kernel path on a CPU a (B, max_actuators) array of finite
+        actions by `tasks.kernels.clip_actions` (the same values; it writes only the robots'
+        columns, which a device backend would return with the others as its memory held them).
+        Anything else goes to `set_actions` itself (which raises its errors)."""
         sim = self.sim
-        if (self.fused and isinstance(actions, np.ndarray) and actions.dtype != object
+        if (self.fused and self._cpu and isinstance(actions, np.ndarray) and actions.dtype != object
                 and actions.shape == (self.n_worlds, sim.max_actuators)):
             a = np.ascontiguousarray(actions, dtype=np.float64)
             if np.isfinite(a).all():
@@ -233,14 +238,30 @@ class BatchEnv:
             for block in self._tail_blocks:
                 values[:, col:col + block.width] = block.fn(scene)
                 col += block.width
-            EK.tail(self._npts, self._head, values, self.max_obs_dim, obs.reshape(-1), self._serial)
+            EK.tail(self._npts, self._head, values, self.max_obs_dim, obs.reshape(-1), not self._cpu,
+                    self._serial)
 
     def _scene(self, com: np.ndarray, vcom: np.ndarray, measure: Measure | None = None) -> O.Scene:
         pos, vel = self._robot()
         return O.Scene(pos=pos, vel=vel, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
                        object_pos0=self._object_pos0, state=self.task_state,
-                       object_now=self._object_now, measure=measure)
+                       object_now=self._object_now, measure=measure,
+                       static_sight=self._static_sight if self.fused else None)
+
+    def _static_sight(self, dist: int, below: bool) -> np.ndarray:
+        """`O.terrain_sight` of `O.com_voxel_units` over the static terrain, by
+        `tasks.kernels.com_voxel_units` and `tasks.kernels.terrain_sight`."""
+        sim = self.sim
+        com_vox = np.empty((self.n_worlds, 2))
+        EK.com_voxel_units(sim.state.reshape(-1), self._npts, sim.state.shape[1], C.CELL, self._ti_real,
+                           com_vox, self._serial)
+        if self._terrain_vox.shape[1] == 0:
+            return O.terrain_sight(com_vox, self._terrain, dist, below=below)
+        out = np.empty((self.n_worlds, 2 * dist + 1))
+        EK.terrain_sight(com_vox, self._terrain_vox[0], self._terrain_vox[1], dist, below, 5.0, C.CELL,
+                         out, self._serial)
+        return out
 
     # ------------------------------------------------------------------ task state
     def seed(self, seeds: Sequence[int] | int | None = None) -> None:

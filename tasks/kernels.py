@@ -9,8 +9,10 @@ numpy's bits (`BatchEnv(..., fused=False)` keeps the numpy path as the test orac
   objects' points follow the robot's, the row times 0.0 (numpy's `rows * mask`), which matters
   only to the sign of a zero sum (`_coms`); the sum is in the state's type and is divided in
   float64 (numpy's float32 / int64 is float64);
-- a relative position is `pos - com` in float64, stored in the observation's type.
-Everything else of a step (the (B,)-sized rewards, termination, the head blocks) stays in numpy.
+- a relative position is `pos - com` in float64, stored in the observation's type;
+- the floor and ceiling sight over the static terrain: the COM in voxel units in the state's type
+  (numpy's mean of the quotients), then numpy's comparisons in float64 (max and min are exact).
+The (B,)-sized rewards and terminations, the orientation and the object blocks stay in numpy.
 """
 
 from tsim.kernels.layout import state_columns
@@ -104,14 +106,23 @@ def observe(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.templat
 
 
 @ti.kernel
-def tail(npts: I32_1, head: ti.i32, values: REAL_2, W: ti.i32, obs: REAL_1, serial: ti.template()):
+def tail(npts: I32_1, head: ti.i32, values: REAL_2, W: ti.i32, obs: REAL_1, whole: ti.template(),
+         serial: ti.template()):
     """The blocks after the points: values (B, k) into each row of obs (flat (B, W)) from column
-    head + 2 npts[b] on."""
+    head + 2 npts[b] on. `whole` rewrites the rest of the row with what it holds: a backend that
+    uploads only the arrays a kernel reads (Vulkan) would otherwise return the others' columns
+    as the device memory held them."""
     ti.loop_config(serialize=serial)
     for b in range(npts.shape[0]):
-        o = b * W + head + 2 * npts[b]
+        c = head + 2 * npts[b]
+        o = b * W
+        if ti.static(whole):
+            for k in range(c):
+                obs[o + k] = obs[o + k]
+            for k in range(c + values.shape[1], W):
+                obs[o + k] = obs[o + k]
         for j in range(values.shape[1]):
-            obs[o + j] = values[b, j]
+            obs[o + c + j] = values[b, j]
 
 
 @ti.kernel
@@ -124,3 +135,57 @@ def clip_actions(a: F64_2, n_act: I32_1, lo: ti.f64, hi: ti.f64, real: ti.templa
     for b in range(n_act.shape[0]):
         for j in range(n_act[b]):
             out[b, j] = ti.cast(ti.min(ti.max(a[b, j], lo), hi), real)
+
+
+@ti.kernel
+def terrain_sight(cv: F64_2, tx: REAL_1, ty: REAL_1, d: ti.template(), below: ti.template(), rng: ti.f64,
+                  cell: ti.f64, out: F64_2, serial: ti.template()):
+    """`tasks.observations.terrain_sight` over a static terrain (tx, ty: its points in voxel units,
+    as numpy divided them): for each world's COM cv[b] (voxel units), the floor (`below`) or
+    ceiling distance in 2 d + 1 windows, world units, into out (B, 2 d + 1). The same comparisons
+    in float64 as numpy's; max and min are exact, so the same bits."""
+    inf = ti.cast(ti.math.inf, ti.f64)
+    ti.loop_config(serialize=serial)
+    for b in range(cv.shape[0]):
+        cx = cv[b, 0]
+        cy = cv[b, 1]
+        lo = cx - (d + 0.5)
+        hi = cx + (d + 0.5)
+        e = ti.Vector([-inf if ti.static(below) else inf] * (2 * d + 1), dt=ti.f64)
+        seen = ti.Vector([0] * (2 * d + 1), dt=ti.i32)
+        for m in range(tx.shape[0]):
+            x = ti.cast(tx[m], ti.f64)
+            y = ti.cast(ty[m], ti.f64)
+            if x > lo and x < hi and ((y < cy) if ti.static(below) else (y > cy)):
+                for k in ti.static(range(2 * d + 1)):
+                    if x > cx + ti.static(k - d - 0.5) and x < cx + ti.static(k - d + 0.5):
+                        e[k] = ti.max(e[k], y) if ti.static(below) else ti.min(e[k], y)
+                        seen[k] = 1
+        for k in ti.static(range(2 * d + 1)):
+            if ti.static(below):
+                ek = e[k] if seen[k] else cy - rng
+                out[b, k] = ti.min(ti.max(cy - ek, 0.0), rng) * cell
+            else:
+                ek = e[k] if seen[k] else cy + rng
+                out[b, k] = ti.min(ti.max(ek - cy, 0.0), rng) * cell
+
+
+@ti.kernel
+def com_voxel_units(state: REAL_1, npts: I32_1, P: ti.i32, cell: ti.f64, real: ti.template(), out: F64_2,
+                    serial: ti.template()):
+    """`tasks.observations.com_voxel_units`: each robot's mean point position over `cell`, in the
+    state's type `real` as numpy computes it (the quotients summed in point order from +0.0, that
+    mean's order, then divided by the point count), stored in float64."""
+    ns = ti.static(state_columns())
+    ti.loop_config(serialize=serial)
+    for b in range(npts.shape[0]):
+        so = b * P * ns
+        n = npts[b]
+        c = ti.cast(cell, real)
+        sx = state[so] - state[so]  # +0.0 of the state's type
+        sy = sx
+        for p in range(n):
+            sx += state[so + p * ns] / c
+            sy += state[so + p * ns + 1] / c
+        out[b, 0] = ti.cast(sx / ti.cast(n, real), ti.f64)
+        out[b, 1] = ti.cast(sy / ti.cast(n, real), ti.f64)

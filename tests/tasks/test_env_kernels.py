@@ -136,6 +136,30 @@ def test_kernel_path_equals_numpy_path_on_vulkan():
     if probe.returncode:
         pytest.skip("no Vulkan device here; on Debian, apt-get install mesa-vulkan-drivers gives lavapipe")
     for precision in ("f64", "f32"):
-        r = _subprocess("vulkan", precision, "Walker-v0,Carrier-v0", 12)
+        r = _subprocess("vulkan", precision, "Walker-v0,Carrier-v0,UpStepper-v0", 12)
         assert r.returncode == 0, r.stderr[-2000:]
         assert f"ok {precision}" in r.stdout
+
+
+def test_kernel_com_voxel_units_and_sight_equal_numpys():
+    """The sight kernels alone against `tasks.observations`: the COM in voxel units to the bit after
+    some steps, and the floor and ceiling sight for COMs anywhere, on lattice lines and half-way
+    between them (where evogym's open windows drop terrain points) included."""
+    from tasks import kernels as EK
+    from tasks import observations as O
+    env = BatchEnv("UpStepper-v0", bodies(5) * 3, episode_steps=50, fused=True)
+    rng = np.random.default_rng(2)
+    for _ in range(8):
+        env.step(rng.uniform(0.6, 1.6, (env.n_worlds, env.sim.max_actuators)))
+    st = env.sim.state
+    com = np.empty((env.n_worlds, 2))
+    EK.com_voxel_units(st.reshape(-1), env.n_points.astype(np.int32), st.shape[1], 0.1, EK.ti.f64, com, False)
+    assert same_bits(com, O.com_voxel_units(st[:, :env.sim.max_robot_points, 0:2], env.n_points))
+    terrain = env._terrain
+    tv = np.ascontiguousarray(terrain / 0.1)
+    cv = np.concatenate([rng.uniform(0, 80, (40, 2)), np.round(rng.uniform(0, 80, (20, 2))),
+                         np.round(rng.uniform(0, 80, (20, 2))) + 0.5])
+    for dist, below in ((5, True), (3, False), (2, True)):
+        out = np.empty((len(cv), 2 * dist + 1))
+        EK.terrain_sight(cv, tv[0], tv[1], dist, below, 5.0, 0.1, out, False)
+        assert same_bits(out, O.terrain_sight(cv, terrain, dist, below=below))
