@@ -85,17 +85,16 @@ class BatchEnv:
         self.reset()
 
     def _init_fused(self) -> None:
-        """Preallocated arrays of the kernel path: COMs before and after a step, the robots'
-        points when the spec's rewards read them, the observation's blocks around the points."""
+        """What the kernel path keeps: the observation's own buffer, the robots' points when the
+        spec's rewards read them, the observation's blocks around the points, the last
+        measurement."""
         B, N = self._mask.shape
         self._npts = self.n_points.astype(np.int32)
         # on a CPU on the calling thread: the kernels are one memory-bound pass over the state, and
-        # on the 2-vCPU VM a second thread added CPU time (0.31-0.34 against 0.24-0.27 us per
-        # robot-step at B = 8,192) without saving wall time
-        backend = self.sim.backend
-        self._serial = backend.arch == "cpu"
-        # elsewhere numpy arguments travel to a device and back (Vulkan: only those a kernel reads)
-        self._cpu = backend.arch == "cpu"
+        # on the 2-vCPU VM a second thread added CPU time (0.31-0.37 against 0.22-0.29 us per
+        # robot-step at B = 8,192) without saving wall time. Elsewhere numpy arguments travel to a
+        # device and back (Vulkan: only those a kernel reads)
+        self._cpu = self._serial = self.sim.backend.arch == "cpu"
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
@@ -112,7 +111,6 @@ class BatchEnv:
         # the static terrain in voxel units as `O.terrain_sight` divides it (x row, y row)
         self._terrain_vox = np.ascontiguousarray(self._terrain / C.CELL)
         self._obs_buf = np.zeros((B, self.max_obs_dim), dtype=self.dtype) if self.fused else None
-        self._no_tail = np.zeros((B, 0), dtype=self.dtype)
 
     # ------------------------------------------------------------------ layout helpers
     def _relative_columns(self) -> np.ndarray:
