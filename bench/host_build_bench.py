@@ -13,7 +13,10 @@ own host work, in microseconds per robot.
   back to `sample_robot` and times that tree's `BatchEnv`: run it with PYTHONPATH on the old tree
   for the old figures side by side.
 - step: `BatchEnv.step`'s host work at B = --step-size: the step with the physics kernel replaced
-  by nothing (observations, rewards, termination and action handling only), per robot-step.
+  by nothing (observations, rewards, termination and action handling only), per robot-step, on
+  the kernel path (`tasks/kernels.py`, the default at that size) and the numpy path beside it
+  (`fused=False`; a tree before issue 48 item 2 has only that one); "dropped" lets each step's
+  returned arrays go, "kept" keeps them all (then every step's observation is fresh memory).
 
 Wall and CPU (process) times are both printed: on a shared machine the CPU time is the steadier.
 """
@@ -105,14 +108,34 @@ def main() -> None:
 
     if a.step_size:
         B = a.step_size
-        env = BatchEnv(a.task, list(sample(B, np.random.default_rng(0))), episode_steps=a.steps + 2)
-        env.sim.step = lambda n=1: None  # the host's share alone: no physics
-        acts = np.full((B, env.sim.max_actuators), 1.1)
-        env.step(acts)
-        w, c, _ = timed(lambda: [env.step(acts) for _ in range(a.steps)])
-        out["step_host"] = {"B": B, "wall_us": w / (B * a.steps) * 1e6, "cpu_us": c / (B * a.steps) * 1e6}
-        print(f"BatchEnv.step host work at B = {B}: {out['step_host']['wall_us']:.3f} / "
-              f"{out['step_host']['cpu_us']:.3f} us per robot-step (wall / cpu)")
+        bodies = list(sample(B, np.random.default_rng(0)))
+        out["step_host"] = {"B": B}
+        for path, fused in (("kernels", True), ("numpy", False)):
+            try:
+                env = BatchEnv(a.task, bodies, episode_steps=2 * a.steps + 2, fused=fused)
+            except TypeError:  # a tree before issue 48 item 2: numpy only
+                if not fused:
+                    continue
+                path, env = "numpy", BatchEnv(a.task, bodies, episode_steps=2 * a.steps + 2)
+            env.sim.step = lambda n=1: None  # the host's share alone: no physics
+            acts = np.full((B, env.sim.max_actuators), 1.1)
+            env.step(acts)
+
+            def discard(env=env, acts=acts) -> None:
+                for _ in range(a.steps):
+                    env.step(acts)
+
+            # "dropped": the caller lets each step's arrays go (their memory is reused); "kept": it
+            # keeps every step's (fresh memory each step, which this VM maps slowly)
+            w, c, _ = timed(discard)
+            row = {"dropped": (w / (B * a.steps) * 1e6, c / (B * a.steps) * 1e6)}
+            w, c, _ = timed(lambda env=env, acts=acts: [env.step(acts) for _ in range(a.steps)])
+            row["kept"] = (w / (B * a.steps) * 1e6, c / (B * a.steps) * 1e6)
+            out["step_host"][path] = row
+            print(f"BatchEnv.step host work at B = {B}, {path}: " +
+                  "; ".join(f"{k} {v[0]:.3f} / {v[1]:.3f}" for k, v in row.items()) +
+                  " us per robot-step (wall / cpu)", flush=True)
+            del env
     if a.json:
         with open(a.json, "w") as f:
             json.dump(out, f, indent=1)

@@ -35,6 +35,12 @@ class Scene:
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
     # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
     object_now: Callable[[str], np.ndarray] | None = None
+    # the `Measure` of this same state when the env has one (after a step): its orientation, if the
+    # reward or termination asked for it, is not computed twice
+    measure: object | None = None
+    # (dist, below) -> the sight over the static terrain, if the env computes it otherwise than
+    # `terrain_sight` of `com_voxel_units` (the same bits; `BatchEnv`'s kernel path)
+    static_sight: Callable[[int, bool], np.ndarray] | None = None
 
 
 
@@ -96,8 +102,15 @@ def terrain_sight(com_vox: np.ndarray, terrain: np.ndarray, sight_dist: int, *, 
 
 
 # ---------------------------------------------------------------------- observation blocks
+def _orientation(s: Scene) -> np.ndarray:
+    m = s.measure
+    if m is not None and m.points is not None:
+        return m.orientation[:, None]  # the same points, pos0 and mask: the same bits
+    return orientation(s.pos, s.pos0, s.mask)[:, None]
+
+
 VCOM = Block("robot velocity COM", 2, lambda s: s.vcom)
-ORIENTATION = Block("robot orientation", 1, lambda s: orientation(s.pos, s.pos0, s.mask)[:, None])
+ORIENTATION = Block("robot orientation", 1, _orientation)
 POINTS = Block("robot points relative to its COM (x of every point, then y)", -1, lambda s: None)
 
 
@@ -132,15 +145,19 @@ def _sight_points(s: Scene, objects: tuple[str, ...] | None) -> np.ndarray:
     return np.concatenate([s.object_now(n) for n in objects], axis=2)
 
 
+def _sight(s: Scene, dist: int, objects: tuple[str, ...] | None, below: bool) -> np.ndarray:
+    if objects is None and s.static_sight is not None:
+        return s.static_sight(dist, below)
+    return terrain_sight(com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=below)
+
+
 def floor_sight(dist: int, objects: tuple[str, ...] | None = None) -> Block:
     """evogym's get_floor_obs: terrain height below the COM in 2 * dist + 1 columns, over the
     static terrain or over the named objects (evogym's `terrain_list`, which may move)."""
-    return Block(f"floor sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
-        com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=True))
+    return Block(f"floor sight +-{dist}", 2 * dist + 1, lambda s: _sight(s, dist, objects, True))
 
 
 def ceiling_sight(dist: int, objects: tuple[str, ...] | None = None) -> Block:
     """evogym's get_ceil_obs: terrain above the COM in 2 * dist + 1 columns (objects as in
     `floor_sight`)."""
-    return Block(f"ceiling sight +-{dist}", 2 * dist + 1, lambda s: terrain_sight(
-        com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=False))
+    return Block(f"ceiling sight +-{dist}", 2 * dist + 1, lambda s: _sight(s, dist, objects, False))

@@ -91,6 +91,9 @@ class TaskSpec:
     state: StateInit | None = None  # per-world task state, drawn anew at each reset of that world
     objects: tuple[AddedObject, ...] = ()  # objects added in code, in the order evogym adds them
     placement: Placement | None = None  # cells of the per_world objects from a world's state
+    # whether reward or termination read the robot's points (`Measure.points`, `.orientation`):
+    # False spares `BatchEnv` copying them twice a step (a measure's points are then None)
+    reads_points: bool = True
 
     def episode_length(self, steps: int | str | None) -> int:
         """The episode length that `steps` stands for: None is the paper's, "evogym" evogym's, an

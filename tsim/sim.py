@@ -124,6 +124,9 @@ class BatchSim:
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
         self.bodies = _as_bodies(bodies, passive_ok)  # a sequence of `Body`s (made when read)
+        # grows whenever the state may have changed: each `step`, and each read of `state`
+        # (which `reset` and every outside writer go through)
+        self.state_version = 0
         self.free_objects = world.free_objects
         self._gpu_block = K.GPU_BLOCK  # worlds per thread block on a GPU (`choose_kernel`)
         self._build()
@@ -290,7 +293,7 @@ class BatchSim:
             self._round_placement(range(B))
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
-        self.state = np.zeros((B, P, K.state_columns()), dtype=real)
+        self._state = np.zeros((B, P, K.state_columns()), dtype=real)
         self.actions = np.ones((B, A), dtype=real)
         # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
         self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]
@@ -322,7 +325,7 @@ class BatchSim:
                   self.ter_f, self.ter_i, self.ter_grid)
         self._static = (tuple(np.ascontiguousarray(a) for a in static) if self.backend.cached_launch
                         else tuple(_taichi_array(a) for a in static))
-        self._state_flat = self.state.reshape(-1)  # a view: the kernel writes the state in place
+        self._state_flat = self._state.reshape(-1)  # a view: the kernel writes the state in place
         self._edge_f_stale = False  # the copy above is current (`_round_placement`)
 
     def _round_world(self, w: int) -> tuple[np.ndarray, np.ndarray]:
@@ -460,11 +463,12 @@ class BatchSim:
             if not isinstance(self._static[1], np.ndarray):
                 self._static[1].from_numpy(np.ascontiguousarray(self.edge_f.reshape(-1)))
             self._edge_f_stale = False
+        self.state_version += 1
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             edge_i, edge_f, vox_i, lists, ter_f, ter_i, ter_grid = self._static
             args = (self.counts, self._state_flat, edge_i, edge_f, vox_i, lists,
-                    self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self.state.shape[1],
+                    self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self._state.shape[1],
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
             if self._spirv:  # maybe several launches per step (see tsim/spirv.py)
@@ -530,6 +534,22 @@ class BatchSim:
 
     # ------------------------------------------------------------------ read-out
     @property
+    def state(self) -> np.ndarray:
+        """(B, P, columns) every world's points in the real type: position 0:2, velocity 2:4, last
+        position 4:6, true velocity 6:8 (and f32's low parts, `tsim.kernels.layout`), written in
+        place by `step` and `reset`. Each read moves `state_version` on, as the reader may write
+        it: `BatchEnv` then measures the state anew rather than reuse its last measurement (so
+        write through `state` each time, not through a reference kept across steps)."""
+        self.state_version += 1
+        return self._state
+
+    @state.setter
+    def state(self, value: np.ndarray) -> None:
+        """A new state array (rarely: the kernel's flat view keeps the old one's memory)."""
+        self.state_version += 1
+        self._state = value
+
+    @property
     def status(self) -> np.ndarray:
         """(B,) copy of each world's status code (RUNNING, UNSTABLE, NONFINITE, INACTIVE, in this
         module); only RUNNING worlds advance."""
@@ -566,26 +586,26 @@ class BatchSim:
 
     def robot_pos(self, w: int) -> np.ndarray:
         """(2, n) robot point positions of world w, evogym point order, world units."""
-        return self.state[w, :self.n_robot_points[w], 0:2].T.copy()
+        return self._state[w, :self.n_robot_points[w], 0:2].T.copy()
 
     def robot_vel(self, w: int) -> np.ndarray:
         """(2, n) robot point velocities of world w, evogym point order, world units per unit of
         simulated time (dt = 1e-4 per substep)."""
-        return self.state[w, :self.n_robot_points[w], 2:4].T.copy()
+        return self._state[w, :self.n_robot_points[w], 2:4].T.copy()
 
     def object_pos(self, w: int, name: str) -> np.ndarray:
         """(2, n) point positions of free object `name` in world w, world units; KeyError when the
         world has no free object of that name (fixed objects are terrain, not simulated)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        return self.state[w, off:off + obj.body.n_points, 0:2].T.copy()
+        return self._state[w, off:off + obj.body.n_points, 0:2].T.copy()
 
     def object_vel(self, w: int, name: str) -> np.ndarray:
         """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
         as `object_pos`."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        return self.state[w, off:off + obj.body.n_points, 2:4].T.copy()
+        return self._state[w, off:off + obj.body.n_points, 2:4].T.copy()
 
     def _free_object(self, name: str):
         for k, o in enumerate(self.free_objects):
@@ -598,9 +618,9 @@ class BatchSim:
         mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in float64, then in
         float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7 (Jumper-v0's COM was
         8e-7 off evogym that way, 2e-7 from the pairs; evogym's chaos floor there is 3e-7)."""
-        mask = np.arange(self.state.shape[1])[None, :] < self.n_robot_points[:, None]
+        mask = np.arange(self._state.shape[1])[None, :] < self.n_robot_points[:, None]
         if self.dtype == np.float64:
-            s = (self.state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
+            s = (self._state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
             return s / self.n_robot_points[:, None]
         s = (self.states64()[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
         return (s / self.n_robot_points[:, None]).astype(self.dtype)
@@ -611,7 +631,7 @@ class BatchSim:
         ~1e-15, where float32 alone rounds at ~1e-8. A low part counts only while its position is
         the one it was written for (a position changed from Python, e.g. by `place_object`, has
         none until the next step). For comparing f32 with f64 or evogym."""
-        st = self.state
+        st = self._state
         out = st[:, :, 0:4].astype(np.float64)
         if st.shape[2] > K.NS:
             own = st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2]

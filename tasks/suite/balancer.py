@@ -16,6 +16,8 @@ def approach(x: float, y: float):
 
 
 SPEC_V0 = TaskSpec(name="Balancer-v0", world="Balancer-v0.json", origin=(15, 3), paper_steps=600,
-                   evogym_steps=600, observation=(O.ORIENTATION, O.POINTS), reward=approach(1.7, 0.5))
+                   evogym_steps=600, observation=(O.ORIENTATION, O.POINTS), reward=approach(1.7, 0.5),
+                   reads_points=False)
 SPEC_V1 = TaskSpec(name="Balancer-v1", world="Balancer-v1.json", origin=(10, 1), paper_steps=600,
-                   evogym_steps=600, observation=(O.ORIENTATION, O.POINTS), reward=approach(1.75, 0.6))
+                   evogym_steps=600, observation=(O.ORIENTATION, O.POINTS), reward=approach(1.75, 0.6),
+                   reads_points=False)

@@ -77,4 +77,4 @@ GOAL = Block("current goal: index, x, x minus the robot's COM x", 3, _goal_block
 
 SPEC = TaskSpec(name="BidirectionalWalker-v0", world="BidirectionalWalker-v0.json", origin=(33, 1),
                 paper_steps=1000, evogym_steps=1000, observation=(O.VCOM, O.POINTS, GOAL),
-                reward=reward, termination=all_goals_reached, state=draw_goals)
+                reward=reward, termination=all_goals_reached, state=draw_goals, reads_points=False)

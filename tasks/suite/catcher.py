@@ -54,4 +54,5 @@ SPEC = TaskSpec(
     name="Catcher-v0", world="Walker-v0.json", origin=(22, 1), paper_steps=400, evogym_steps=400,
     observation=(O.object_offset("package"), O.VCOM, O.object_vcom("package"),
                  O.object_orientation("package"), O.POINTS),
-    reward=reward, tracked=("package",), state=draw_offset, objects=OBJECTS, placement=placement)
+    reward=reward, tracked=("package",), state=draw_offset, objects=OBJECTS, placement=placement,
+    reads_points=False)

@@ -10,4 +10,4 @@ termination = reached_height(8.6)  # +1 and the end at the top of the pipe (evog
 
 SPEC = TaskSpec(name="Climber-v0", world="Climber-v0.json", origin=(1, 1), paper_steps=400,
                 evogym_steps=400, observation=(O.VCOM, O.POINTS), reward=reward,
-                termination=termination)
+                termination=termination, reads_points=False)

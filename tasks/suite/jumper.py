@@ -14,4 +14,5 @@ def reward(before: Measure, after: Measure):
 
 
 SPEC = TaskSpec(name="Jumper-v0", world="Jumper-v0.json", origin=(32, 1), paper_steps=500,
-                evogym_steps=500, observation=(O.VCOM, O.POINTS, O.floor_sight(2)), reward=reward)
+                evogym_steps=500, observation=(O.VCOM, O.POINTS, O.floor_sight(2)), reward=reward,
+                reads_points=False)

@@ -10,7 +10,7 @@ from tasks.suite._common import both, dx, fell_below, upside_down
 OBS = (O.VCOM, O.ORIENTATION, O.POINTS, O.floor_sight(5))
 
 GAP = TaskSpec(name="GapJumper-v0", world="GapJumper-v0.json", origin=(1, 6), paper_steps=1000,
-               evogym_steps=1000, observation=OBS, reward=dx, termination=fell_below(0.4))
+               evogym_steps=1000, observation=OBS, reward=dx, termination=fell_below(0.4), reads_points=False)
 PLATFORM = TaskSpec(name="PlatformJumper-v0", world="PlatformJumper-v0.json", origin=(1, 6),
                     paper_steps=1000, evogym_steps=1000, observation=OBS, reward=dx,
                     termination=both(fell_below(0.4), upside_down()))

@@ -20,15 +20,16 @@ top_of_pipe = reached_height(65 * 0.1)  # +1 and the end above y = 65 voxels, as
 
 BRIDGE_WALKER = TaskSpec(
     name="BridgeWalker-v0", world="BridgeWalker-v0.json", origin=(2, 5), paper_steps=500,
-    evogym_steps=500, observation=(O.VCOM, O.ORIENTATION, O.POINTS), reward=dx, goal=(60, 1.0))
+    evogym_steps=500, observation=(O.VCOM, O.ORIENTATION, O.POINTS), reward=dx, goal=(60, 1.0),
+    reads_points=False)
 
 CAVE_CRAWLER = TaskSpec(
     name="CaveCrawler-v0", world="CaveCrawler-v0.json", origin=(1, 2), paper_steps=1000,
     evogym_steps=1000,
     observation=(O.VCOM, O.POINTS, O.floor_sight(5, ("terrain",)),
                  O.ceiling_sight(5, ("terrain",))),
-    reward=dx, goal=(69, 1.0))
+    reward=dx, goal=(69, 1.0), reads_points=False)
 
 CLIMBER_V1 = TaskSpec(
     name="Climber-v1", world="Climber-v1.json", origin=(1, 1), paper_steps=600, evogym_steps=600,
-    observation=(O.VCOM, O.POINTS), reward=climb, termination=top_of_pipe)
+    observation=(O.VCOM, O.POINTS), reward=climb, termination=top_of_pipe, reads_points=False)

@@ -55,16 +55,16 @@ LIFTER = TaskSpec(name="Lifter-v0", world="Lifter-v0.json", origin=(2, 3), paper
                   evogym_steps=300,
                   observation=(O.VCOM, O.object_offset("package"), O.object_vcom("package"),
                                O.object_orientation("package"), O.POINTS),
-                  reward=lift, tracked=("package",))
+                  reward=lift, tracked=("package",), reads_points=False)
 CARRIER_V1 = TaskSpec(name="Carrier-v1", world="Carrier-v1.json", origin=(1, 4), paper_steps=1000,
                       evogym_steps=1000, observation=PACKAGE_OBS, reward=carry_to_table,
-                      tracked=("package",))
+                      tracked=("package",), reads_points=False)
 PUSHER_V1 = TaskSpec(name="Pusher-v1", world="Pusher-v1.json", origin=(13, 1), paper_steps=600,
                      evogym_steps=600, observation=PACKAGE_OBS, reward=push, tracked=("package",),
-                     goal=(69, 1.0))
+                     goal=(69, 1.0), reads_points=False)
 BEAM_TOPPLER = TaskSpec(name="BeamToppler-v0", world="BeamToppler-v0.json", origin=(1, 1),
                         paper_steps=1000, evogym_steps=1000, observation=BEAM_OBS, reward=topple,
-                        tracked=("beam",), termination=beam_left)
+                        tracked=("beam",), termination=beam_left, reads_points=False)
 BEAM_SLIDER = TaskSpec(name="BeamSlider-v0", world="BeamSlider-v0.json", origin=(1, 1),
                        paper_steps=1000, evogym_steps=1000, observation=BEAM_OBS, reward=slide,
-                       tracked=("beam",), termination=beam_left)
+                       tracked=("beam",), termination=beam_left, reads_points=False)

@@ -10,4 +10,5 @@ def reward(before: Measure, after: Measure):
 
 
 SPEC = TaskSpec(name="Walker-v0", world="Walker-v0.json", origin=(1, 1), paper_steps=500,
-                evogym_steps=500, observation=(O.VCOM, O.POINTS), reward=reward, goal=(99, 1.0))
+                evogym_steps=500, observation=(O.VCOM, O.POINTS), reward=reward, goal=(99, 1.0),
+                reads_points=False)

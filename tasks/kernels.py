@@ -1,0 +1,191 @@
+"""Taichi kernels for `BatchEnv.step`'s per-point work (issue 48 item 2): the robots' COMs and
+the observation rows, computed where the state lives, into preallocated arrays.
+
+What numpy did with temporaries, fancy-index scatters and copies of (B, N, .) arrays, these do in
+one pass over each world's points, in the same order and the same types, so the results are
+numpy's bits (`BatchEnv(..., fused=False)` keeps the numpy path as the test oracle):
+- a COM is the sum of the robot's rows in point order, from +0.0 (numpy's `add.reduce` along a
+  non-contiguous axis), over all `N` padded rows: a padding row adds its zeros, or, when free
+  objects' points follow the robot's, the row times 0.0 (numpy's `rows * mask`), which matters
+  only to the sign of a zero sum (`_coms`); the sum is in the state's type and is divided in
+  float64 (numpy's float32 / int64 is float64);
+- a relative position is `pos - com` in float64, stored in the observation's type;
+- the floor and ceiling sight over the static terrain: the COM in voxel units in the state's type
+  (numpy's mean of the quotients), then numpy's comparisons in float64 (max and min are exact).
+The (B,)-sized rewards and terminations, the orientation and the object blocks stay in numpy.
+"""
+
+from tsim.kernels.layout import state_columns
+from tsim.runtime import ti
+
+REAL_1 = ti.types.ndarray(ndim=1)
+REAL_2 = ti.types.ndarray(ndim=2)
+I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
+F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
+F64_2 = ti.types.ndarray(dtype=ti.f64, ndim=2)
+
+# Arrays are flat 1-D views with strides known when compiling (the state's columns) or passed as
+# ints, as the physics kernels address theirs (`tsim.kernels.layout`): with Taichi's ndarray
+# shapes, every store reloads every array's pointer and shape; flat, the observation kernel took
+# about half the time.
+
+
+@ti.func
+def _sum_rows(state: ti.template(), so, lo, hi, n, masked: ti.template(), s: ti.template()):
+    """s (4 sums: x, y, vx, vy) plus the world's rows lo..hi-1 (the world's rows start at so), each
+    times 1.0 or 0.0 (row < n) when `masked`, as numpy's `rows * mask` summed."""
+    ns = ti.static(state_columns())
+    for p in range(lo, hi):
+        for c in ti.static(range(4)):
+            if ti.static(masked):
+                s[c] += state[so + p * ns + c] * ti.select(p < n, 1.0, 0.0)
+            else:
+                s[c] += state[so + p * ns + c]
+
+
+@ti.func
+def _coms(state: ti.template(), npts: ti.template(), b, P, N, masked: ti.template(), com: ti.template(),
+          vcom: ti.template(), copy: ti.template(), points: ti.template()):
+    """World b's position and velocity COMs into com, vcom (flat (B, 2)), and with `copy` its N
+    rows' positions into points (flat (B, N, 2)); its COM. The padding rows' products are +-0.0
+    and change no sum but a zero one's sign, so they are read only when a sum of the robot's rows
+    is 0 (see the module docstring)."""
+    ns = ti.static(state_columns())
+    so = b * P * ns
+    n = npts[b]
+    z = state[so] - state[so]  # +0.0 in the state's type (its rows are finite)
+    s = ti.Vector([z, z, z, z])
+    _sum_rows(state, so, 0, n, n, masked, s)
+    if n < N and (s[0] == 0.0 or s[1] == 0.0 or s[2] == 0.0 or s[3] == 0.0):
+        s = ti.Vector([z, z, z, z])
+        _sum_rows(state, so, 0, N, n, masked, s)
+    nf = ti.cast(n, ti.f64)
+    c = ti.Vector([ti.cast(s[0], ti.f64) / nf, ti.cast(s[1], ti.f64) / nf])
+    com[2 * b] = c[0]
+    com[2 * b + 1] = c[1]
+    vcom[2 * b] = ti.cast(s[2], ti.f64) / nf
+    vcom[2 * b + 1] = ti.cast(s[3], ti.f64) / nf
+    if ti.static(copy):
+        for p in range(N):
+            points[(b * N + p) * 2] = state[so + p * ns]
+            points[(b * N + p) * 2 + 1] = state[so + p * ns + 1]
+    return c
+
+
+@ti.kernel
+def robot_coms(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.template(), com: F64_1,
+               vcom: F64_1, copy: ti.template(), points: REAL_1, serial: ti.template()):
+    """(B, 2) position and velocity COMs (com, vcom: flat) of every world's robot, its first npts[b]
+    of the N robot rows of its P state rows (state: flat (B, P, columns)); with `copy`, each
+    robot's N rows' positions into points (flat (B, N, 2); `Measure.points`) too."""
+    ti.loop_config(serialize=serial)
+    for b in range(npts.shape[0]):
+        _coms(state, npts, b, P, N, masked, com, vcom, copy, points)
+
+
+@ti.kernel
+def observe(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.template(), com: F64_1,
+            vcom: F64_1, copy: ti.template(), points: REAL_1, head: ti.i32, W: ti.i32, obs: REAL_1,
+            real: ti.template(), serial: ti.template()):
+    """`robot_coms`, then each observation row (obs: flat (B, W)) from column `head` on: the
+    robot's points relative to its COM (x of every point, then y), zeros to the row's end (`tail`
+    writes the blocks after the points), rounded to `real` (obs's type). Columns before `head` are
+    the caller's."""
+    ns = ti.static(state_columns())
+    ti.loop_config(serialize=serial)
+    for b in range(npts.shape[0]):
+        c = _coms(state, npts, b, P, N, masked, com, vcom, copy, points)
+        so = b * P * ns
+        n = npts[b]
+        o = b * W + head
+        for p in range(n):
+            obs[o + p] = ti.cast(ti.cast(state[so + p * ns], ti.f64) - c[0], real)
+            obs[o + n + p] = ti.cast(ti.cast(state[so + p * ns + 1], ti.f64) - c[1], real)
+        for k in range(head + 2 * n, W):
+            obs[b * W + k] = ti.cast(0.0, real)
+
+
+@ti.kernel
+def tail(npts: I32_1, head: ti.i32, values: REAL_2, W: ti.i32, obs: REAL_1, whole: ti.template(),
+         serial: ti.template()):
+    """The blocks after the points: values (B, k) into each row of obs (flat (B, W)) from column
+    head + 2 npts[b] on. `whole` rewrites the rest of the row with what it holds: a backend that
+    uploads only the arrays a kernel reads (Vulkan) would otherwise return the others' columns
+    as the device memory held them."""
+    ti.loop_config(serialize=serial)
+    for b in range(npts.shape[0]):
+        c = head + 2 * npts[b]
+        o = b * W
+        if ti.static(whole):
+            for k in range(c):
+                obs[o + k] = obs[o + k]
+            for k in range(c + values.shape[1], W):
+                obs[o + k] = obs[o + k]
+        for j in range(values.shape[1]):
+            obs[o + c + j] = values[b, j]
+
+
+@ti.kernel
+def clip_actions(a: F64_2, n_act: I32_1, lo: ti.f64, hi: ti.f64, real: ti.template(), out: REAL_2,
+                 serial: ti.template()):
+    """`BatchSim.set_actions` for a (B, max_actuators) float64 array of finite actions: robot b's
+    first n_act[b] clipped to [lo, hi] (max, then min: numpy's `minimum(maximum(a, lo), hi)`) into
+    out, rounded to `real`."""
+    ti.loop_config(serialize=serial)
+    for b in range(n_act.shape[0]):
+        for j in range(n_act[b]):
+            out[b, j] = ti.cast(ti.min(ti.max(a[b, j], lo), hi), real)
+
+
+@ti.kernel
+def terrain_sight(cv: F64_2, tx: REAL_1, ty: REAL_1, d: ti.template(), below: ti.template(), rng: ti.f64,
+                  cell: ti.f64, out: F64_2, serial: ti.template()):
+    """`tasks.observations.terrain_sight` over a static terrain (tx, ty: its points in voxel units,
+    as numpy divided them): for each world's COM cv[b] (voxel units), the floor (`below`) or
+    ceiling distance in 2 d + 1 windows, world units, into out (B, 2 d + 1). The same comparisons
+    in float64 as numpy's; max and min are exact, so the same bits."""
+    inf = ti.cast(ti.math.inf, ti.f64)
+    ti.loop_config(serialize=serial)
+    for b in range(cv.shape[0]):
+        cx = cv[b, 0]
+        cy = cv[b, 1]
+        lo = cx - (d + 0.5)
+        hi = cx + (d + 0.5)
+        e = ti.Vector([-inf if ti.static(below) else inf] * (2 * d + 1), dt=ti.f64)
+        seen = ti.Vector([0] * (2 * d + 1), dt=ti.i32)
+        for m in range(tx.shape[0]):
+            x = ti.cast(tx[m], ti.f64)
+            y = ti.cast(ty[m], ti.f64)
+            if x > lo and x < hi and ((y < cy) if ti.static(below) else (y > cy)):
+                for k in ti.static(range(2 * d + 1)):
+                    if x > cx + ti.static(k - d - 0.5) and x < cx + ti.static(k - d + 0.5):
+                        e[k] = ti.max(e[k], y) if ti.static(below) else ti.min(e[k], y)
+                        seen[k] = 1
+        for k in ti.static(range(2 * d + 1)):
+            if ti.static(below):
+                ek = e[k] if seen[k] else cy - rng
+                out[b, k] = ti.min(ti.max(cy - ek, 0.0), rng) * cell
+            else:
+                ek = e[k] if seen[k] else cy + rng
+                out[b, k] = ti.min(ti.max(ek - cy, 0.0), rng) * cell
+
+
+@ti.kernel
+def com_voxel_units(state: REAL_1, npts: I32_1, P: ti.i32, cell: ti.f64, real: ti.template(), out: F64_2,
+                    serial: ti.template()):
+    """`tasks.observations.com_voxel_units`: each robot's mean point position over `cell`, in the
+    state's type `real` as numpy computes it (the quotients summed in point order from +0.0, that
+    mean's order, then divided by the point count), stored in float64."""
+    ns = ti.static(state_columns())
+    ti.loop_config(serialize=serial)
+    for b in range(npts.shape[0]):
+        so = b * P * ns
+        n = npts[b]
+        c = ti.cast(cell, real)
+        sx = state[so] - state[so]  # +0.0 of the state's type
+        sy = sx
+        for p in range(n):
+            sx += state[so + p * ns] / c
+            sy += state[so + p * ns + 1] / c
+        out[b, 0] = ti.cast(sx / ti.cast(n, real), ti.f64)
+        out[b, 1] = ti.cast(sy / ti.cast(n, real), ti.f64)
