@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # GPU readiness in one command on a bare GPU machine (Python 3.12, no network, no taichi): not run
 # by CI, whose machines have no GPU. From the repository root, with device-wheels/ beside it
-# (bash bench/device_wheels.sh, here, before sending the tree):
-#   bash bench/gpu_check.sh
+# (bash device/device_wheels.sh, here, before sending the tree):
+#   bash device/gpu_check.sh
 # 1. installs the carried wheels offline (pip --no-index --target) and puts them and the project on
 #    PYTHONPATH: nothing is built, nothing downloaded;
 # 2. `sgr bench` on Walker-v0 at B = 1024, 8192 and 32768 (robot-steps/s), each under BENCH_LIMIT
@@ -15,16 +15,16 @@
 #    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
 #    evogym| exceeds 1e-9 on the GPU;
 # 4. the GPU against this machine's own CPU backend on all 32 tasks, in f64 and f32 (f32 skipped
-#    where SGR_PRECISION does not exist yet) (bench/arch_returns.py: random 5x5 robots, open-loop
+#    where SGR_PRECISION does not exist yet) (device/arch_returns.py: random 5x5 robots, open-loop
 #    actions; fails when a task's median |return difference| exceeds F64_TOL=1e-6 / F32_TOL=1e-3,
 #    and says whether f64's bits matched: CUDA may fuse multiply-adds, see below). It comes last:
 #    on the H200 (2026-12-04) its f64 half took ~8 of a call's 9 minutes (CUDA compiles each
 #    task's kernels afresh), so a call cut short still brings back 2 and 3.
 #    With the probe (2b, ~5.5 min per precision) a 540 s call leaves ~3 min for 3 and 4: run
-#    `PROBE=0 bash bench/gpu_check.sh` in a second call for the whole comparison.
+#    `PROBE=0 bash device/gpu_check.sh` in a second call for the whole comparison.
 # Everything goes to $OUT (default gpu-check/) as JSON and text, with a summary at the end; exit 1
-# on a failed check. Rehearsal on a CPU (what bench/gpu_rehearsal.sh does):
-#   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 DATA=tests/data/returns PY=python3.12 bash bench/gpu_check.sh
+# on a failed check. Rehearsal on a CPU (what device/gpu_rehearsal.sh does):
+#   SGR_ARCH_GPU=cpu SIZES=64 ROBOTS=2 STEPS=20 DATA=tests/data/returns PY=python3.12 bash device/gpu_check.sh
 set -euo pipefail
 cd "$(dirname "$0")/.."
 PY=${PY:-python3}
@@ -34,7 +34,7 @@ GPU=${SGR_ARCH_GPU:-cuda}
 mkdir -p "$OUT"
 start=$(date +%s)
 if ! "$PY" -c "import taichi, neat, gymnasium" >/dev/null 2>&1; then
-  [ -d "$WHEELS" ] || { echo "gpu_check: no taichi here and no $WHEELS/ (run bench/device_wheels.sh first)"; exit 1; }
+  [ -d "$WHEELS" ] || { echo "gpu_check: no taichi here and no $WHEELS/ (run device/device_wheels.sh first)"; exit 1; }
   SITE=$(mktemp -d)
   "$PY" -m pip install -q --no-index --no-deps --target "$SITE" "$WHEELS"/*.whl
   export PYTHONPATH="$SITE${PYTHONPATH:+:$PYTHONPATH}"
@@ -107,9 +107,9 @@ for prec in ${PRECISIONS:-f64 f32}; do
     continue
   fi
   tol=$([ "$prec" = f32 ] && echo "${F32_TOL:-1e-3}" || echo "${F64_TOL:-1e-6}")
-  SGR_PRECISION=$prec SGR_ARCH=cpu "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_cpu_$prec.json"
-  SGR_PRECISION=$prec SGR_ARCH=$GPU "$PY" bench/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_gpu_$prec.json"
-  "$PY" bench/arch_returns.py --tol "$tol" --compare "$OUT/arch_cpu_$prec.json" "$OUT/arch_gpu_$prec.json" | tee "$OUT/arch_compare_$prec.txt" || fail=1
+  SGR_PRECISION=$prec SGR_ARCH=cpu "$PY" device/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_cpu_$prec.json"
+  SGR_PRECISION=$prec SGR_ARCH=$GPU "$PY" device/arch_returns.py --robots "${ROBOTS:-16}" --steps "${STEPS:-200}" --out "$OUT/arch_gpu_$prec.json"
+  "$PY" device/arch_returns.py --tol "$tol" --compare "$OUT/arch_cpu_$prec.json" "$OUT/arch_gpu_$prec.json" | tee "$OUT/arch_compare_$prec.txt" || fail=1
 done
 
 echo "gpu_check: $(( $(date +%s) - start )) s; $([ $fail = 0 ] && echo ok || echo FAILED)" | tee -a "$OUT/summary.txt"
