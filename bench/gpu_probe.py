@@ -17,7 +17,7 @@ what it measured so far and says so), results written as they come:
   blocks, warps and occupancy per SM at each block size (cuOccupancyMaxActiveBlocksPerMultiprocessor);
   `ptxas -v` beside them where a CUDA toolkit is installed. On a CPU: "n/a (cpu)".
 - parity: the GPU against this machine's CPU backend on the paper's four tasks
-  (bench/arch_returns.py; the whole 32 are bench/gpu_check.sh's last step).
+  (device/arch_returns.py; the whole 32 are device/gpu_check.sh's last step).
 Into --out: probe.json (everything), summary.txt (the tables), part_*.json, part_*.log and, on
 CUDA, ptx/ (the step kernels' PTX, gzipped).
 """
@@ -359,13 +359,13 @@ def _kernel_attributes(call, args, out: Path, rec: dict) -> None:
 
 
 def part_parity(args, out: Path) -> dict:
-    """bench/arch_returns.py on this arch and on the CPU at once, then compared."""
+    """device/arch_returns.py on this arch and on the CPU at once, then compared."""
     import importlib.util
 
-    spec = importlib.util.spec_from_file_location("arch_returns", ROOT / "bench" / "arch_returns.py")
+    spec = importlib.util.spec_from_file_location("arch_returns", ROOT / "device" / "arch_returns.py")
     ar = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(ar)
-    base = [sys.executable, str(ROOT / "bench" / "arch_returns.py"), "--robots", str(args.parity_robots),
+    base = [sys.executable, str(ROOT / "device" / "arch_returns.py"), "--robots", str(args.parity_robots),
             "--steps", str(args.parity_steps), "--tasks", *args.parity_tasks]
     arch = os.environ.get("SGR_ARCH", "cpu")
     procs = {}

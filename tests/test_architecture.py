@@ -167,7 +167,8 @@ def mapping_reads(source: str) -> list[str]:
 
 
 def test_the_run_config_is_read_by_attribute_everywhere():
-    files = [f for d in ("evolve", "tasks", "tsim", "sgr", "bench", "tools", "tests")
+    files = [f for d in ("evolve", "tasks", "tsim", "sgr", "bench", "references", "studies", "device",
+                                 "tools", "tests")
              for f in (ROOT / d).rglob("*.py") if f != ROOT / "evolve" / "config.py"]
     assert len(files) > 100
     bad = [f"{f.relative_to(ROOT)}:{hit}" for f in files for hit in mapping_reads(f.read_text())]

@@ -18,7 +18,7 @@ def test_a_measurement_doc_opens_with_today_and_keeps_its_history_below(doc):
     assert headings[0].startswith("Today"), headings[:3]
     assert not DATED.search(headings[0])
     today = text[text.index("## " + headings[0]):text.index("## " + headings[1])]
-    assert "`sgr " in today or "python bench/" in today  # how to reproduce the figures
+    assert "`sgr " in today or re.search(r"python (bench|studies)/", today)  # how to reproduce the figures
     assert re.search(r"\d\.\d", today)  # figures, not only words
     later = headings[1:]
     assert any(h.startswith(("History", "How the figures came")) for h in later[:1]), later[:2]

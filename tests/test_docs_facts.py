@@ -26,7 +26,8 @@ RECORD_KEYS = {"name", "figures", "machine", "commit", "date", "command"}
 LINK = re.compile(r"\[([^\]]*)\]\((?:docs/)?records/([\w.-]+\.json)#([\w.-]+)\)")
 NUMBER = re.compile(r"(?<![\w.])[-−]?\d[\d,]*(?:\.\d+)?(?:e[-+]?\d+)?")
 # a path the docs name: a top-level folder of the repository (or ../shared), then a file or folder
-PATH = re.compile(r"(?<![\w./-])((?:\.\./shared|bench|tools|configs|docs|tests|tsim|tasks|evolve|examples)"
+PATH = re.compile(r"(?<![\w./-])((?:\.\./shared|bench|references|studies|device|results|tools|configs|docs|"
+                  r"tests|tsim|tasks|evolve|examples)"
                   r"/[\w./*-]*[\w/*])")
 SPAN = re.compile(r"`([^`\n]+)`")
 # files a how-to asks the reader to write (they are the reader's, not the repository's)

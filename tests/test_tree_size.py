@@ -1,8 +1,8 @@
 """What travels to a GPU machine fits it (issue 27): the working tree it receives (tracked files
-plus untracked ones git does not ignore) and the device wheels (bench/device-wheels.json: CI does
-not download them, bench/device_wheels.sh checks them against it) stay within 56 MiB of the 64 MiB
+plus untracked ones git does not ignore) and the device wheels (device/device-wheels.json: CI does
+not download them, device/device_wheels.sh checks them against it) stay within 56 MiB of the 64 MiB
 a device machine takes (issue 34: a margin for run records committed later); and
-bench/gpu_check.sh's default reference folders are in the tree."""
+device/gpu_check.sh's default reference folders are in the tree."""
 
 import json
 import re
@@ -34,7 +34,7 @@ def size(paths: list[str]) -> int:
 
 
 def test_tree_and_device_wheels_fit_56_mib(files):
-    wheels = json.loads((ROOT / "bench" / "device-wheels.json").read_text())
+    wheels = json.loads((ROOT / "device" / "device-wheels.json").read_text())
     assert wheels["total"] == sum(wheels["files"].values())
     tracked, untracked = size(files["tracked"]), size(files["untracked"])
     data = size([f for f in files["tracked"] if f.startswith("tests/data/")])
@@ -44,14 +44,14 @@ def test_tree_and_device_wheels_fit_56_mib(files):
            f"tracked files {tracked / mib:.2f} MiB ({len(files['tracked'])} files; tests/data "
            f"{data / mib:.2f} MiB), untracked files git "
            f"does not ignore {untracked / mib:.2f} MiB ({len(files['untracked'])}), device wheels "
-           f"{wheels['total'] / mib:.2f} MiB (bench/device-wheels.json)")
+           f"{wheels['total'] / mib:.2f} MiB (device/device-wheels.json)")
     assert total <= BUDGET, msg
 
 
 def test_gpu_check_default_data_folders_exist():
-    text = (ROOT / "bench" / "gpu_check.sh").read_text()
+    text = (ROOT / "device" / "gpu_check.sh").read_text()
     (default,) = re.findall(r"\$\{DATA:-([^}]*)\}", text)
     folders = default.split()
-    assert folders, "bench/gpu_check.sh names no default DATA folder"
+    assert folders, "device/gpu_check.sh names no default DATA folder"
     for d in folders:
-        assert (ROOT / d).is_dir(), f"bench/gpu_check.sh's default DATA folder {d} is missing"
+        assert (ROOT / d).is_dir(), f"device/gpu_check.sh's default DATA folder {d} is missing"

@@ -84,7 +84,7 @@ def test_reset_observation_and_returns_match_evogym(returns, task):
 
 def evogym_spread(z, key: str, ref: str) -> np.ndarray:
     """Per robot, the larger distance of evogym's +1e-9 and -1e-9 action reruns from its own
-    reference (recorded by bench/evogym_reference.py in every returns_<task>.npz)."""
+    reference (recorded by references/evogym_reference.py in every returns_<task>.npz)."""
     if ref:
         return np.maximum(np.abs(z[key + "_p9"] - z[ref]), np.abs(z[key + "_m9"] - z[ref]))
     return np.maximum(z[key + "_p9"], z[key + "_m9"])

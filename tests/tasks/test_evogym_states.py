@@ -4,7 +4,7 @@ Catcher-v0's package below y = 0.5, evogym's built-in ground plane y < 0; and si
 other reward and termination branch of every task, both sides of its line, listed in
 test_evogym_branches.py and docs/VALIDATION.md), against evogym 2.0.0 episodes that start from a
 moved state
-(`state_cases.npz`, recorded by bench/evogym_state_cases.py; README there): evogym's own
+(`state_cases.npz`, recorded by references/evogym_state_cases.py; README there): evogym's own
 `Sim.translate_object` moved the robot (or a package or beam) right after reset, and we move ours
 by the same (dx, dy) in `env.sim.state`, then replay the same actions. Two BidirectionalWalker-v0
 cases move the robot again before every step (to each goal in turn, evogym's `Sim.revert(now)`

@@ -79,7 +79,7 @@ def test_the_run_folder_records_arch_and_precision(tmp_path, repo_root, monkeypa
 
 
 def stored_configs() -> list[Path]:
-    found = sorted(p for d in ("docs/paper/runs", "docs/robust/runs", "tests/data")
+    found = sorted(p for d in ("results/paper/runs", "results/robust/runs", "tests/data")
                    for p in (ROOT / d).rglob("config.yaml"))
     assert len(found) > 50
     return found

@@ -1,6 +1,6 @@
 """A champion's verdict (evolve/runs/verdict.py): holds or knife-edge, by one rule, wherever a
 champion is shown. The paper sweep's nominal champions give one of each: Walker-v0 seed 0 keeps about
-two thirds of its return under ±1e-3 (docs/paper/report.md), seed 3 over 90 %."""
+two thirds of its return under ±1e-3 (results/paper/report.md), seed 3 over 90 %."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from evolve import load_champion
 from evolve.runs import verdict
 from evolve.runs.report import write_report
 
-PAPER = Path(__file__).resolve().parents[3] / "docs" / "paper" / "runs"
+PAPER = Path(__file__).resolve().parents[3] / "results" / "paper" / "runs"
 
 
 @pytest.mark.parametrize("nominal, noisy, holds", [

@@ -1,5 +1,5 @@
 """EvoSim against evogym itself on a world of our own (tests/data/evogym_api/multi_world.*,
-recorded by bench/evogym_api_reference.py): terrain with a step, a rigid box, a lever held by a
+recorded by references/evogym_api_reference.py): terrain with a step, a rigid box, a lever held by a
 fixed voxel, a falling ball, a robot added from an array with custom connections and a second
 robot, both driven by set_action with targets up to 1.65 (evogym's EvoSim does not clip: clipping
 would change the run).
@@ -22,7 +22,7 @@ PI2 = 2 * 3.1415926  # evogym's orientation lives on [0, 2 x its pi)
 
 def _ref():
     spec = importlib.util.spec_from_file_location("evogym_api_reference",
-                                                  ROOT / "bench" / "evogym_api_reference.py")
+                                                  ROOT / "references" / "evogym_api_reference.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

@@ -4,7 +4,7 @@ envs/__init__.py and envs/simple_env.py, github.com/EvolutionGym/evogym, MIT lic
 
 The tutorial env (envs/simple_env.py over world_data/simple_walker_env.json) gives evogym's
 observations and rewards over a whole 500-step episode (tests/data/evogym_api/simple_env.npz,
-recorded from evogym by bench/evogym_api_reference.py)."""
+recorded from evogym by references/evogym_api_reference.py)."""
 
 import importlib.util
 import runpy
@@ -40,7 +40,7 @@ def tutorial_dir(tmp_path, monkeypatch):
 
 def _actions():
     spec = importlib.util.spec_from_file_location("evogym_api_reference",
-                                                  ROOT / "bench" / "evogym_api_reference.py")
+                                                  ROOT / "references" / "evogym_api_reference.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod.actions

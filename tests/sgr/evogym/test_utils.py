@@ -1,5 +1,5 @@
 """sgr.evogym.utils against evogym itself (tests/data/evogym_api/samples.json, recorded by
-bench/evogym_api_reference.py): a seeded script samples evogym's robots."""
+references/evogym_api_reference.py): a seeded script samples evogym's robots."""
 
 import json
 import random

@@ -115,7 +115,7 @@ def test_camera_follows_as_evogyms():
     view's centre and size after each step's render within 1e-9 of evogym's."""
     import importlib.util
     root = DATA.parents[2]
-    spec = importlib.util.spec_from_file_location("ref", root / "bench" / "evogym_api_reference.py")
+    spec = importlib.util.spec_from_file_location("ref", root / "references" / "evogym_api_reference.py")
     ref = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(ref)
     d = np.load(DATA / "camera.npz", allow_pickle=False)

@@ -1,5 +1,5 @@
 """EvoWorld / WorldObject edits print and raise what evogym's do (tests/data/evogym_api/
-world_ops.txt, evogym's output for the same calls, recorded by bench/evogym_api_reference.py)."""
+world_ops.txt, evogym's output for the same calls, recorded by references/evogym_api_reference.py)."""
 
 import importlib.util
 from pathlib import Path
@@ -16,7 +16,7 @@ DATA = ROOT / "tests" / "data" / "evogym_api"
 
 def _reference_script():
     spec = importlib.util.spec_from_file_location("evogym_api_reference",
-                                                  ROOT / "bench" / "evogym_api_reference.py")
+                                                  ROOT / "references" / "evogym_api_reference.py")
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod

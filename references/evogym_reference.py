@@ -4,8 +4,8 @@ Runs ONLY under the evogym virtual environment built by shared/tools/setup_evogy
 evogym 2.0.0, numpy 1.26, gymnasium 1.x). sgr never imports this file and never depends on evogym;
 it only reads what this script writes (tests/data/evogym32/, described in its README.md).
 
-    /root/.cache/evogym-venv/bin/python bench/evogym_reference.py                 # all 32 tasks
-    /root/.cache/evogym-venv/bin/python bench/evogym_reference.py --tasks Walker-v0 Catcher-v0
+    /root/.cache/evogym-venv/bin/python references/evogym_reference.py                 # all 32 tasks
+    /root/.cache/evogym-venv/bin/python references/evogym_reference.py --tasks Walker-v0 Catcher-v0
 
 Per task it writes:
   returns_<task>.npz   24 random robots (evogym's sample_robot, 5x5) with random open-loop sinusoidal
@@ -43,7 +43,7 @@ import evogym.envs  # noqa: F401  (registers the 32 tasks)
 import gymnasium as gym
 import numpy as np
 from evogym import sample_robot
-from npz_io import save_npz, state_steps  # bench/ (this script's folder) is on sys.path
+from npz_io import save_npz, state_steps  # references/ (this script's folder) is on sys.path
 
 ALL_TASKS = (
     "Walker-v0", "BridgeWalker-v0", "CaveCrawler-v0", "Jumper-v0", "Flipper-v0", "Balancer-v0",
@@ -500,7 +500,7 @@ def main() -> None:
     timing = json.load(open(timing_path)) if os.path.exists(timing_path) else {}
     index.update({
         "format_version": FORMAT_VERSION,
-        "generator": "bench/evogym_reference.py",
+        "generator": "references/evogym_reference.py",
         "evogym_version": "2.0.0",
         "python": sys.version.split()[0], "numpy": np.__version__, "gymnasium": gym.__version__,
         "n_cases": args.cases, "steps": STEPS, "trace_steps": TRACE_STEPS,

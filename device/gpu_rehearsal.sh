@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
-# Rehearses bench/gpu_check.sh here, on the CPU, as the GPU machine would run it: a fresh Python
+# Rehearses device/gpu_check.sh here, on the CPU, as the GPU machine would run it: a fresh Python
 # 3.12 environment holding only the device image's packages (no taichi, neat-python, gymnasium),
 # the carried wheels installed offline, the GPU arch replaced by the CPU and small sizes.
-#   bash bench/gpu_rehearsal.sh          (~5 min on 2 cores; downloads the image's packages once)
+#   bash device/gpu_rehearsal.sh          (~5 min on 2 cores; downloads the image's packages once)
 # Not in the test suite: building the environment downloads ~150 MB and takes minutes, which the
 # suite's 10-minute budget on CI's 2 cores cannot spare. Its last run is recorded in
 # docs/BENCHMARKS.md ("Running on a GPU").
@@ -16,7 +16,7 @@ if [ ! -x "$ENV/bin/python" ]; then
   # the device image's packages that sgr may touch (its full list: .library/device/KINDS.md)
   "$ENV/bin/pip" install -q numpy scipy matplotlib pillow pyyaml imageio rich tqdm pytest
 fi
-[ -d device-wheels ] || PY="$ENV/bin/python" bash bench/device_wheels.sh
+[ -d device-wheels ] || PY="$ENV/bin/python" bash device/device_wheels.sh
 if "$ENV/bin/python" -c "import taichi" 2>/dev/null; then echo "gpu_rehearsal: $ENV has taichi: not the device image"; exit 1; fi
 OUT=${OUT:-gpu-rehearsal} PY="$ENV/bin/python" PIP_NO_INDEX=1 SGR_ARCH_GPU=cpu SIZES=${SIZES:-64} \
-  ROBOTS=${ROBOTS:-2} STEPS=${STEPS:-20} DATA=${DATA:-tests/data/returns} bash bench/gpu_check.sh
+  ROBOTS=${ROBOTS:-2} STEPS=${STEPS:-20} DATA=${DATA:-tests/data/returns} bash device/gpu_check.sh

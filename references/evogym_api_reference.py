@@ -28,7 +28,7 @@ tests/data/evogym_api/:
                    tutorial world with padding (4, 2) and scale (0.3, 0.1), one update a step, 150
                    steps (`camera`).
 
-    /root/.cache/evogym-venv/bin/python bench/evogym_api_reference.py --tutorials DIR
+    /root/.cache/evogym-venv/bin/python references/evogym_api_reference.py --tutorials DIR
 
 where DIR is a copy of evogym's tutorials/ folder (fetch github:EvolutionGym/evogym).
 """

@@ -2,7 +2,7 @@
 
 Their recorder (tools/evogym_ref/make_returns.py of the data's authors) is not in this repository;
 the full files are, in git history (FULL_COMMIT). This keeps every value evogym recorded except the
-per-step states between strides, and writes byte-reproducible files (bench/npz_io.py):
+per-step states between strides, and writes byte-reproducible files (references/npz_io.py):
 
 - traces/caseNN_*.npz: `robot_pos`, `robot_vel`, `box_pos`, `box_vel` and `obs` at steps 0..50
   (what the 50-step checks compare), every 50th and the last (`state_steps`); `com`, `reward`,
@@ -12,7 +12,7 @@ per-step states between strides, and writes byte-reproducible files (bench/npz_i
 
 It updates the sha256 (and size) of each file in traces/index.json and returns/summary.json.
 
-    .venv/bin/python bench/thin_reference.py            # rewrites tests/data/{traces,returns}
+    .venv/bin/python references/thin_reference.py            # rewrites tests/data/{traces,returns}
 """
 
 from __future__ import annotations

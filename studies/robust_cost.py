@@ -8,8 +8,8 @@ episodes per generation, and at the end (`--select`) the champion chosen by fina
 its return under uniform(+-1e-3) action noise over `--replays` episodes as a share of its
 noise-free return (>= 90 %: it holds).
 
-    python bench/robust_cost.py --task Walker-v0 --pop 128 --generations 10
-    python bench/robust_cost.py --generations 30 --select --out /tmp/pilot   # the pilot of #33
+    python studies/robust_cost.py --task Walker-v0 --pop 128 --generations 10
+    python studies/robust_cost.py --generations 30 --select --out /tmp/pilot   # the pilot of #33
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ from pathlib import Path
 NOISE = {"action_noise": "uniform", "action_scale": 0.001, "offset": 0.0, "statistic": "mean"}
 DESIGNS = {
     "nominal": None,
-    "k4": {"episodes": 4, **NOISE, "reevaluate": True},  # docs/robust: 4 episodes, elites again
+    "k4": {"episodes": 4, **NOISE, "reevaluate": True},  # results/robust: 4 episodes, elites again
     "acc1": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True},
     "race16": {"episodes": 1, **NOISE, "reevaluate": True, "accumulate": True, "race": 16},
     "race8x2": {"episodes": 2, **NOISE, "reevaluate": True, "accumulate": True, "race": 8},

@@ -1,7 +1,7 @@
 """A gallery of every registered task: one GIF per task of a random robot driven open-loop, and a
 contact sheet with one still per task (docs/img/tasks.png is made with it).
 
-    python bench/gallery.py [--out runs/gallery] [--steps 200] [--seed 0] [--sheet PATH]
+    python tools/gallery.py [--out runs/gallery] [--steps 200] [--seed 0] [--sheet PATH]
 
 Each task gets its own robot: `tsim.sample_robot((5, 5), rng)` with rng seeded by (--seed, a CRC
 of the task name), so a task's robot does not change when tasks are added. Actions are the open-loop

@@ -1,6 +1,6 @@
 """evogym's spread under +-1e-5 and +-1e-4 action changes, beside its recorded +-1e-6 one (not run by CI).
 
-    SGR_THREADS=1 python bench/perturbed_spread.py OUT.json     # ~6 minutes on 2 shared cores
+    SGR_THREADS=1 python studies/perturbed_spread.py OUT.json     # ~6 minutes on 2 shared cores
 
 evogym32 records its reruns at +-1e-9 and +-1e-6 only. Our f64 reproduces evogym's runs to ~1e-14,
 so it stands in for evogym here. Per task of tests/data/evogym32 and per d: the median over the 24

@@ -3,7 +3,7 @@ device machine receives (tests/test_tree_size.py): rewrites WHEEL in place witho
 each PREFIX and without their RECORD lines; the other entries keep their bytes, names, dates and
 order, so the result is the same file every time. A wheel with nothing to drop is left untouched.
 
-    python bench/strip_wheel.py device-wheels/taichi-1.7.4-*.whl taichi/_lib/c_api/
+    python device/strip_wheel.py device-wheels/taichi-1.7.4-*.whl taichi/_lib/c_api/
 
 taichi/_lib/c_api/ (55 MB unpacked, 20 MB packed) is taichi's C API for ahead-of-time modules:
 `import taichi` loads taichi/_lib/core/ and the LLVM runtimes of taichi/_lib/runtime/ only.

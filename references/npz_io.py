@@ -1,7 +1,7 @@
 """Byte-reproducible .npz files and the strided steps of the reference data's large state arrays.
 
-Shared by the evogym recorders (bench/evogym_reference.py, run in evogym's Python 3.10 venv) and
-bench/thin_reference.py; numpy only, so it imports in either environment.
+Shared by the evogym recorders (references/evogym_reference.py, run in evogym's Python 3.10 venv) and
+references/thin_reference.py; numpy only, so it imports in either environment.
 """
 
 from __future__ import annotations

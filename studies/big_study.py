@@ -8,7 +8,7 @@ all with the packaged configs' honest evaluation (configs/sgr/<task>.yaml, confi
 - ``direct-<task>-<RxC>-s<seed>``: direct NEAT at the big size, 100 generations;
 - ``sgr-<task>-5x5-g50-s<seed>`` then ``sgr-<task>-5x5to<RxC>-s<seed>``: SGR at 5x5 for 50
   generations, then the same population at the big size for 50 more (``sgr evolve --from``);
-- ``decoded-<task>-<RxC>-s<seed>``: the 5x5 champion of ``docs/robust-fast/runs/sgr-<task>-s<seed>``
+- ``decoded-<task>-<RxC>-s<seed>``: the 5x5 champion of ``results/robust-fast/runs/sgr-<task>-s<seed>``
   (100 generations of the same evaluation) decoded at the big size, no further evolution
   (``sgr decode``).
 
@@ -18,16 +18,16 @@ stood. Each finished run's records (config.yaml, neat.ini, generations.csv, cham
 champion-best-ever.json) are copied to ``--records``, the decoded champions written there directly.
 Seeds go outermost, so a partial study has every arm of the first seeds.
 
-    python bench/big_study.py                                   # all of it: hours on 2 cores
-    python bench/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
-    python bench/big_study.py --decode-only                     # only the decoded champions (minutes)
-    python bench/big_study.py --pictures                        # docs/big/bodies.png from the records
-    python bench/big_study.py --table                           # docs/RESULTS.md's table from them
+    python studies/big_study.py                                   # all of it: hours on 2 cores
+    python studies/big_study.py --tasks Walker-v0 --seeds 0       # one seed of one task
+    python studies/big_study.py --decode-only                     # only the decoded champions (minutes)
+    python studies/big_study.py --pictures                        # results/big/bodies.png from the records
+    python studies/big_study.py --table                           # docs/RESULTS.md's table from them
 
 The decoded champions are committed with the rest (champion.json of a 10x10 body is ~2.5 KB: the
 controller is recorded as its genome's decoding); decoding is exact, so --decode-only remakes them
 bit for bit from the committed 5x5 records.
-    sgr report docs/big                                         # then the report
+    sgr report results/big                                         # then the report
 """
 
 from __future__ import annotations
@@ -77,7 +77,7 @@ def study(task: str, seed: int, out: Path, records: Path, workers: int, decode_o
     rows, cols = SHAPES[task]
     size = f"{rows}x{cols}"
     common = ["--task", task, "--seed", str(seed)]
-    source = ROOT / "docs" / "robust-fast" / "runs" / f"sgr-{task}-s{seed}"
+    source = ROOT / "results" / "robust-fast" / "runs" / f"sgr-{task}-s{seed}"
     decoded = records / f"decoded-{task}-{size}-s{seed}"
     if (source / "champion.json").is_file() and not (decoded / "champion.json").is_file():
         print(f"+ decode {source.name} --shape {size}", flush=True)
@@ -103,7 +103,7 @@ ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
     ("SGR 5x5 for 50, then the big size for 50", "sgr-{task}-5x5to{size}-s{seed}"),
     ("its 5x5 champion at 50", "sgr-{task}-5x5-g50-s{seed}"),
     ("5x5 champion (100 gens) decoded, no evolution", "decoded-{task}-{size}-s{seed}"),
-    ("5x5 champion, 100 gens (robust-fast)", str(ROOT / "docs" / "robust-fast" / "runs")
+    ("5x5 champion, 100 gens (robust-fast)", str(ROOT / "results" / "robust-fast" / "runs")
      + "/sgr-{task}-s{seed}"),
 )
 
@@ -130,7 +130,7 @@ def arm_cell(folders: list[Path]) -> str:
     text = f"{statistics.fmean(means):.2f} ± {sd:.2f} ({' / '.join(f'{m:.2f}' for m in means)})"
     text += f"; holds {sum(v.holds for v in verdicts)} of {len(verdicts)}"
     secs = [float(np.median(read_generations(d)["total_s"])) for d in have
-            if (d / "generations.csv").is_file() and ROOT / "docs" / "robust-fast" not in d.parents]
+            if (d / "generations.csv").is_file() and ROOT / "results" / "robust-fast" not in d.parents]
     if secs:
         text += f"; {' / '.join(f'{x:.1f}' for x in secs)} s/gen"
     return text
@@ -188,7 +188,7 @@ def main() -> None:
     ap.add_argument("--tasks", nargs="+", default=list(SHAPES), choices=list(SHAPES))
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "big")
-    ap.add_argument("--records", type=Path, default=ROOT / "docs" / "big" / "runs")
+    ap.add_argument("--records", type=Path, default=ROOT / "results" / "big" / "runs")
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--pictures", action="store_true", help="only draw RECORDS/../bodies.png")
     ap.add_argument("--decode-only", action="store_true", help="only decode the 5x5 champions")

@@ -13,7 +13,7 @@ ground plane (which throws it above y = 0 within one step).
 
 Run under the evogym venv (sgr never imports evogym):
 
-    /root/.cache/evogym-venv/bin/python bench/evogym_state_cases.py
+    /root/.cache/evogym-venv/bin/python references/evogym_state_cases.py
 
 Each case: the body, seed and actions of trace case 1 of the task (tests/data/evogym32), or another
 body (BODIES) with the program of that seed, a fresh env, `reset` as in `evogym_reference.py`, then

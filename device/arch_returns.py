@@ -1,9 +1,9 @@
 """Episode returns of random robots on every task, on the arch of $SGR_ARCH (one arch per process:
-Taichi cannot switch), for comparing a GPU with the same machine's CPU (bench/gpu_check.sh).
+Taichi cannot switch), for comparing a GPU with the same machine's CPU (device/gpu_check.sh).
 
-    SGR_ARCH=cpu  python bench/arch_returns.py --out cpu.json
-    SGR_ARCH=cuda python bench/arch_returns.py --out gpu.json
-    python bench/arch_returns.py --compare cpu.json gpu.json     # exit 1 when a task differs
+    SGR_ARCH=cpu  python device/arch_returns.py --out cpu.json
+    SGR_ARCH=cuda python device/arch_returns.py --out gpu.json
+    python device/arch_returns.py --compare cpu.json gpu.json     # exit 1 when a task differs
 
 The CPU is validated against evogym's recorded data in CI; this checks that the GPU computes the
 same physics: random 5x5 robots (fixed seed) with open-loop sinusoid actions, every task, returns

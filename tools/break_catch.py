@@ -1,10 +1,10 @@
 """Catch rate of the fast tests: apply one-line breaks, one at a time, to a temporary copy of the
 tree, run the fast test files on each, and record which files fail (catch it).
 
-    .venv/bin/python bench/break_catch.py                  # every break: its guards + fast files
-    .venv/bin/python bench/break_catch.py --all            # every break, every file
-    .venv/bin/python bench/break_catch.py --only drag --files tests/tsim/test_physics.py
-    .venv/bin/python bench/break_catch.py --only friction --data /path/to/other/tests/data
+    .venv/bin/python tools/break_catch.py                  # every break: its guards + fast files
+    .venv/bin/python tools/break_catch.py --all            # every break, every file
+    .venv/bin/python tools/break_catch.py --only drag --files tests/tsim/test_physics.py
+    .venv/bin/python tools/break_catch.py --only friction --data /path/to/other/tests/data
 
 Each break replaces one exact line fragment (found exactly once) in one file. Each names the test
 files that claim to guard it; by default a break runs the two quickest files (test_physics.py,
