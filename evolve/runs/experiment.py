@@ -17,15 +17,15 @@ from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
+from evolve.records.champion import best_ever_record
+from evolve.records.rundir import RunDir
+from evolve.records.segments import record_segment
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
-from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
 from evolve.runs.reporters import ReporterSet, configured_reporters
-from evolve.runs.rundir import RunDir
-from evolve.runs.segments import record_segment
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -263,7 +263,7 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
-            from evolve.runs.champion import judge
+            from evolve.records.replay import judge
 
             best = self.run.champion()
             ev = best.get("evaluation") or {}
@@ -285,8 +285,8 @@ def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
     when `render_champion` is set (or the run has one: it must show the champion of
     champion.json). Each is written whole or not at all, and while they are written the run is
     marked so that `sgr evolve --resume` writes them again after a failure."""
-    from evolve.runs.champion import champion_gif
-    from evolve.runs.plots import plot_run
+    from evolve.records.replay import champion_gif
+    from evolve.report.plots import plot_run
 
     run.begin_end_files()
     plot_run(run.path, run.path / "fitness.png")

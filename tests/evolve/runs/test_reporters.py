@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from evolve.cli import main
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 8, "seed": 11,
         "episode_steps": 12, "workers": 1, "render_champion": False,
