@@ -101,7 +101,7 @@ def run(args: argparse.Namespace) -> int:
         print(f"resuming {args.resume} after generation {exp.search.generation}")
         if args.tensorboard and not exp.cfg.tensorboard:
             from evolve.runs.reporters import configured_reporters
-            for reporter in configured_reporters({"tensorboard": True}, exp.run.path):
+            for reporter in configured_reporters(exp.cfg.replace(tensorboard=True), exp.run.path):
                 exp.add_reporter(reporter)
     else:
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
