@@ -10,7 +10,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from evolve.runs.decode import write_decoded
+from evolve.records.decode import write_decoded
 from evolve.runs.experiment import Experiment
 
 TINY = {"task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3, "episode_steps": 20, "workers": 1,

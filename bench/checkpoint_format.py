@@ -26,11 +26,11 @@ import yaml
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from evolve.config import RunConfig  # noqa: E402
+from evolve.records.files import atomic_write  # noqa: E402
+from evolve.records.legacy import load_trusted_pickle  # noqa: E402
+from evolve.records.rundir import RunDir, checkpoint_bytes  # noqa: E402
 from evolve.runs.checkpoint import load_checkpoint  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
-from evolve.runs.files import atomic_write  # noqa: E402
-from evolve.runs.legacy import load_trusted_pickle  # noqa: E402
-from evolve.runs.rundir import RunDir, checkpoint_bytes  # noqa: E402
 
 
 def old_state(exp: Experiment) -> dict:

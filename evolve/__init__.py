@@ -1,6 +1,7 @@
 """Genomes and search on top of tasks: SGR and the paper's baselines behind one contract
 (`evolve.methods`), NEAT plumbing (`evolve.search`), networks (`evolve.nn`), batched rollouts
-(`evolve.rollout`), runs, sweeps and reports (`evolve.runs`), and the `sgr` command line.
+(`evolve.rollout`), the run's lifecycle (`evolve.runs`), what a run leaves on disk (`evolve.records`),
+sweeps (`evolve.sweeps`), reports (`evolve.report`), and the `sgr` command line.
 
     from evolve import Experiment
     exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5,
@@ -14,8 +15,8 @@ from evolve.own_modules import use_own_modules
 use_own_modules()  # tsim and tasks are sgr's, whatever else the path holds (evolve/own_modules.py)
 
 from evolve.methods import METHODS, Problem  # noqa: E402
+from evolve.records.replay import Champion, load_champion  # noqa: E402
 from evolve.runs import Experiment, RunDir, config_from_dict, load_config  # noqa: E402
-from evolve.runs.champion import Champion, load_champion  # noqa: E402
 
 __all__ = ["METHODS", "Champion", "Experiment", "Problem", "RunDir", "config_from_dict", "load_champion",
            "load_config"]

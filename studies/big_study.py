@@ -46,7 +46,7 @@ SGR = [sys.executable, "-m", "evolve.cli"]
 
 def finished(run: Path) -> bool:
     """A run folder whose last checkpoint is its last generation and whose champion is written."""
-    from evolve.runs.rundir import RunDir
+    from evolve.records.rundir import RunDir
 
     if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
         return False
@@ -110,7 +110,7 @@ ARMS = (  # (column title, folder name pattern: {task}, {size}, {seed})
 
 def arm_cell(folders: list[Path]) -> str:
     """One table cell: the champions' mean return under uniform(+-1e-3) action noise (20 replays,
-    the verdict's, `evolve.runs.champion.judge`), mean +- sd over seeds, then each seed's, how many
+    the verdict's, `evolve.records.replay.judge`), mean +- sd over seeds, then each seed's, how many
     hold, and each seed's median seconds per generation (generations.csv; per seed, since seeds
     may run on different machines; none for a decoded one, nor for robust-fast's runs, timed on
     another machine two at a time)."""
@@ -118,8 +118,8 @@ def arm_cell(folders: list[Path]) -> str:
 
     import numpy as np
 
-    from evolve.runs.champion import judge
-    from evolve.runs.plots import read_generations
+    from evolve.records.replay import judge
+    from evolve.report.plots import read_generations
 
     have = [d for d in folders if (d / "champion.json").is_file()]
     if not have:
@@ -160,7 +160,7 @@ def pictures(records: Path, out: Path, seeds: list[int], tasks: list[str]) -> Pa
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from evolve.runs.gallery import body_image
+    from evolve.report.gallery import body_image
 
     rows = [(t, s) for t in tasks for s in seeds]
     fig, axes = plt.subplots(len(rows), len(ARMS), figsize=(1.9 * len(ARMS), 1.9 * len(rows)),

@@ -11,7 +11,7 @@ import statistics
 from collections import defaultdict
 from pathlib import Path
 
-from evolve.runs.plots import plot_runs, read_generations, run_labels
+from evolve.report.plots import plot_runs, read_generations, run_labels
 
 
 def main() -> None:

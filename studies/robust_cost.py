@@ -47,7 +47,7 @@ def main() -> None:
     ap.add_argument("--out", default=None, help="folder for the runs (default: a temporary one)")
     args = ap.parse_args()
 
-    from evolve.runs.champion import replay_champion
+    from evolve.records.replay import replay_champion
     from evolve.runs.experiment import Experiment
     from evolve.runs.final_selection import FinalSelection, select_champion
 

@@ -1,7 +1,7 @@
 """No file sgr reads can run code: nothing in the packages unpickles except the worker pipes of one
 run's own processes (evolve/rollout/pool.py, worker.py) and the conversion of an older sgr's
 pickles (checkpoints, a script's task.pkl) that the user must ask for with --trust-pickle
-(evolve/runs/legacy.py); every np.load says allow_pickle=False; YAML is read with safe_load only;
+(evolve/records/legacy.py); every np.load says allow_pickle=False; YAML is read with safe_load only;
 nothing evals, execs or imports a name at run time, except the task modules a config names
 (tasks/registry.py: from a run or sweep folder only after --trust-imports). Checked on the
 source's syntax tree."""
@@ -15,7 +15,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("tsim", "tasks", "evolve")
 # a run folder keeps a script's task as a reference (task.json), never as a pickle: tasks/registry.py
 # unpickles nothing (tests/evolve/runs/test_folder_trust.py)
-MAY_UNPICKLE = {"evolve/rollout/pool.py", "evolve/rollout/worker.py", "evolve/runs/legacy.py"}
+MAY_UNPICKLE = {"evolve/rollout/pool.py", "evolve/rollout/worker.py", "evolve/records/legacy.py"}
 # imports the task modules a config names (`imports:`) and the file a task reference names: from a
 # run or sweep folder only with --trust-imports (tests/evolve/runs/test_folder_trust.py)
 MAY_IMPORT_BY_NAME = {"tasks/registry.py"}

@@ -67,7 +67,7 @@ class Backend:
         return runtime.describe()
 
     def record(self) -> dict:
-        """What a run folder records of it (a segment of the run's life: evolve/runs/segments.py)."""
+        """What a run folder records of it (a segment of the run's life: evolve/records/segments.py)."""
         return {"arch": self.runs_on, "asked": self.arch, "device": self.device, "software": self.software,
                 "precision": self.precision, "threads": self.threads}
 

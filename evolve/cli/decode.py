@@ -21,8 +21,8 @@ def register(sub) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """`sgr decode`."""
     from evolve.cli.common import resume_dir
-    from evolve.runs.decode import write_decoded
-    from evolve.runs.rundir import RunDir
+    from evolve.records.decode import write_decoded
+    from evolve.records.rundir import RunDir
 
     shape = parse_shape(args.shape)
     if args.out:

@@ -132,7 +132,7 @@ def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
     """`--from RUN`: the config (RUN's config.yaml) and the default folder name of a run that starts
     from RUN's newest checkpoint; `overrides` gains start_from and, when not given, generations
     (twice RUN's generations so far)."""
-    from evolve.runs.rundir import RunDir
+    from evolve.records.rundir import RunDir
 
     if args.config or args.task or args.method:
         raise SgrError("--from starts from another run's config and population; --config, --task and "

@@ -30,8 +30,8 @@ def register(sub) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """`sgr plot`."""
-    from evolve.runs.groups import find_runs, parse_pool
-    from evolve.runs.plots import plot_run, plot_runs, runs_plot_path
+    from evolve.report.groups import find_runs, parse_pool
+    from evolve.report.plots import plot_run, plot_runs, runs_plot_path
     from tsim.errors import SgrError
 
     pool = parse_pool(args.pool)

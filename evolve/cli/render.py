@@ -43,7 +43,7 @@ def register(sub) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """`sgr render`."""
-    from evolve.runs.champion import MEDIAN, champion_gif, replay_line
+    from evolve.records.replay import MEDIAN, champion_gif, replay_line
     from tasks.bench import sinusoid
     from tasks.render_episode import render_episode
     from tsim.body import check_robot

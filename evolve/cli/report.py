@@ -34,8 +34,8 @@ def register(sub) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """`sgr report`."""
-    from evolve.runs.groups import parse_pool
-    from evolve.runs.report import write_report
+    from evolve.report.groups import parse_pool
+    from evolve.report.report import write_report
 
     out = write_report(args.dir, args.out, robustness=not args.no_robustness, levels=args.noise,
                        replays=args.replays, gallery=not args.no_gallery, pool=parse_pool(args.pool),

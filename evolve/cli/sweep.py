@@ -34,7 +34,7 @@ def register(sub) -> argparse.ArgumentParser:
 
 def run(args: argparse.Namespace) -> int:
     """`sgr sweep`."""
-    from evolve.runs.sweep import LocalBackend, Sweep, run_sweep
+    from evolve.sweeps.sweep import LocalBackend, Sweep, run_sweep
 
     if args.backend == "ray":
         from evolve.rollout.ray_cluster import require_ray
@@ -61,7 +61,7 @@ def run(args: argparse.Namespace) -> int:
         sweep = Sweep.create(config, out)
         print(f"sweep directory: {out}")
     if args.backend == "ray":
-        from evolve.runs.ray_sweep import RayBackend
+        from evolve.sweeps.ray_sweep import RayBackend
         backend = RayBackend(args.parallel, address=args.address)
     else:
         backend = LocalBackend(args.parallel)

@@ -15,7 +15,7 @@ from collections.abc import Mapping
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config
 from evolve.search.state_codec import StateError, decode_search_state, encode_search_state
 

@@ -10,7 +10,7 @@ resolved to the number of steps a run uses and `robust`/`final_selection` parsed
 dataclasses. It reads as a mapping of the config's keys to their YAML values, which is what a
 run directory stores (config.yaml), with the run's precision; `arch` is the one asked for when
 the config was checked, not written to config.yaml (segments.json records where each part of a run
-ran: evolve/runs/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
+ran: evolve/records/segments.py). `RunConfig.of` reads a run folder's config.yaml back, older ones
 (keys missing, `episode_steps` null) included. Left out, `robust` and `final_selection` are the
 honest evaluation that `sgr evolve` runs by default (evolve/config.py, `HONEST_ROBUST`);
 null is the paper's nominal one.
@@ -26,9 +26,9 @@ from pathlib import Path
 
 from evolve.config import COMMON, FinalSelection, RunConfig, default
 from evolve.methods import METHODS
+from evolve.records.files import read_yaml
 from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
-from evolve.runs.files import read_yaml
 from evolve.runs.final_selection import not_for
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, body_fit_problem, closest, unknown_task

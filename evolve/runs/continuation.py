@@ -18,7 +18,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from evolve.config import RunConfig
-from evolve.runs.rundir import RunDir, checkpoint_generation, read_checkpoint_file
+from evolve.records.rundir import RunDir, checkpoint_generation, read_checkpoint_file
 from evolve.search.state_codec import decode_search_state
 from tsim.errors import SgrError
 

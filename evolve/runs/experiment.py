@@ -9,23 +9,20 @@ A first Ctrl-C or SIGTERM lets the generation under way end, writes a checkpoint
 
 from __future__ import annotations
 
-import math
-import sys
 import time
 from collections.abc import Callable
 from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
+from evolve.records.rundir import RunDir
+from evolve.records.segments import record_segment
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
-from evolve.runs.champion import best_ever_record
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
-from evolve.runs.reporters import ReporterSet, configured_reporters
-from evolve.runs.rundir import RunDir
-from evolve.runs.segments import record_segment
+from evolve.runs.reporters import ReporterSet, builtin_reporters, configured_reporters
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -72,8 +69,9 @@ class Experiment:
         overrides the config's (a resumed run may use another machine's CPUs)."""
         cfg = RunConfig.of(cfg)
         self.run, self.cfg, self.quiet = run, cfg, quiet
-        self._warned_population = False  # `_warn_if_population_grew`
-        self.reporters = ReporterSet(configured_reporters(cfg, run.path))  # evolve/runs/reporters.py
+        # row, champion, checkpoint, console line, warnings; then the config's (evolve/runs/reporters.py)
+        self.reporters = ReporterSet(builtin_reporters() + configured_reporters(cfg, run.path))
+        self._stop = None  # the loop's stop request, while it runs (`stopping`)
         # the run's precision for this process and its rollout workers (started with this process's)
         start_backend(cfg.precision)
         self.neat_config = load_neat_config(run.path / "neat.ini")
@@ -167,38 +165,42 @@ class Experiment:
         generation(exp, row), end(exp) (evolve/runs/reporters.py)."""
         self.reporters.add(reporter)
 
+    def replace_reporter(self, kind: type, reporter) -> None:
+        """Use `reporter` in place of the built-in reporter of type `kind` (say `ConsoleProgress`:
+        evolve/runs/reporters.py), at its place in the order."""
+        self.reporters.replace(kind, reporter)
+
+    @property
+    def stopping(self) -> bool:
+        """Whether a stop (Ctrl-C, SIGTERM) was asked for: the loop ends after this generation,
+        once its reporters (the checkpoint's included) have run."""
+        return self._stop is not None and self._stop.is_set()
+
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
         """Run to the configured number of generations; `after_generation(self)` is called once
         each generation's row, champion and checkpoint are written (bench/soak.py measures there).
         Ctrl-C (SIGINT) or SIGTERM: the generation under way ends, a checkpoint is written, then
         `Interrupted` (a KeyboardInterrupt); a second one raises it at once."""
         cfg, search = self.cfg, self.search
-        t_start = time.perf_counter()
         with stop_after_generation() as stop, self.reporters.running(self):
-            while search.generation < cfg.generations:
-                row = search.step()
-                final = self.selection is not None and search.generation == cfg.generations
-                if final:  # before the row: a run killed while choosing runs its last generation again
-                    chosen = self._select_champion()
-                self.run.append_row({**row, "generation": row["generation"] + 1})  # counted from 1
-                if not final:
-                    self._write_champion()
-                g = search.generation
-                if g % cfg.checkpoint_every == 0 or g == cfg.generations or stop.is_set():
-                    self.run.save_checkpoint(search.generation, self.state())
-                self._progress(row, time.perf_counter() - t_start)
-                self._warn_if_population_grew(row)
-                self.reporters.generation(self, {**row, "generation": row["generation"] + 1})
-                if final and not self.quiet:
-                    print(chosen, flush=True)
-                if after_generation is not None:
-                    after_generation(self)
-                if stop.is_set() and search.generation < cfg.generations:
-                    raise Interrupted(stop.signum)
-
-    def _write_champion(self) -> None:
-        if self.search.best is not None:
-            self.run.write_champion(best_ever_record(self.cfg, self.problem, self.search.best))
+            self._stop = stop
+            try:
+                while search.generation < cfg.generations:
+                    row = search.step()
+                    final = self.selection is not None and search.generation == cfg.generations
+                    if final:  # before the row: a run killed while choosing runs its last generation again
+                        chosen = self._select_champion()
+                    # its row, champion (the best-ever's, unless final selection chose it), checkpoint,
+                    # console line and warnings, then the reporters added (evolve/runs/reporters.py)
+                    self.reporters.generation(self, {**row, "generation": row["generation"] + 1})
+                    if final and not self.quiet:
+                        print(chosen, flush=True)
+                    if after_generation is not None:
+                        after_generation(self)
+                    if stop.is_set() and search.generation < cfg.generations:
+                        raise Interrupted(stop.signum)
+            finally:
+                self._stop = None
 
     def _select_champion(self) -> str:
         """The run's end with `final_selection`: the champion chosen afresh among the final elites
@@ -208,30 +210,6 @@ class Experiment:
         champ = select_champion(self, self.selection)
         return (f"final selection: {describe(champ)} ({time.perf_counter() - t0:.1f} s)\n"
                 f"final selection {explain(champ)}")
-
-    def _warn_if_population_grew(self, row: dict) -> None:
-        """One line on stderr, once per run, when the population outgrows pop_size by a quarter:
-        neat-python keeps each species' elites whatever pop_size says, so a speciation that
-        splits nearly every genome off grows the population (and each generation's cost) without
-        bound."""
-        n, pop = row["n_valid"] + row["n_invalid"], int(self.cfg.pop_size)
-        if self._warned_population or n <= 1.25 * pop:
-            return
-        self._warned_population = True
-        print(f"warning: the population has grown to {n} genomes for pop_size {pop}: {row['n_species']} "
-              "species each keep their elites. Speciation splits too finely: raise "
-              "compatibility_threshold in the NEAT config or lower body_distance_weight",
-              file=sys.stderr, flush=True)
-
-    def _progress(self, row: dict, elapsed: float) -> None:
-        if self.quiet:
-            return
-        best = self.search.best["fitness"] if self.search.best else math.nan
-        print(f"gen {row['generation'] + 1:>4}/{self.cfg.generations}  best {row['best']:8.3f}  "
-              f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
-              f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
-              f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
-              f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
 
     def write_failed(self, exc: OSError) -> str:
         """One line for a write that failed (a full disk): the file, why, where the run stands and
@@ -263,7 +241,7 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
-            from evolve.runs.champion import judge
+            from evolve.records.replay import judge
 
             best = self.run.champion()
             ev = best.get("evaluation") or {}
@@ -285,8 +263,8 @@ def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
     when `render_champion` is set (or the run has one: it must show the champion of
     champion.json). Each is written whole or not at all, and while they are written the run is
     marked so that `sgr evolve --resume` writes them again after a failure."""
-    from evolve.runs.champion import champion_gif
-    from evolve.runs.plots import plot_run
+    from evolve.records.replay import champion_gif
+    from evolve.report.plots import plot_run
 
     run.begin_end_files()
     plot_run(run.path, run.path / "fitness.png")

@@ -76,8 +76,8 @@ from evolve.config import (
     run_episodes,
     selection_episodes,
 )
-from evolve.runs.champion import best_ever_record, champion_record
-from evolve.runs.files import atomic_write, record_json
+from evolve.records.champion import best_ever_record, champion_record
+from evolve.records.files import atomic_write, record_json
 from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"

@@ -5,26 +5,42 @@ A reporter is any object with some of these methods (each optional):
     start(exp)            the loop starts (a new run, or a resumed one: `exp.search.generation`
                           generations are done)
     generation(exp, row)  a generation ended: `row` is its generations.csv row (generation counted
-                          from 1, as the file has it), written with the champion and any checkpoint
+                          from 1, as the file has it)
     end(exp)              the loop ended: finished, stopped (Ctrl-C, SIGTERM) or failed
 
-    exp.add_reporter(MyReporter())    # before exp.run_all()
+    exp.add_reporter(MyReporter())                          # before exp.run_all()
+    exp.replace_reporter(ConsoleProgress, MyConsole())      # instead of a built-in one
 
-The console line, generations.csv and the checkpoints are written by the loop itself, before the
-reporters are called: a reporter that fails stops the run, and loses nothing of it.
-`TensorBoardReporter` (config key `tensorboard: true`, `sgr evolve --tensorboard`) is one.
+Every run starts with the built-in reporters (`builtin_reporters`), in this order: generations.csv's
+row (`GenerationsCsv`), champion.json (`ChampionFile`), the checkpoint schedule (`Checkpointer`),
+the console line (`ConsoleProgress`) and the population-growth warning (`PopulationWarning`). The
+ones added later run after them, so a reporter sees its generation's row, champion and checkpoint
+written, and one that fails stops the run and loses nothing of it. `TensorBoardReporter` (config
+key `tensorboard: true`, `sgr evolve --tensorboard`) is one.
 """
 
 from __future__ import annotations
 
+import math
 import sys
+import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
+from evolve.records.champion import best_ever_record
+
 HOOKS = ("start", "generation", "end")
 INSTALL_TENSORBOARD = "pip install 'sgr[tensorboard]' (or: pip install tensorboardX)"
+
+
+def _checked(reporter: Any) -> Any:
+    """`reporter`, or a TypeError when it has none of the hooks (a likely mistake)."""
+    if not any(callable(getattr(reporter, h, None)) for h in HOOKS):
+        raise TypeError(f"a reporter needs one of the methods {', '.join(HOOKS)}; "
+                        f"{type(reporter).__name__} has none")
+    return reporter
 
 
 class ReporterSet:
@@ -37,10 +53,17 @@ class ReporterSet:
 
     def add(self, reporter: Any) -> None:
         """Add `reporter`; a TypeError when it has none of the hooks (a likely mistake)."""
-        if not any(callable(getattr(reporter, h, None)) for h in HOOKS):
-            raise TypeError(f"a reporter needs one of the methods {', '.join(HOOKS)}; "
-                            f"{type(reporter).__name__} has none")
-        self.reporters.append(reporter)
+        self.reporters.append(_checked(reporter))
+
+    def replace(self, kind: type, reporter: Any) -> None:
+        """Put `reporter` where the reporter of type `kind` is (the same place in the order); a
+        ValueError when there is none."""
+        for i, r in enumerate(self.reporters):
+            if type(r) is kind:
+                self.reporters[i] = _checked(reporter)
+                return
+        raise ValueError(f"no reporter of type {kind.__name__} to replace: "
+                         f"{', '.join(type(r).__name__ for r in self.reporters) or 'none'}")
 
     def _call(self, hook: str, *args: Any) -> None:
         for r in self.reporters:
@@ -60,6 +83,93 @@ class ReporterSet:
             yield
         finally:
             self._call("end", exp)
+
+
+# The reporters every run has, added first and in this order (`builtin_reporters`): what the loop
+# itself once wrote. Each is replaceable (`Experiment.replace_reporter`); the order is the files'
+# promise: a generation's row, then its champion, then its checkpoint, then the console.
+
+
+class GenerationsCsv:
+    """Appends each generation's row to the run's generations.csv."""
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """The row as the file has it (generation counted from 1)."""
+        exp.run.append_row(row)
+
+
+class ChampionFile:
+    """Writes the best-ever genome to champion.json after each generation; the last one of a run
+    with final selection is that selection's (chosen before the row: a run killed while choosing
+    runs its last generation again)."""
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """champion.json, unless final selection chose it this generation."""
+        if exp.selection is not None and exp.search.generation == exp.cfg.generations:
+            return
+        if exp.search.best is not None:
+            exp.run.write_champion(best_ever_record(exp.cfg, exp.problem, exp.search.best))
+
+
+class Checkpointer:
+    """A checkpoint every `every` generations (default: the config's `checkpoint_every`), after the
+    last one, and after the generation under way when a stop was asked for (Ctrl-C, SIGTERM): the
+    loop honours the stop only after this reporter."""
+
+    def __init__(self, every: int | None = None):
+        self.every = every
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """Save the state when the schedule (or a stop) says so."""
+        g, cfg = exp.search.generation, exp.cfg
+        if g % (self.every or cfg.checkpoint_every) == 0 or g == cfg.generations or exp.stopping:
+            exp.run.save_checkpoint(g, exp.state())
+
+
+class ConsoleProgress:
+    """The console's line per generation (nothing for a quiet run): fitness, species, valid bodies,
+    seconds per generation by phase, and the seconds since the loop started."""
+
+    def start(self, exp: Any) -> None:
+        """The clock of the line's last column."""
+        self.t_start = time.perf_counter()
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """One line on stdout, flushed."""
+        if exp.quiet:
+            return
+        elapsed = time.perf_counter() - self.t_start
+        best = exp.search.best["fitness"] if exp.search.best else math.nan
+        print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
+              f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
+              f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
+              f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
+              f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+
+
+class PopulationWarning:
+    """One line on stderr, once per run, when the population outgrows pop_size by a quarter:
+    neat-python keeps each species' elites whatever pop_size says, so a speciation that splits
+    nearly every genome off grows the population (and each generation's cost) without bound."""
+
+    def __init__(self):
+        self.warned = False
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """Warn, the first time the population is too large."""
+        n, pop = row["n_valid"] + row["n_invalid"], int(exp.cfg.pop_size)
+        if self.warned or n <= 1.25 * pop:
+            return
+        self.warned = True
+        print(f"warning: the population has grown to {n} genomes for pop_size {pop}: {row['n_species']} "
+              "species each keep their elites. Speciation splits too finely: raise "
+              "compatibility_threshold in the NEAT config or lower body_distance_weight",
+              file=sys.stderr, flush=True)
+
+
+def builtin_reporters() -> list[Any]:
+    """The reporters every run starts with, in the order they must run."""
+    return [GenerationsCsv(), ChampionFile(), Checkpointer(), ConsoleProgress(), PopulationWarning()]
 
 
 def tensorboard_scalars(exp: Any, row: dict) -> dict[str, float]:

@@ -45,7 +45,7 @@ import json, sys
 from tsim import runtime
 if sys.argv[2] == "f64-first":
     runtime.init(precision="f64")
-from evolve.runs.champion import load_champion, rescore_champion
+from evolve.records.replay import load_champion, rescore_champion
 try:
     champ = load_champion(sys.argv[1])
 except ValueError as exc:

@@ -191,7 +191,7 @@ def test_corrupt_champion(tmp_path, capsys, case):
 
 
 def test_champion_check_accepts_a_good_one(tmp_path):
-    from evolve.runs.champion import read_champion
+    from evolve.records.champion import read_champion
 
     (tmp_path / "champion.json").write_text(json.dumps(GOOD))
     _, body, ctrl = read_champion(tmp_path)
@@ -358,7 +358,7 @@ def sgr_with(patch: str, *argv: str, cwd: Path) -> subprocess.CompletedProcess:
                           timeout=300)
 
 
-BUG = ("import evolve.runs.plots as plots\n"
+BUG = ("import evolve.report.plots as plots\n"
        "def plot_run(*a, **k):\n"
        "    raise {exc}('a planted bug')\n"
        "plots.plot_run = plot_run")
@@ -375,7 +375,7 @@ def test_an_internal_error_inside_a_command_shows_its_traceback(tmp_path):
 
 def test_an_internal_value_error_gives_one_line_and_the_file_with_its_traceback(tmp_path, capsys,
                                                                                monkeypatch):
-    import evolve.runs.plots as plots
+    import evolve.report.plots as plots
 
     def plot_run(*a, **k):
         raise ValueError("a planted bug")

@@ -7,9 +7,10 @@ import numpy as np
 import pytest
 
 from evolve.cli import main
-from evolve.runs.champion import read_champion, replay_champion, rescore_champion
+from evolve.records.champion import read_champion
+from evolve.records.replay import replay_champion, rescore_champion
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 from evolve.search.neat_search import NeatSearch
 
 pytestmark = pytest.mark.slow

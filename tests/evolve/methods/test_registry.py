@@ -8,7 +8,7 @@ import pytest
 
 from evolve import METHODS, Experiment, Problem
 from evolve.nn import CompiledCPPN
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 
 WALKER = np.array([[3, 3, 3, 3, 3], [3, 3, 3, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3, 3]])
 

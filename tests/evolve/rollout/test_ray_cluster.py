@@ -16,8 +16,8 @@ ray = pytest.importorskip("ray")
 
 from evolve.rollout.ray_cluster import RayRolloutPool  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
-from evolve.runs.ray_sweep import RayBackend  # noqa: E402
-from evolve.runs.sweep import Sweep  # noqa: E402
+from evolve.sweeps.ray_sweep import RayBackend  # noqa: E402
+from evolve.sweeps.sweep import Sweep  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess, pytest.mark.ray]
 
@@ -33,7 +33,7 @@ def local_ray():
 
 
 def fitness(run_path) -> list[tuple]:
-    from evolve.runs.rundir import RunDir
+    from evolve.records.rundir import RunDir
 
     rows = RunDir(run_path).rows()
     return [tuple(r[k] for k in FITNESS) for r in rows]

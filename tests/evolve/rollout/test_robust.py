@@ -21,12 +21,12 @@ import pytest
 import yaml
 
 from evolve.nn.dense import DenseController
+from evolve.records.replay import champion_gif, replay_champion, rescore_champion
+from evolve.records.rundir import RunDir
 from evolve.rollout.episodes import dense_policy
 from evolve.rollout.pool import RolloutPool
 from evolve.rollout.robust import EpisodeNoise, Perturbation, Robust, episode_keys, unit_uniform
-from evolve.runs.champion import champion_gif, replay_champion, rescore_champion
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 from tasks.env import BatchEnv, obs_dim
 from tsim.body import build_body
 from tsim.sampling import sample_robot

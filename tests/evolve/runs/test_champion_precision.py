@@ -12,7 +12,7 @@ import sys
 import pytest
 import yaml
 
-from evolve.runs.champion import load_champion
+from evolve.records.replay import load_champion
 from tsim import runtime
 from tsim.errors import SgrError
 
@@ -20,7 +20,7 @@ REPLAY = """
 import json, os, sys
 before = dict(os.environ)
 from tsim import runtime
-from evolve.runs.champion import judge, load_champion, replay_champion, rescore_champion
+from evolve.records.replay import judge, load_champion, replay_champion, rescore_champion
 champ = load_champion(sys.argv[1])
 after_load = dict(os.environ) == before
 rescored = rescore_champion(sys.argv[1])

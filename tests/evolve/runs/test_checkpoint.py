@@ -18,9 +18,9 @@ import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.records.rundir import RunDir, checkpoint_bytes, read_checkpoint_file
 from evolve.runs.checkpoint import decode_checkpoint, load_checkpoint
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir, checkpoint_bytes, read_checkpoint_file
 from evolve.search.neat_ini import load_neat_config
 
 FITNESS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
@@ -146,7 +146,7 @@ def test_old_pickled_checkpoints_load_only_once_converted_with_trust_and_resume_
 
 
 def test_a_sweep_with_old_pickled_runs_is_refused_before_any_run_starts(tmp_path, repo_root, capsys):
-    from evolve.runs.sweep import Sweep
+    from evolve.sweeps.sweep import Sweep
 
     sweep_file = tmp_path / "sweep.yaml"
     sweep_file.write_text(yaml.safe_dump({"methods": ["sgr"], "tasks": ["Walker-v0"], "seeds": 1,
@@ -212,7 +212,7 @@ def test_a_damaged_newest_checkpoint_with_bad_fields_falls_back_to_the_one_befor
 
 def test_a_checkpoint_that_would_fill_the_memory_once_uncompressed_is_refused(tmp_path, repo_root,
                                                                                monkeypatch):
-    import evolve.runs.rundir as rundir
+    import evolve.records.rundir as rundir
 
     done = run(config(tmp_path, repo_root), tmp_path / "run", 2)
     assert load_checkpoint(done)["generation"] == 2

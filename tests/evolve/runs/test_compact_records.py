@@ -3,7 +3,7 @@ recorded as its genome's decoding and direct NEAT's network as its genome's comp
 checked against a SHA-256 when read; a 10x10 SGR champion is a few KB (it was ~650 KB), reads back as
 the very controller decoding gives, bit for bit, and replays to the same fitness as the same robot
 written in full. Files of the older layout (tests/data/champions) still load, and their rewrite
-(`evolve.runs.compact`) is the same robot with the same returns."""
+(`evolve.records.compact`) is the same robot with the same returns."""
 
 import json
 import shutil
@@ -15,10 +15,10 @@ import pytest
 from evolve.methods.sgr_decoder import DecoderSettings, decode
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
-from evolve.runs.champion import load_champion, rescore_champion
-from evolve.runs.compact import compact_file
-from evolve.runs.decode import write_decoded
-from evolve.runs.files import record_json
+from evolve.records.compact import compact_file
+from evolve.records.decode import write_decoded
+from evolve.records.files import record_json
+from evolve.records.replay import load_champion, rescore_champion
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tests.evolve.runs.conftest import tiny_run

@@ -8,8 +8,8 @@ import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.records.rundir import read_checkpoint_file
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import read_checkpoint_file
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 8, "seed": 3,
         "episode_steps": 20, "workers": 1, "render_champion": False, "robust": None, "final_selection": None}

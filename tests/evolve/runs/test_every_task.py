@@ -6,7 +6,8 @@ import math
 
 import pytest
 
-from evolve.runs.champion import read_champion, replay_champion
+from evolve.records.champion import read_champion
+from evolve.records.replay import replay_champion
 from evolve.runs.experiment import Experiment
 from tasks.specs import TASKS
 

@@ -7,9 +7,9 @@ import pytest
 import yaml
 
 from evolve.cli import main
-from evolve.runs.champion import replay_champion
+from evolve.records.replay import replay_champion
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
         "episode_steps": 15, "checkpoint_every": 2, "render_champion": False, "robust": None,

@@ -16,11 +16,11 @@ import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.records import verdict
+from evolve.records.replay import champion_gif, replay_champion, rescore_champion
+from evolve.records.rundir import RunDir
 from evolve.rollout.robust import episode_keys
-from evolve.runs import verdict
-from evolve.runs.champion import champion_gif, replay_champion, rescore_champion
 from evolve.runs.final_selection import FinalSelection, explain, run_episodes, selection_episodes
-from evolve.runs.rundir import RunDir
 
 ROBUST = {"episodes": 2, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0,
           "statistic": "mean"}

@@ -12,7 +12,7 @@ import pytest
 from PIL import Image
 
 from evolve.cli import main
-from evolve.runs.champion import replay_champion
+from evolve.records.replay import replay_champion
 
 
 @pytest.fixture(scope="module")

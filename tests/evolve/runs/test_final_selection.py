@@ -18,10 +18,10 @@ import pytest
 import yaml
 
 from evolve.cli import main
-from evolve.runs.champion import replay_champion, rescore_champion
+from evolve.records.replay import replay_champion, rescore_champion
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
 from evolve.runs.final_selection import BEST_EVER_FILE, FinalSelection, choose
-from evolve.runs.rundir import RunDir
 
 ROBUST = {"episodes": 2, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0,
           "statistic": "mean"}

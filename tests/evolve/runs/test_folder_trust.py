@@ -24,9 +24,9 @@ import pytest
 import yaml
 
 from evolve.cli import main
-from evolve.runs.champion import load_champion
+from evolve.records.replay import load_champion
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 from tasks import Measure, TaskSpec, register
 from tasks import observations as O
 from tasks.specs import TASKS, forget_worlds
@@ -235,7 +235,7 @@ def test_a_sweep_folder_naming_planted_code_runs_none_of_it(tmp_path):
     """`sgr sweep --resume` reads sweep.yaml back: its imports are refused in one line when its
     tasks need them, and not imported at all when they do not (sgr's own tasks), as its runs are
     created."""
-    from evolve.runs.sweep import Sweep
+    from evolve.sweeps.sweep import Sweep
 
     marker = tmp_path / "ran"
     sw = tmp_path / "sw"

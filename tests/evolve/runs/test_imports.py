@@ -10,7 +10,7 @@ import sys
 import pytest
 import yaml
 
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 

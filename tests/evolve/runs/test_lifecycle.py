@@ -4,8 +4,8 @@ run directory however the block ends."""
 
 import pytest
 
+from evolve.records.rundir import RunDir, checkpoint_generation
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir, checkpoint_generation
 
 
 def test_checkpoint_names_are_parsed_by_one_pattern():

@@ -7,7 +7,7 @@ import shutil
 
 from evolve.cli import main
 from evolve.methods.formats import controller_of
-from evolve.runs.compact import same_controller
+from evolve.records.compact import same_controller
 from tasks.registry import OLD_TASK_FILE
 
 OLD = "tests/data/champions/sgr-Walker-v0-paper-s0"  # a champion file as an older sgr wrote it
@@ -50,7 +50,7 @@ def test_the_old_command_names_are_aliases_saying_so_in_one_line(tmp_path, repo_
     err = capsys.readouterr().err.splitlines()
     assert err == [f"sgr: note: convert-checkpoints is an alias of: sgr migrate {run}"]
     assert len((run / "champion.json").read_text()) < len(before) / 4  # it migrated
-    from evolve.runs.compact import main as compact_main
+    from evolve.records.compact import main as compact_main
 
     assert compact_main([str(run)]) == 0
     err = capsys.readouterr().err.splitlines()

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 import yaml
 
-from evolve.runs.plots import draw_curves, plot_run, plot_runs, run_labels, summarize_runs
+from evolve.report.plots import draw_curves, plot_run, plot_runs, run_labels, summarize_runs
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -101,7 +101,7 @@ def test_numpy_scalar_reprs_are_read_as_numbers(tmp_path):
 def test_a_run_counted_from_0_reads_as_counted_from_1(tmp_path):
     """generations.csv of runs made before generations were counted from 1 starts at 0; read, it is
     renumbered, so old and new runs line up in one plot."""
-    from evolve.runs.plots import read_generations
+    from evolve.report.plots import read_generations
     old = _run(tmp_path / "old", [1.0, 2.0], "sgr", first=0)
     new = _run(tmp_path / "new", [1.5, 2.5], "sgr")
     assert read_generations(old)["generation"].tolist() == [1, 2]
@@ -112,7 +112,7 @@ def test_ticks_are_whole_generations_and_per_run_draws_one_line_per_run(tmp_path
     """A 3-generation run has no tick at 2.5; --per-run draws each run as its own line."""
     from matplotlib.figure import Figure
 
-    import evolve.runs.plots as P
+    import evolve.report.plots as P
     runs = [_run(tmp_path / "a", [1.0, 2.0, 3.0], "sgr"), _run(tmp_path / "b", [0.5, 1.0, 1.5], "sgr"),
             _run(tmp_path / "c", [0.2, 0.4, 0.6], "direct")]
     seen = {}

@@ -22,11 +22,11 @@ import yaml
 ray = pytest.importorskip("ray")
 from ray.cluster_utils import Cluster  # noqa: E402
 
+from evolve.records.rundir import RunDir  # noqa: E402
 from evolve.rollout.ray_cluster import RayRolloutPool  # noqa: E402
 from evolve.runs.experiment import Experiment  # noqa: E402
-from evolve.runs.ray_sweep import RayBackend  # noqa: E402
-from evolve.runs.rundir import RunDir  # noqa: E402
-from evolve.runs.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
+from evolve.sweeps.ray_sweep import RayBackend  # noqa: E402
+from evolve.sweeps.sweep import LocalBackend, Sweep, run_sweep  # noqa: E402
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess, pytest.mark.ray]
 

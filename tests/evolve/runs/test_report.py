@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 import yaml
 
-import evolve.runs.champion as champion_module
-from evolve.runs.report import write_report
-from evolve.runs.rundir import COLUMNS
+import evolve.records.replay as champion_module
+from evolve.records.rundir import COLUMNS
+from evolve.report.report import write_report
 
 
 def best_column(seed: int) -> list[float]:

@@ -6,7 +6,7 @@ import pytest
 import yaml
 from matplotlib.figure import Figure
 
-from evolve.runs.report import plot_curves, report_markdown, summarize
+from evolve.report.report import plot_curves, report_markdown, summarize
 
 
 def _run(path, best, steps):

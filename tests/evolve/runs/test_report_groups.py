@@ -17,7 +17,7 @@ from matplotlib.figure import Figure
 from scipy.stats import mannwhitneyu
 
 from evolve.cli import main
-from evolve.runs.report import mann_whitney, write_report
+from evolve.report.report import mann_whitney, write_report
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 
@@ -204,8 +204,8 @@ def _fitness_axes(fig: Figure) -> dict[str, object]:
 def test_one_panel_per_task_in_plots_and_report_curves_with_species_and_body_diversity(tmp_path, saved):
     """Walker-v0 (fitness ~1) and Climber-v2 (fitness ~100) in one plot: each task its own fitness
     panel, whose lines are its own runs', and beside each a species and a body diversity panel."""
-    from evolve.runs.plots import plot_runs
-    from evolve.runs.report import plot_curves
+    from evolve.report.plots import plot_runs
+    from evolve.report.report import plot_curves
 
     runs = [make_run(tmp_path / "w0", best=(1.0, 2.0)), make_run(tmp_path / "w1", seed=1, best=(1.5, 2.5)),
             make_run(tmp_path / "c0", task="Climber-v2", best=(100.0, 200.0))]
@@ -234,7 +234,7 @@ def test_one_panel_per_task_in_plots_and_report_curves_with_species_and_body_div
 
 def test_old_runs_without_body_diversity_plot_and_report(tmp_path, saved):
     """A run made before body_diversity was recorded: no diversity panel of it, nothing fails."""
-    from evolve.runs.plots import plot_runs
+    from evolve.report.plots import plot_runs
 
     run = make_run(tmp_path / "runs" / "old")
     rows = (run / "generations.csv").read_text().splitlines()
@@ -248,7 +248,7 @@ def test_old_runs_without_body_diversity_plot_and_report(tmp_path, saved):
 def test_sgr_plot_of_one_run_draws_its_species_and_body_diversity(tmp_path, saved, capsys):
     """`sgr plot RUN`: the run's fitness and, beside it, its species and body diversity (the run's
     0.5 / g); the run's own end file (plot_run's default) keeps to fitness."""
-    from evolve.runs.plots import plot_run
+    from evolve.report.plots import plot_run
 
     run = make_run(tmp_path / "run", best=(1.0, 2.0, 3.0))
     assert main(["plot", str(run)]) == 0

@@ -12,9 +12,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from evolve.report.gallery import VOXEL_RGB, body_image
+from evolve.report.report import write_report
 from evolve.runs.experiment import Experiment
-from evolve.runs.gallery import VOXEL_RGB, body_image
-from evolve.runs.report import write_report
 
 pytestmark = [pytest.mark.slow, pytest.mark.browser]
 

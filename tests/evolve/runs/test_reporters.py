@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from evolve.cli import main
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 3, "pop_size": 8, "seed": 11,
         "episode_steps": 12, "workers": 1, "render_champion": False,
@@ -181,3 +181,49 @@ def test_a_resumed_run_tells_tensorboard_to_drop_the_generations_it_computes_aga
     rows = RunDir(tmp_path / "run").rows()
     assert scalars(files[0].parent)["fitness/best"] == {int(r["generation"]): np.float32(r["best"])
                                                         for r in rows}
+
+
+def test_the_console_line_can_be_replaced_and_the_files_stay_the_loops(tmp_path, capsys):
+    """A user's reporter takes the built-in console line's place without editing the loop: its line
+    is printed, the built-in one is not, and generations.csv and the checkpoints are still written."""
+    from evolve.runs.reporters import ConsoleProgress
+
+    class Mine:
+        def generation(self, exp, row):
+            print(f"mine {row['generation']}")
+
+    with Experiment.from_config(TINY, tmp_path / "run", quiet=False) as exp:
+        exp.replace_reporter(ConsoleProgress, Mine())
+        with pytest.raises(ValueError, match="no reporter of type int"):
+            exp.replace_reporter(int, Mine())
+        exp.run_all()
+    out = capsys.readouterr().out
+    assert [line for line in out.splitlines() if line.startswith("mine")] == ["mine 1", "mine 2", "mine 3"]
+    assert "best" not in out
+    run = RunDir(tmp_path / "run")
+    assert [r["generation"] for r in run.rows()] == ["1", "2", "3"]
+    assert (tmp_path / "run" / "champion.json").is_file()
+
+
+def test_a_checkpointer_of_another_schedule_writes_every_generation(tmp_path):
+    """The checkpoint schedule is a reporter: one that checkpoints every generation replaces the
+    config's (checkpoint_every 5: generation 0's stays the newest until the last)."""
+    from evolve.runs.reporters import Checkpointer
+
+    class Newest:  # added after the built-ins: sees each generation's checkpoint written
+        def __init__(self):
+            self.names = []
+
+        def generation(self, exp, row):
+            self.names.append(exp.run.checkpoints()[0].name)
+
+    newest = {}
+    for name, every in (("default", None), ("every", 1)):
+        with Experiment.from_config({**TINY, "checkpoint_every": 5}, tmp_path / name, quiet=True) as exp:
+            if every:
+                exp.replace_reporter(Checkpointer, Checkpointer(every=every))
+            newest[name] = Newest()
+            exp.add_reporter(newest[name])
+            exp.run_all()
+    assert newest["default"].names == ["gen-00000.json.gz", "gen-00000.json.gz", "gen-00003.json.gz"]
+    assert newest["every"].names == ["gen-00001.json.gz", "gen-00002.json.gz", "gen-00003.json.gz"]

@@ -17,9 +17,9 @@ from pathlib import Path
 import pytest
 import yaml
 
+from evolve.records.rundir import COLUMNS, RunDir
 from evolve.runs.checkpoint import load_checkpoint
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import COLUMNS, RunDir
 
 FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 GENERATIONS = 12
@@ -206,7 +206,7 @@ def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path
                                                                         monkeypatch):
     import errno
 
-    import evolve.runs.rundir
+    import evolve.records.rundir
     from evolve.cli import main
 
     cfg = write_config(tmp_path, repo_root, "sgr", generations=5, pop_size=16, checkpoint_every=2)
@@ -219,7 +219,7 @@ def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path
             raise OSError(errno.ENOSPC, "No space left on device")
         real_fsync(fd)
 
-    monkeypatch.setattr(evolve.runs.rundir.os, "fsync", fsync_until_full)
+    monkeypatch.setattr(evolve.records.rundir.os, "fsync", fsync_until_full)
     assert main(["evolve", "--config", str(cfg), "--out", str(run.path), "--quiet"]) == 1
     err = capsys.readouterr().err
     assert err.startswith("sgr: error: cannot write ") and "No space left on device" in err
@@ -228,7 +228,7 @@ def test_a_full_disk_stops_the_run_with_one_line_and_it_resumes_exactly(tmp_path
     rows_before = run.rows()
     assert 0 < len(rows_before) < 5  # the CSV is whole: the last complete version
 
-    monkeypatch.setattr(evolve.runs.rundir.os, "fsync", real_fsync)
+    monkeypatch.setattr(evolve.records.rundir.os, "fsync", real_fsync)
     assert main(["evolve", "--resume", str(run.path), "--quiet"]) == 0
     assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "full"), "--quiet"]) == 0
     assert fitness_rows(run) == fitness_rows(RunDir(tmp_path / "full"))
@@ -263,7 +263,7 @@ def test_generations_csv_is_appended_and_a_row_cut_short_is_no_row(tmp_path, rep
     with csv_path.open("ab") as f:  # a kill or a full disk in the middle of writing generation 2's row
         f.write(b"3,1.2345")
     assert fitness_rows(exp.run) == fitness_rows(RunDir(tmp_path / "full"))[:2]
-    from evolve.runs.plots import read_generations
+    from evolve.report.plots import read_generations
     assert len(read_generations(exp.run.path)["best"]) == 2
     resumed = Experiment.resume(str(exp.run.path), quiet=True, generations=3)
     assert csv_path.read_bytes() == whole  # the resume dropped the cut row

@@ -11,11 +11,11 @@ import yaml
 
 from evolve.cli import main
 from evolve.config import RunConfig
+from evolve.records.rundir import RunDir
 from evolve.rollout.pool import RolloutPool
 from evolve.rollout.robust import Robust
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 
 ROOT = Path(__file__).resolve().parents[3]
 

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 

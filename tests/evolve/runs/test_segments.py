@@ -6,8 +6,8 @@ import json
 
 import yaml
 
+from evolve.records.segments import SEGMENTS_FILE, backend_summary, segments
 from evolve.runs.experiment import Experiment
-from evolve.runs.segments import SEGMENTS_FILE, backend_summary, segments
 from tsim import runtime
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 6, "episode_steps": 5,

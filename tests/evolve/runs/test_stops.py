@@ -15,8 +15,8 @@ import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.records.rundir import RunDir
 from evolve.runs.experiment import Experiment
-from evolve.runs.rundir import RunDir
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 

@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from evolve.cli import main
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 
 FITNESS_COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes"]
 TINY = {"methods": ["sgr", "nested"], "tasks": ["Walker-v0"], "seeds": [0, 4],
@@ -135,7 +135,7 @@ def test_a_sweep_file_that_is_not_a_mapping_and_a_folder_that_is_not_a_sweep(tmp
 def test_report_names_champions_that_do_not_replay_to_their_fitness():
     """champion.json alone must reproduce a run's fitness; where the unperturbed replay differs,
     report.md says so with both numbers, and says nothing when every replay agrees."""
-    from evolve.runs.report import report_markdown
+    from evolve.report.report import report_markdown
 
     base = {"method": "direct", "task": "Walker-v0", "generations": 100, "best_final": 2.0,
             "best_gen1": 1.0, "best_gen30": 1.5, "best_gen100": 2.0, "noise1e-09_mean": 2.0,

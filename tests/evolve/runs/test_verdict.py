@@ -1,4 +1,4 @@
-"""A champion's verdict (evolve/runs/verdict.py): holds or knife-edge, by one rule, wherever a
+"""A champion's verdict (evolve/records/verdict.py): holds or knife-edge, by one rule, wherever a
 champion is shown. The paper sweep's nominal champions give one of each: Walker-v0 seed 0 keeps about
 two thirds of its return under ±1e-3 (results/paper/report.md), seed 3 over 90 %."""
 
@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from evolve import load_champion
-from evolve.runs import verdict
-from evolve.runs.report import write_report
+from evolve.records import verdict
+from evolve.report.report import write_report
 
 PAPER = Path(__file__).resolve().parents[3] / "results" / "paper" / "runs"
 

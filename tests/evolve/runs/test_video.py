@@ -11,7 +11,7 @@ from PIL import Image, ImageSequence
 
 import tsim.render
 from evolve.cli import main
-from evolve.runs.champion import champion_gif
+from evolve.records.replay import champion_gif
 
 FPS = 30.0
 

@@ -21,8 +21,8 @@ from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.runs.champion import champion_record, precision_of, read_champion
-from evolve.runs.rundir import RunDir
+from evolve.records.champion import champion_record, precision_of, read_champion
+from evolve.records.rundir import RunDir
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tasks.specs import body_fit_problem

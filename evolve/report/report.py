@@ -3,7 +3,7 @@
 `sgr report DIR` reads every run directory at any depth below DIR (a sweep, a folder of runs or of
 sweeps) and writes report.md, summary.csv and curves.png; what it passes over (files, a decoded
 champion, half a run) it names, with why. Runs are averaged only when they differ in their seed
-alone (evolve/runs/groups.py; `--pool` averages across the settings it names), and report.md lists
+alone (evolve/report/groups.py; `--pool` averages across the settings it names), and report.md lists
 the groups with their settings and runs. Between methods on a task (every other setting equal), a
 two-sided Mann-Whitney U test on the runs' champion fitness gives a p-value and the Vargha-Delaney
 A12. "Best at generation g" is the best fitness found in generations 1..g (1-based; generation 1 is
@@ -35,10 +35,10 @@ from pathlib import Path
 import numpy as np
 import yaml
 
-from evolve.runs import verdict as verdict_rule
-from evolve.runs.files import atomic_write
-from evolve.runs.groups import episode_length
-from evolve.runs.plots import read_generations, save_png
+from evolve.records import verdict as verdict_rule
+from evolve.records.files import atomic_write
+from evolve.report.groups import episode_length
+from evolve.report.plots import read_generations, save_png
 from tsim.errors import SgrError
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
@@ -90,8 +90,8 @@ def summary_columns(levels: Sequence[float] = NOISE_LEVELS) -> list[str]:
 def find_report_runs(folders: Sequence[str | Path]) -> tuple[list[Path], list]:
     """The run folders (config.yaml and generations.csv) at any depth below `folders` (each may
     be a run itself, as `sgr render RUN` takes it) and what was skipped, with why
-    (evolve/runs/groups.py); SgrError when there is no run at all."""
-    from evolve.runs.groups import find_runs
+    (evolve/report/groups.py); SgrError when there is no run at all."""
+    from evolve.report.groups import find_runs
 
     runs, skipped = find_runs(folders)
     if not runs:
@@ -124,8 +124,8 @@ def champion_robustness(run_dir: Path, replays: int = 10,
     """The champion's recorded fitness, that fitness scored again from champion.json (`replay`),
     its nominal return, and per noise level the mean, sd, min and mean / nominal of `replays`
     episodes with uniform(-eps, eps) added to every action (each level one batch)."""
-    from evolve.runs.champion import replay_champion, rescore_champion
-    from evolve.runs.rundir import RunDir
+    from evolve.records.replay import replay_champion, rescore_champion
+    from evolve.records.rundir import RunDir
 
     champ = RunDir(run_dir).champion()
     out = {"champion_fitness": float(champ["fitness"]), "replay": rescore_champion(run_dir),
@@ -143,11 +143,11 @@ def champion_robustness(run_dir: Path, replays: int = 10,
 
 def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float] = NOISE_LEVELS,
               replays: int = 10, pool: Sequence[str] = ()) -> list[dict]:
-    """One row per run (`summary_columns`): its group's label as `method` (evolve/runs/groups.py:
+    """One row per run (`summary_columns`): its group's label as `method` (evolve/report/groups.py:
     runs that differ in their seed alone, or in the settings in `pool`) and its `settings`; best
     so far at generations 1, 30, 100 and the end (NaN when not reached); the champion's recorded
     fitness; `robustness` also replays each champion (`champion_robustness`)."""
-    from evolve.runs.groups import group_of_each_run
+    from evolve.report.groups import group_of_each_run
 
     group_of = group_of_each_run(runs, pool)
     names = run_names(runs)
@@ -209,9 +209,9 @@ def _fmt(x: float | str | None) -> str:
 
 def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str] = ()) -> str:
     """report.md's text: `summarize` rows grouped by (method, task) (`method` is the group's label:
-    evolve/runs/groups.py), mean +- sd over seeds, with the authors' figures beside; the groups and
+    evolve/report/groups.py), mean +- sd over seeds, with the authors' figures beside; the groups and
     their settings; Mann-Whitney U tests between methods (`method_tests`); each champion under
-    noise, run by run; the paths `skipped` (evolve/runs/groups.py's Skipped), with why."""
+    noise, run by run; the paths `skipped` (evolve/report/groups.py's Skipped), with why."""
     groups: dict[tuple[str, str], list[dict]] = defaultdict(list)
     for r in rows:
         groups[(r["method"], r["task"])].append(r)
@@ -318,7 +318,7 @@ def _groups(rows: list[dict]) -> dict[tuple[str, str], list[dict]]:
 def groups_markdown(rows: list[dict], pool: Sequence[str] = ()) -> str:
     """The groups the table averages over, each with its settings and runs, and which groups of a
     task were kept apart and by what (rows from `summarize`; "" for rows without settings)."""
-    from evolve.runs.groups import SETTINGS
+    from evolve.report.groups import SETTINGS
 
     groups = {k: rs for k, rs in _groups(rows).items() if "settings" in rs[0]}
     if not groups:
@@ -369,7 +369,7 @@ def method_tests(rows: list[dict]) -> list[dict]:
     """A Mann-Whitney U test (`mann_whitney`) for each pair of groups of one task that differ in
     their method alone, on each run's champion fitness (champion.json), or where a run of the two
     has none, on the best fitness it found (`end`)."""
-    from evolve.runs.groups import SETTINGS
+    from evolve.report.groups import SETTINGS
 
     alike: dict[tuple, list[tuple[str, list[dict]]]] = defaultdict(list)
     for (label, _), rs in _groups(rows).items():
@@ -410,7 +410,7 @@ def tests_markdown(rows: list[dict]) -> str:
 
 
 def _verdict(row: dict) -> verdict_rule.Verdict:
-    """A summary row's verdict (evolve/runs/verdict.py) from its replays at the rule's noise level."""
+    """A summary row's verdict (evolve/records/verdict.py) from its replays at the rule's noise level."""
     return verdict_rule.Verdict(row["nominal"], row[noise_column(verdict_rule.EPS, "mean")],
                                 row.get("replays", 0), verdict_rule.EPS)
 
@@ -422,7 +422,7 @@ def _rule(rows: list[dict]) -> str:
     return verdict_rule.RULE.replace(f"{verdict_rule.REPLAYS} replays", f"{n} replays")
 
 
-# summary.csv's columns of a run's group settings (evolve/runs/groups.py; `generations` there is
+# summary.csv's columns of a run's group settings (evolve/report/groups.py; `generations` there is
 # the planned count, the `generations` column the count run)
 SETTING_COLUMNS = ("shape", "pop", "steps", "evaluation", "selection", "precision", "arch", "start")
 
@@ -443,7 +443,7 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
 
 def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     """One row of panels per task (tasks never share a y axis): mean best-so-far fitness per group
-    (evolve/runs/groups.py) with a ± sd band over seeds, over the runs' generations, and the
+    (evolve/report/groups.py) with a ± sd band over seeds, over the runs' generations, and the
     authors' SGR figures as markers at the generations the runs reached, only where the runs used
     the paper's episode lengths (as the authors did); beside it, where the runs record them, the
     mean species count and body diversity per generation, drawn the same way."""
@@ -451,8 +451,8 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     from matplotlib.figure import Figure
     from matplotlib.ticker import MaxNLocator
 
-    from evolve.runs.groups import group_of_each_run
-    from evolve.runs.plots import DIVERSITY, diversity_columns
+    from evolve.report.groups import group_of_each_run
+    from evolve.report.plots import DIVERSITY, diversity_columns
 
     group_of = group_of_each_run(runs, pool)
     extra = diversity_columns(runs)
@@ -476,7 +476,7 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     n_cols = 1 + len(extra)
     fig = Figure(figsize=(6 * n_cols, 3.8 * len(tasks)))
     FigureCanvasAgg(fig)
-    from evolve.runs.plots import matplotlib_colors
+    from evolve.report.plots import matplotlib_colors
 
     cycle = matplotlib_colors()
     color = {label: cycle[i] for i, label in enumerate(sorted({m for t in by_task.values() for m in t}))}
@@ -540,7 +540,7 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
     each champion replayed `replays` times at each noise level in `levels`; `gallery`: the best
     seed's champion per group as a GIF and a body picture in gallery/, inlined in report.html.
     `say` gets one line per path skipped and per group."""
-    from evolve.runs.gallery import gallery_entries, report_html, write_gallery
+    from evolve.report.gallery import gallery_entries, report_html, write_gallery
 
     folders = [folder] if isinstance(folder, str | Path) else list(folder)
     runs, skipped = find_report_runs(folders)

@@ -190,7 +190,7 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
 def _arches(run_dir: Path, raw: dict) -> str:
     """The arch(s) the run ran on, in the order of its segments (segments.json: "cuda, then cpu" for
     a run resumed elsewhere); an older run's config.yaml `arch`; "not recorded" otherwise."""
-    from evolve.runs.segments import segments
+    from evolve.records.segments import segments
 
     arches = list(dict.fromkeys(str(s.get("arch")) for s in segments(run_dir)))
     if not arches and isinstance(raw.get("arch"), str):
@@ -218,7 +218,7 @@ def _selection(raw) -> str:
     """"none", or the final selection's settings."""
     if raw is None:
         return "none"
-    from evolve.runs.final_selection import FinalSelection
+    from evolve.config import FinalSelection
 
     try:
         s = FinalSelection.from_config(raw).to_json()

@@ -10,7 +10,7 @@ of plain values on one line (`record_json`). Every other key is kept as it is, a
 would not come back exactly stays in full, so a rewritten file loads as the same robot, bit for bit,
 and replays to the same returns.
 
-    sgr migrate docs   # every champion*.json below (or: python -m evolve.runs.compact PATH...)
+    sgr migrate docs   # every champion*.json below (or: python -m evolve.records.compact PATH...)
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from evolve.methods import METHODS, sgr_record
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
-from evolve.runs.files import atomic_write, read_yaml, record_json
+from evolve.records.files import atomic_write, read_yaml, record_json
 from evolve.search.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 
 MALFORMED = (KeyError, TypeError, ValueError, IndexError)
@@ -103,15 +103,15 @@ def champion_files(paths: list[str | Path]) -> list[Path]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """`python -m evolve.runs.compact PATH...`: rewrite every champion file there; prints the bytes
+    """`python -m evolve.records.compact PATH...`: rewrite every champion file there; prints the bytes
     before and after."""
     paths = argv if argv is not None else sys.argv[1:]
-    print("note: python -m evolve.runs.compact is an alias of: sgr migrate PATH (one folder; it also "
+    print("note: python -m evolve.records.compact is an alias of: sgr migrate PATH (one folder; it also "
           "converts an older sgr's pickles, with --trust-pickle)", file=sys.stderr)
     missing = [p for p in paths if not Path(p).exists()]
     if not paths or missing:
         what = "no such file or folder: " + ", ".join(missing) if missing else "name files or folders"
-        print(f"error: {what} (usage: python -m evolve.runs.compact PATH...)", file=sys.stderr)
+        print(f"error: {what} (usage: python -m evolve.records.compact PATH...)", file=sys.stderr)
         return 2
     files = champion_files(paths)
     before = after = 0

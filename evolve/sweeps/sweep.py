@@ -33,9 +33,9 @@ import yaml
 
 from evolve.methods import METHODS
 from evolve.own_modules import child_env, python_command
+from evolve.records.files import atomic_write, read_yaml
+from evolve.records.rundir import RunDir
 from evolve.runs.config import configs_dir
-from evolve.runs.files import atomic_write, read_yaml
-from evolve.runs.rundir import RunDir
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 from tsim.errors import SgrError

@@ -1,7 +1,7 @@
 """Fitness plots of run directories (PNG, matplotlib's Agg canvas: no display needed).
 
 `plot_runs` compares methods: runs are grouped by every setting that makes them comparable
-(evolve/runs/groups.py: runs that differ in their seed alone), and each group becomes one curve,
+(evolve/report/groups.py: runs that differ in their seed alone), and each group becomes one curve,
 the mean over seeds of the best fitness per generation, with a min..max band over seeds, so the
 spread between seeds is visible rather than hidden in a mean. Each task gets its own row of
 panels (tasks never share a y axis), with the species count and the body diversity (generations.csv's
@@ -29,7 +29,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from evolve.runs.files import atomic_write
+from evolve.records.files import atomic_write
 from tsim.errors import SgrError
 
 UNKNOWN = "unknown"
@@ -112,13 +112,13 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
 
 def summarize_runs(run_dirs: Sequence[str | Path], column: str = "best",
                    pool: Sequence[str] = ()) -> dict[tuple[str, str], Curve]:
-    """Group runs (evolve/runs/groups.py: by every setting that makes them comparable, but those
+    """Group runs (evolve/report/groups.py: by every setting that makes them comparable, but those
     in `pool`), keyed (group label, task), and aggregate `column` per generation across runs.
 
     Runs may have different lengths (e.g. still running): each generation is aggregated over the
     runs that reached it. Runs with no rows, or without the column, are skipped.
     """
-    from evolve.runs.groups import group_of_each_run
+    from evolve.report.groups import group_of_each_run
 
     group_of = group_of_each_run([Path(d) for d in run_dirs], pool)
     groups: dict[tuple[str, str], list[dict[str, float]]] = {}
@@ -193,7 +193,7 @@ def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = F
     share a y axis): the mean best fitness per generation with a min..max band over seeds, or with
     `per_run` one line per run in its group's colour; beside it, where the runs record them,
     species and body diversity drawn the same way. Returns the PNG path."""
-    from evolve.runs.groups import run_settings
+    from evolve.report.groups import run_settings
 
     curves = summarize_runs(run_dirs, pool=pool)
     if not curves:
@@ -236,7 +236,7 @@ def _group_colors(curves: dict[tuple[str, str], Curve]) -> dict[str, str]:
 def draw_runs(ax: Axes, run_dirs: Sequence[str | Path], column: str = "best", pool: Sequence[str] = (),
               colors: dict[str, str] | None = None) -> None:
     """One line per run (`column` per generation), one colour per group."""
-    from evolve.runs.groups import group_of_each_run
+    from evolve.report.groups import group_of_each_run
 
     group_of = group_of_each_run([Path(d) for d in run_dirs], pool)
     colors = dict(colors or {})

@@ -61,8 +61,9 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
     `folder` for each entry; returns the entries with `gif` and `body` paths added."""
     import imageio.v3 as iio
 
-    from evolve.runs.champion import champion_gif, read_champion
-    from evolve.runs.files import atomic_write
+    from evolve.records.champion import read_champion
+    from evolve.records.files import atomic_write
+    from evolve.records.replay import champion_gif
 
     folder.mkdir(parents=True, exist_ok=True)
     out = []
@@ -156,5 +157,5 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
 
 
 def _verdict_caption(row: dict) -> str:
-    """" · holds" or " · knife-edge" (evolve/runs/verdict.py), where the report judged the row."""
+    """" · holds" or " · knife-edge" (evolve/records/verdict.py), where the report judged the row."""
     return f" · {row['verdict']}" if row.get("verdict") else ""

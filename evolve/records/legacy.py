@@ -15,7 +15,7 @@ import io
 import pickle
 from pathlib import Path
 
-from evolve.runs.rundir import RunDir
+from evolve.records.rundir import RunDir
 from tsim.errors import SgrError
 
 # modules renamed since checkpoints were first written: old checkpoints still load
@@ -70,35 +70,3 @@ def run_dirs(path: Path) -> list[RunDir]:
     if (path / "sweep.yaml").is_file():
         return [RunDir(p) for p in sorted((path / "runs").iterdir()) if (p / "config.yaml").is_file()]
     raise SgrError(f"{path} is neither a run directory (config.yaml) nor a sweep directory (sweep.yaml)")
-
-
-def convert_run(run: RunDir) -> list[str]:
-    """Convert every pickled checkpoint of `run` (oldest first), holding its lock; the names of the
-    files written. Each state is restored into an Experiment, exactly as an older sgr resumed it,
-    and saved from there."""
-    from evolve.runs.experiment import Experiment
-
-    written = []
-    cfg = run.config()
-    if run.pickled_checkpoints():
-        run.load_task(cfg)  # a task of the user's (the folder is trusted: `sgr migrate`)
-    run.lock()
-    try:
-        for f in run.pickled_checkpoints():
-            try:
-                state = load_trusted_pickle(f)
-                exp = Experiment(run, cfg, state=state, quiet=True, workers=1)
-            except ValueError:
-                raise
-            except Exception as exc:
-                raise SgrError(f"{f}: cannot convert ({type(exc).__name__}: "
-                               f"{' '.join(str(exc).split())[:200]})") from None
-            try:
-                path = run.save_checkpoint(state["generation"], exp.state())
-            finally:
-                exp.pool.close()
-            f.unlink()
-            written.append(path.name)
-    finally:
-        run.unlock()
-    return written

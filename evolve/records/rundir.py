@@ -1,7 +1,7 @@
 """Run directories: resolved config, per-generation CSV, champion JSON, atomic checkpoints.
 
 Layout: config.yaml, neat.ini (the INI actually used), generations.csv, champion.json,
-segments.json (the arch, device and precision of each start and resume: evolve/runs/segments.py),
+segments.json (the arch, device and precision of each start and resume: evolve/records/segments.py),
 checkpoints/gen-XXXXX.json.gz (state at the start of generation XXXXX: gzipped JSON, never a
 pickle; evolve/runs/checkpoint.py says what it holds). Every file that a crash could
 leave half-written is written to a temporary file, flushed to disk and renamed over the old one, so
@@ -34,7 +34,7 @@ from pathlib import Path
 import yaml
 
 from evolve.config import RunConfig
-from evolve.runs.files import atomic_write, read_yaml, record_json
+from evolve.records.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",

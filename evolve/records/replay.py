@@ -1,4 +1,5 @@
-"""A run's champion as a runnable robot: body + controller read back from champion.json.
+"""A run's champion as a runnable robot (body + controller read back from champion.json by
+evolve/records/champion.py), its replays and its GIFs.
 
     from evolve import load_champion
     champ = load_champion("runs/sgr-quick-seed0-...")      # body, policy, episode length, fitness
@@ -12,112 +13,20 @@ fitness.
 
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
+from evolve.records import verdict as verdict_rule
+from evolve.records.champion import episode_steps, precision_of, read_champion
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
-from evolve.runs import verdict as verdict_rule
-from evolve.runs.rundir import RunDir
-from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
-from tasks.specs import TASKS
-from tsim import runtime
-from tsim.body import build_body, check_robot
+from tsim.body import build_body
 from tsim.errors import SgrError
-
-KEYS = ("task", "episode_steps", "body", "controller")
-
-
-def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, generation: int,
-                    evaluation: dict) -> dict:
-    """champion.json's record of `genome` (decoded to `phenotype`) scored `fitness` as `evaluation`
-    says (robust settings, seed, tag), found in `generation` (counted from 1); `problem` is the run's
-    method (`Problem.champion` gives the body and controller)."""
-    champ = {"format": "sgr-champion-1", "method": cfg.method, "task": cfg.task,
-             "episode_steps": cfg.episode_steps, "fitness": fitness, "generation": generation,
-             "precision": cfg.precision, "genome": genome_json(genome)}
-    method_keys = problem.champion_of(genome, phenotype)
-    evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
-    champ.update(method_keys, evaluation=evaluation)
-    return champ
-
-
-def best_ever_record(cfg: dict, problem, best: dict) -> dict:
-    """champion.json's record of a search's best-ever genome (`NeatSearch.best`), with how its
-    fitness was scored: enough to score it again exactly (robust: the run's seed and the
-    evaluation's tag give every episode's noise; the tag holds the search's own generation
-    number, counted from 0)."""
-    evaluation = {"robust": cfg.robust and cfg.robust.to_json(), "seed": cfg.seed}
-    if "tags" in best:  # accumulated fitness: the mean of these evaluations' scores, in this order
-        evaluation["tags"] = list(best["tags"])
-    else:
-        evaluation["tag"] = f"{best['generation']}/{best['key']}"
-    return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
-                           best["generation"] + 1, evaluation)
-
-
-def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
-    """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
-    ValueError naming the file and the key when it is not a champion that runs (checked with one
-    forward pass of the controller)."""
-    f = Path(run_dir) / "champion.json"
-    if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
-        run = RunDir(run_dir)
-        run.load_task(run.config())
-    try:
-        champ = RunDir(run_dir).champion()
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise SgrError(f"{f}: not valid JSON ({exc})") from None
-    if not isinstance(champ, dict):
-        raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
-    missing = [k for k in KEYS if k not in champ]
-    if missing:
-        raise SgrError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
-    if champ["task"] not in TASKS:
-        raise SgrError(f"{f}: key 'task': unknown task {champ['task']!r}")
-    steps = champ["episode_steps"]
-    positive = isinstance(steps, int) and not isinstance(steps, bool) and steps > 0
-    if not (positive or steps in (None, "evogym")):
-        raise SgrError(f"{f}: key 'episode_steps' must be a positive int, 'evogym' or null, got {steps!r}")
-    try:
-        body = check_robot(champ["body"])
-    except ValueError as exc:
-        raise SgrError(f"{f}: key 'body': {exc}") from None
-    b = build_body(body)
-    try:
-        ctrl = controller_of(champ)
-        actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
-    except (KeyError, IndexError, TypeError, ValueError) as exc:
-        raise SgrError(f"{f}: key 'controller': not a controller of this body and task "
-                       f"({type(exc).__name__}: {exc})") from None
-    if np.shape(actions) != (len(b.actuator_flat),):
-        raise SgrError(f"{f}: key 'controller': gives {np.size(actions)} actions, the body has "
-                       f"{len(b.actuator_flat)} actuators")
-    # its fitness is reproducible in the precision it was scored in (records without the key: f64):
-    # its replays pass that precision down to the simulator they build (`precision_of`); reading
-    # the file only checks that this process can (it sets nothing: the file is data)
-    precision = precision_of(champ)
-    if precision not in runtime.PRECISIONS:
-        raise SgrError(f"{f}: key 'precision': unknown precision {precision!r}; use one of "
-                       f"{', '.join(runtime.PRECISIONS)}")
-    if (why := runtime.switch_problem(precision)) is not None:
-        raise SgrError(f"{f}: key 'precision': scored in {precision}, to be replayed in it: {why} "
-                       "(start a new process)")
-    return champ, body, ctrl
-
-
-def precision_of(champ: dict) -> str:
-    """The real type a champion record was scored in, which its replays simulate in (f64 for a
-    record from before the key)."""
-    return champ.get("precision") or "f64"
-
 
 MEDIAN = "median"  # champion_gif's default replay: the verdict's typical perturbed episode
 
@@ -250,7 +159,7 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
 
 def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
           eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
-    """The verdict (evolve/runs/verdict.py) on a run folder's champion.json: its robot replayed
+    """The verdict (evolve/records/verdict.py) on a run folder's champion.json: its robot replayed
     from the JSON alone, `replays` times under uniform(+-eps) and once without noise."""
     return load_champion(run_dir).verdict(replays, eps)
 
@@ -263,12 +172,6 @@ def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> Ep
         raise SgrError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
     tags = [f"replay/{kind}/{eps!r}/{offset!r}/{i}" for i in range(n)]
     return EpisodeNoise(Perturbation(kind, eps, offset), episode_keys(seed, tags, 0), np.arange(n) > 0)
-
-
-def episode_steps(task: str, steps: int | str | None) -> int:
-    """The episode length a record stands for: runs record theirs; older ones wrote null (the
-    paper's length for the task) or "evogym" (evogym's)."""
-    return TASKS[task].episode_length(steps if steps is None or steps == "evogym" else int(steps))
 
 
 @dataclass(frozen=True)
@@ -329,7 +232,7 @@ class Champion:
 
     def verdict(self, replays: int = verdict_rule.REPLAYS,
                 eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
-        """Whether it holds (evolve/runs/verdict.py): its episode replayed `replays` times with
+        """Whether it holds (evolve/records/verdict.py): its episode replayed `replays` times with
         uniform(+-eps) on every action, against its noise-free return. `verdict().line()` says it
         in words; `verdict().holds` is the rule's answer."""
         returns = _replay(self.record, self.body, self.controller,

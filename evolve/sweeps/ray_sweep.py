@@ -16,7 +16,7 @@ from pathlib import Path
 
 from evolve.own_modules import child_env, python_command
 from evolve.rollout.ray_cluster import connect
-from evolve.runs.sweep import BackendLost, die_with_parent, trust_flag
+from evolve.sweeps.sweep import BackendLost, die_with_parent, trust_flag
 
 CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
 HEALTH_EVERY_S = 1.0

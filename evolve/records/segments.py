@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-from evolve.runs.files import atomic_write
+from evolve.records.files import atomic_write
 
 SEGMENTS_FILE = "segments.json"
 
