@@ -108,7 +108,7 @@ class KernelLaunch:
 
     def __call__(self, args: tuple) -> None:
         """One env step: args are `step_kernel`'s, less the block size."""
-        args = (*args, *self._extra)
+        args = args + self._extra
         # the arguments rarely change between steps (arrays are updated in place), so after the
         # first launch the same launch context is reused
         cached = self.cached

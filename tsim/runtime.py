@@ -9,9 +9,9 @@ import tempfile
 import threading
 import time
 
-from tsim import backend as B
+from tsim import backends as B
 from tsim import devices
-from tsim.backend import DEFAULT_ARCH, DEFAULT_PRECISION, GPU, NO_F64, SPIRV_ARCHS, resolved
+from tsim.backends import DEFAULT_ARCH, DEFAULT_PRECISION, GPU, NO_F64, SPIRV_ARCHS, resolved
 from tsim.errors import SgrError
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its

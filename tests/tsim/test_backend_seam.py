@@ -1,8 +1,9 @@
-"""The backend seam: precision and arch names are written in tsim/backend.py only.
+"""The backend seam: precision and arch names are written in tsim/backends.py only (the tables
+that tsim.backend re-exports).
 
 The rule (it can fail): in the library's code (tsim/, tasks/, evolve/, sgr/), a string literal whose
 whole value is a precision's or an arch's name ("f64", "cuda", ...) is a decision taken outside the
-seam (`arch == "cpu"`, `or "f64"`, a copied list of names), and fails this test. Allowed: tsim/backend.py
+seam (`arch == "cpu"`, `or "f64"`, a copied list of names), and fails this test. Allowed: tsim/backends.py
 itself; docstrings and comments (not string literals that code compares: a docstring is the first
 statement of a module, class or function; comments are not in the syntax tree); longer text that
 merely mentions a name (help and error lines, "SGR_ARCH=cpu"); and a literal on a line marked
@@ -21,7 +22,7 @@ from tsim import backend
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGES = ("tsim", "tasks", "evolve", "sgr")
-SEAM = ROOT / "tsim" / "backend.py"
+SEAM = ROOT / "tsim" / "backends.py"
 MARK = "# backend-seam:"
 NAMES = frozenset({"f64", "f32", "cpu", "gpu", "cuda", "vulkan", "metal"})
 
@@ -51,15 +52,15 @@ def named_outside(source: str, path: str = "<text>") -> list[str]:
     return hits
 
 
-def test_backend_names_are_written_only_in_tsim_backend():
-    """No module of the library but tsim/backend.py writes a precision's or arch's name as a
+def test_backend_names_are_written_only_in_tsim_backends():
+    """No module of the library but tsim/backends.py writes a precision's or arch's name as a
     string literal (see this file's docstring for the rule)."""
     hits = []
     for package in PACKAGES:
         for path in sorted((ROOT / package).rglob("*.py")):
             if path != SEAM:
                 hits += named_outside(path.read_text(), str(path.relative_to(ROOT)))
-    assert not hits, "backend names outside tsim/backend.py (ask tsim.backend instead):\n" + "\n".join(hits)
+    assert not hits, "backend names outside tsim/backends.py (ask tsim.backend instead):\n" + "\n".join(hits)
 
 
 @pytest.mark.parametrize("code", ['if arch == "cpu":\n    pass\n', 'p = cfg.get("precision") or "f64"\n',

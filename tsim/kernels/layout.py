@@ -25,7 +25,7 @@ the process's floating-point type (f64 by default, f32 on request; `tsim.backend
 from __future__ import annotations
 
 from tsim import backend
-from tsim.backend import PRECISIONS, Tolerances
+from tsim.backends import PRECISIONS, Tolerances
 from tsim.runtime import ti
 
 # counts columns
