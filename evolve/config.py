@@ -26,6 +26,7 @@ from typing import Any
 
 from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
 from tasks.specs import TASKS
+from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
 
 # docs/EVOLVE.md "Robust evaluation": every action carries uniform(+-1e-3) actuator noise, one fresh
@@ -155,7 +156,7 @@ class RunConfig:
     start_from: Mapping[str, Any] | None = key((dict, type(None)), None)
     method_keys: Mapping[str, Any] = field(default_factory=dict)
     arch: str | None = None
-    precision: str = "f64"
+    precision: str = DEFAULT_PRECISION
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "method_keys", MappingProxyType(dict(self.method_keys)))
@@ -211,7 +212,7 @@ class RunConfig:
                   for k, (_, fallback) in COMMON.items()}
         own = [k for k in raw if k not in COMMON and k not in ("arch", "precision")]
         return cls.build({**values, **{k: raw[k] for k in own}}, own, arch=raw.get("arch"),
-                         precision=raw.get("precision") or "f64")
+                         precision=raw.get("precision") or DEFAULT_PRECISION)
 
     @classmethod
     def build(cls, values: Mapping, method_keys: Iterable[str], *, arch: str | None, precision: str,

@@ -13,12 +13,12 @@ from pathlib import Path
 
 import numpy as np
 
+from tsim import backend
 from tsim.errors import SgrError
 from tsim.files import atomic_write
 
-# tsim.runtime.PRECISIONS, written out: importing tsim starts Taichi's import (seconds), which a
-# parser must not wait for (tests/tasks/test_precision.py checks they agree)
-PRECISIONS = ("f64", "f32")
+# the precisions' names (tsim/backend.py imports no Taichi, so a parser need not wait for it)
+PRECISIONS = tuple(backend.PRECISIONS)
 PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default $SGR_PRECISION, else f64"
 
 

@@ -94,7 +94,7 @@ class BatchEnv:
         # on the 2-vCPU VM a second thread added CPU time (0.31-0.37 against 0.22-0.29 us per
         # robot-step at B = 8,192) without saving wall time. Elsewhere numpy arguments travel to a
         # device and back (Vulkan: only those a kernel reads)
-        self._cpu = self._serial = self.sim.backend.arch == "cpu"
+        self._cpu = self._serial = self.sim.backend.on_host
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)

@@ -15,7 +15,7 @@ import numpy as np
 from scipy.stats import spearmanr
 
 from tasks.env import BatchEnv
-from tsim import runtime
+from tsim import backend
 from tsim.errors import SgrError
 
 
@@ -171,7 +171,7 @@ def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dic
     out = {}
     for task in tasks or [t for t in index["all_tasks"] if t in TASKS]:
         r = evogym32_returns(folder, task)
-        if runtime.precision() != "f64":  # no bits to match: evogym's chaos floor is the measure
+        if not backend.real().bits:  # no bits to match: evogym's chaos floor is the measure
             c = chaos_row(r, _npz(folder / f"returns_{task}.npz"))
             out[task] = {k: c[k] for k in ("com_err_median", "chaos_floor", "com_ratio", "com_ok",
                                            "spearman", "spearman_evogym_rerun", "rank_ok")}

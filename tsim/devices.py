@@ -12,6 +12,8 @@ import platform
 import subprocess
 import sys
 
+from tsim import backends as B
+
 # VkPhysicalDeviceType: what a Vulkan driver says its device is
 VK_TYPES = {0: "other", 1: "integrated GPU", 2: "discrete GPU", 3: "virtual GPU", 4: "CPU"}
 VK_CPU = 4  # a software device: its shaders run on the CPU (lavapipe, SwiftShader)
@@ -41,7 +43,7 @@ def cpu_name() -> str:
 def cuda_name() -> str | None:
     """The name of the CUDA device Taichi uses (device 0 of those CUDA_VISIBLE_DEVICES leaves),
     from the driver (libcuda); None where it cannot be asked."""
-    path = ctypes.util.find_library("cuda") or "libcuda.so.1"
+    path = ctypes.util.find_library("cuda") or "libcuda.so.1"  # backend-seam: a library name
     try:
         cuda = ctypes.CDLL(path)
         dev = ctypes.c_int()
@@ -64,8 +66,9 @@ def vulkan_devices() -> list[dict] | None:
     """Every Vulkan device the loader finds, in its order: name, type (VK_TYPES), API minor
     version and whether it draws wide lines (what Taichi's choice weighs); None without Vulkan."""
     try:
+        found = ctypes.util.find_library("vulkan")  # backend-seam: a library name
         vk = ctypes.CDLL("libvulkan.so.1" if sys.platform.startswith("linux") else
-                         ctypes.util.find_library("vulkan") or "libvulkan.so.1")
+                         found or "libvulkan.so.1")
     except OSError:
         return None
     info = _InstanceInfo(sType=1)  # VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO; Vulkan 1.0, no layers
@@ -115,17 +118,17 @@ def vulkan_choice(devices: list[dict]) -> dict | None:
 def describe(backend: str) -> tuple[str, bool]:
     """(the device's name, whether it is software) for Taichi's arch name `backend` ("x64",
     "arm64", "cuda", "vulkan", "metal", ...)."""
-    if backend in ("x64", "arm64"):
+    if backend in B.TAICHI_CPUS:
         return f"{backend}: {cpu_name()}", False
-    if backend == "cuda":
+    if backend == B.CUDA:
         return cuda_name() or "a CUDA GPU (its name not readable)", False
-    if backend == "vulkan":
+    if backend == B.VULKAN:
         chosen = vulkan_choice(vulkan_devices() or [])
         if chosen is None:
             return "a Vulkan device (its name not readable)", False
         software = chosen["type"] == VK_CPU
         kind = "software, on the CPU" if software else VK_TYPES.get(chosen["type"], "other")
         return f"{chosen['name']}: {kind}", software
-    if backend == "metal":
+    if backend == B.METAL:
         return "the Mac's GPU", False
     return backend, False

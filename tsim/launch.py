@@ -91,3 +91,64 @@ class CachedLaunch:
         prog = self._prog
         prog.launch_kernel(prog.compile_kernel(prog.config(), prog.get_device_caps(), self._t_kernel),
                            self._ctx)
+
+
+class KernelLaunch:
+    """An env step as one launch of `step_kernel` (worlds over the thread pool or a GPU's blocks of
+    `block` worlds) or `step_kernel_serial` (on the calling thread), re-launched from a
+    `CachedLaunch` where `cache` (the CPU)."""
+
+    def __init__(self, serial: bool, block: int, cache: bool):
+        from tsim import kernels as K
+
+        self.kernel = K.step_kernel_serial if serial else K.step_kernel
+        self._extra = () if serial else (block,)  # the serial kernel has no block size
+        self._cache = cache
+        self.cached: CachedLaunch | None = None  # None: the next step calls the kernel through Taichi
+
+    def __call__(self, args: tuple) -> None:
+        """One env step: args are `step_kernel`'s, less the block size."""
+        args = args + self._extra
+        # the arguments rarely change between steps (arrays are updated in place), so after the
+        # first launch the same launch context is reused
+        cached = self.cached
+        if cached is not None and cached.matches(self.kernel, args):
+            cached.launch()
+        else:
+            self.kernel(*args)
+            self.cached = CachedLaunch.build(self.kernel, args) if self._cache else None
+
+
+class SplitLaunch:
+    """An env step as the SPIR-V backends' launches (tsim/spirv.py: maybe several per step)."""
+
+    def __init__(self, split, block: int, batch_tier: int):
+        self._split = split  # a `tsim.spirv.Launcher`, kept by the simulator (it learns `chunk`)
+        self._tail = (block, batch_tier)
+        self.cached = None  # no cached launch context (`KernelLaunch.cached`)
+
+    def __call__(self, args: tuple) -> None:
+        """One env step: args are `step_kernel`'s, less the block size."""
+        self._split.step((*args, *self._tail))
+
+
+# how a step is launched, by `tsim.backend.Arch.launch`: (serial, block, split launcher, worlds) ->
+# a callable taking `step_kernel`'s arguments less the block size. A backend that launches
+# differently (e.g. the GPU lanes kernel) adds its entry here and names it in its `Arch`
+LAUNCHERS = {
+    "host": lambda serial, block, split, n: KernelLaunch(serial, 1, cache=True),
+    "device": lambda serial, block, split, n: KernelLaunch(serial, block, cache=False),
+    "spirv": lambda serial, block, split, n: SplitLaunch(split, block, _batch_tier(n)),
+}
+
+
+def _batch_tier(n_worlds: int) -> int:
+    from tsim import spirv
+
+    return spirv.batch_tier(n_worlds)
+
+
+def launcher(path: str, *, serial: bool, block: int, split, n_worlds: int):
+    """The step launcher of launch path `path` (`tsim.backend.Backend.launch_path`, or the one
+    `BatchSim.choose_kernel` forces)."""
+    return LAUNCHERS[path](serial, block, split, n_worlds)

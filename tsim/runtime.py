@@ -9,7 +9,9 @@ import tempfile
 import threading
 import time
 
+from tsim import backends as B
 from tsim import devices
+from tsim.backends import DEFAULT_ARCH, DEFAULT_PRECISION, GPU, NO_F64, SPIRV_ARCHS, resolved
 from tsim.errors import SgrError
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
@@ -21,17 +23,17 @@ os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # no version banner
 with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
-ARCHS = ("cpu", "gpu", "cuda", "vulkan", "metal")
+# the archs' and precisions' names: tsim/backend.py's tables own them (and what follows from each)
+ARCHS = tuple(B.ARCHS)
 # profiling only (bench/profile_parts.py): kernel parts left out at compile time, e.g. "pairs,terrain";
 # results are then wrong, so such a process neither reads nor writes Taichi's offline cache
 PROFILE_SKIP = tuple(p for p in os.environ.get("SGR_PROFILE_SKIP", "").split(",") if p)
 _ARCH: str | None = None
 # the real type of the kernels, numpy arrays at their boundary and the tasks' numbers: f64 is
 # evogym's (bit for bit), f32 is faster and within evogym's chaos floor (docs/VALIDATION.md)
-PRECISIONS = ("f64", "f32")
+PRECISIONS = tuple(B.PRECISIONS)
 _PRECISION: str | None = None
 _DEVICE: tuple[str, bool] | None = None  # `device()`
-NO_F64 = ("metal",)  # archs without 64-bit floats
 
 
 def requested_precision(precision: str | None = None) -> str:
@@ -41,7 +43,7 @@ def requested_precision(precision: str | None = None) -> str:
         if precision not in PRECISIONS:
             raise ValueError(f"SGR_PRECISION={precision}: unknown precision; use one of "
                              f"{', '.join(PRECISIONS)}")
-    precision = precision or "f64"
+    precision = precision or DEFAULT_PRECISION
     if precision not in PRECISIONS:
         raise ValueError(f"unknown precision {precision!r}; use one of {', '.join(PRECISIONS)}")
     return precision
@@ -72,7 +74,7 @@ def check_real_type(arch: str, precision: str, arch_from_env: bool = False,
     """ValueError, one line saying what is missing and what to use, when `arch` has no floats of
     `precision` (Metal: no 64-bit floats). Checked once the arch is known to run here, so that a
     missing device is reported as such first."""
-    if precision == "f64" and arch in NO_F64:
+    if B.PRECISIONS[precision].needs_f64 and arch in NO_F64:
         what = f"SGR_ARCH={arch}" if arch_from_env else f"arch {arch!r}"
         how = "SGR_PRECISION=f64" if precision_from_env else "precision f64"
         raise ValueError(f"{what} with {how}: {arch} has no 64-bit floats; use SGR_PRECISION=f32 "
@@ -85,29 +87,21 @@ def precision() -> str:
     return _PRECISION or requested_precision()
 
 
-def real_dtype() -> type:
-    """numpy's type for the process's real type (np.float64 or np.float32)."""
-    import numpy as np
-
-    return np.float32 if precision() == "f32" else np.float64
-
-
 def requested_arch(arch: str | None = None) -> str:
     """`arch`, else $SGR_ARCH, else cpu; raises ValueError for a name that is not an arch."""
     if arch is None and os.environ.get("SGR_ARCH"):
         arch = os.environ["SGR_ARCH"]
         if arch not in ARCHS:
             raise SgrError(f"SGR_ARCH={arch}: unknown arch; use one of {', '.join(ARCHS)}")
-    arch = arch or "cpu"
+    arch = arch or DEFAULT_ARCH
     if arch not in ARCHS:
         raise SgrError(f"unknown arch {arch!r}; use one of {', '.join(ARCHS)}")
     return arch
 
 
 def _taichi_archs(arch: str) -> list:
-    # "gpu" tries only the GPU backends this package supports: Taichi's own ti.gpu list also probes
-    # OpenGL, whose probe crashes the process on some machines without a display
-    return [ti.cuda, ti.metal, ti.vulkan] if arch == "gpu" else [getattr(ti, arch)]
+    # the Taichi archs tsim/backend.py's row for `arch` tries, in order
+    return [getattr(ti, name) for name in B.ARCHS[arch].taichi]
 
 
 def init(arch: str | None = None, precision: str | None = None) -> str:
@@ -150,14 +144,14 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     # file descriptor 2: they are held back and shown only if the arch works
     out = io.StringIO()
     with contextlib.redirect_stdout(out), _held_stderr() as held:
-        ti.init(arch=_taichi_archs(arch), default_fp=ti.f32 if precision == "f32" else ti.f64,
+        ti.init(arch=_taichi_archs(arch), default_fp=getattr(ti, B.PRECISIONS[precision].taichi),
                 default_ip=ti.i32, fast_math=False, advanced_optimization=False,
                 make_cpu_multithreading_loop=False, log_level=ti.ERROR, **kwargs)
     ti.set_logging_level(ti.WARN)
     what = f"SGR_ARCH={arch}" if from_env else f"arch {arch!r}"
     if ti.lang.impl.current_cfg().arch not in _taichi_archs(arch):  # Taichi fell back to the CPU
         ti.reset()
-        raise SgrError(f"{what}: Taichi cannot run on {arch} here: {MISSING.get(arch, 'no usable GPU')}; "
+        raise SgrError(f"{what}: Taichi cannot run on {arch} here: {B.ARCHS[arch].missing}; "
                        "use SGR_ARCH=cpu")
     try:
         check_real_type(arch, precision, from_env, prec_from_env)
@@ -165,12 +159,12 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
         ti.reset()
         raise
     name, software = devices.describe(backend())
-    if arch == "gpu" and software:  # a software device is never what a GPU is asked for
+    if arch == GPU and software:  # a software device is never what a GPU is asked for
         ti.reset()
         raise SgrError(f"{what}: the only GPU here is {name.split(': ')[0]}, a software Vulkan device "
                        f"(it runs on the CPU), {SOFTWARE_SPEED}; use SGR_ARCH=cpu (or SGR_ARCH=vulkan to "
                        "run on it anyway)")
-    if precision == "f64" and backend() in SPIRV_ARCHS and not _runs_f64():
+    if B.PRECISIONS[precision].needs_f64 and backend() in SPIRV_ARCHS and not _runs_f64():
         ti.reset()
         raise SgrError(f"{what}: this {backend()} device has no 64-bit floats, which sgr's f64 "
                        "physics needs; use SGR_ARCH=cpu, or SGR_PRECISION=f32")
@@ -181,7 +175,7 @@ def init(arch: str | None = None, precision: str | None = None) -> str:
     _ARCH = arch
     _PRECISION = precision
     _DEVICE = (name, software)
-    if arch == "cpu":
+    if B.ARCHS[arch].host:
         pin_threads()
     return _ARCH
 
@@ -194,8 +188,7 @@ SOFTWARE_SPEED = ("25 to 60 times slower than SGR_ARCH=cpu (sgr bench: 307 again
 def resolved_arch() -> str:
     """What the kernels run on once Taichi started, as an arch name: "cpu" (for x64 or arm64),
     "cuda", "vulkan" or "metal" ("gpu" resolves to one of the last three)."""
-    name = backend()
-    return "cpu" if name in ("x64", "arm64") else name
+    return resolved(backend())
 
 
 def device() -> tuple[str, bool]:
@@ -215,14 +208,6 @@ def describe() -> str:
     return f"backend: {resolved_arch()} ({name}{asked}), {_PRECISION}"
 
 
-# what is missing when Taichi cannot start an arch (it does not say why)
-MISSING = {
-    "cuda": "no CUDA device (it needs an NVIDIA GPU and its driver, libcuda.so)",
-    "metal": "no Metal device (Metal exists only on macOS with an Apple or AMD GPU)",
-    "vulkan": "no Vulkan device (it needs a Vulkan driver: a GPU's, or Mesa's software one, Debian's "
-              "mesa-vulkan-drivers)",
-    "gpu": "no GPU (tried CUDA, Metal and Vulkan)",
-}
 
 
 @contextlib.contextmanager
@@ -272,10 +257,6 @@ PIN_TRIES = 8  # rendezvous loops at most to single out the workers, PIN_PAUSE_S
 PIN_PAUSE_S = 0.005  # lets another thread's burst (Taichi's, after a first launch) end
 PIN_WORK = 1_000_000  # multiply-adds each worker runs after the rendezvous (~1.3 ms)
 PIN_SPIN_LIMIT = 20_000_000  # spins (~0.1-0.5 s) after which a task stops waiting for the others
-
-
-# Taichi's backends that compile to SPIR-V: they have no 64-bit transcendental functions
-SPIRV_ARCHS = ("vulkan", "metal", "opengl", "gles")
 
 
 def backend() -> str:

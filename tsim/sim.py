@@ -16,7 +16,7 @@ import numpy as np
 from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
-from tsim import runtime, spirv
+from tsim import launch, runtime, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected, is_connected_batch
 from tsim.bodybatch import BodyBatch, build_bodies
 from tsim.launch import CachedLaunch
@@ -303,7 +303,7 @@ class BatchSim:
         while any(n > c for n, c in zip((P, E, n_surf), K.capacity(self.capacity_tier), strict=True)):
             self.capacity_tier += 1
         # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
-        self._serial = self._arch == "cpu" and (self.backend.threads == 1 or self.n_worlds == 1)
+        self._serial = self.backend.on_host and (self.backend.threads == 1 or self.n_worlds == 1)
         # how contact pairs are found (the same pairs either way): with the kernel that can sweep
         # and prune only when some world is long enough to gain from it (tests force either)
         self.sweep_mode = K.SWEEP_AUTO if any(
@@ -312,9 +312,9 @@ class BatchSim:
         # and whether a substep may test only the pairs listed at an earlier one (the same pairs
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
-        self._launch: CachedLaunch | None = None  # see `step`
-        self._spirv = runtime.backend() in runtime.SPIRV_ARCHS  # see tsim/spirv.py
+        self._spirv = self.backend.launch_path == "spirv"  # see tsim/spirv.py
         self._spirv_launcher = spirv.Launcher(B)
+        self._launcher = self._make_launcher()  # how `step` launches the kernels (tsim/launch.py)
         # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
         # that they stay on the device instead of crossing the bus at every launch. On the CPU the
         # numpy arrays themselves are passed (flattened once, so every step passes the same
@@ -471,24 +471,23 @@ class BatchSim:
                     self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self._state.shape[1],
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
-            if self._spirv:  # maybe several launches per step (see tsim/spirv.py)
-                self._spirv_launcher.step((*args, self._gpu_block, spirv.batch_tier(self.n_worlds)))
-                self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
-                continue
-            if self._serial:
-                kernel = K.step_kernel_serial
-            else:
-                kernel = K.step_kernel
-                args = (*args, 1 if self._arch == "cpu" else self._gpu_block)
-            # the arguments rarely change between steps (arrays are updated in place), so after
-            # the first launch the same launch context is reused (CPU only; see tsim/launch.py)
-            cached = self._launch
-            if cached is not None and cached.matches(kernel, args):
-                cached.launch()
-            else:
-                kernel(*args)
-                self._launch = CachedLaunch.build(kernel, args) if self.backend.cached_launch else None
+            self._launcher(args)
             self.time += running & (self.counts[:, K.STATUS] == K.RUNNING)
+
+    def _make_launcher(self):
+        """The backend's launcher of a step for this batch and its `choose_kernel` choices."""
+        return launch.launcher("spirv" if self._spirv else self.backend.kernel_path, serial=self._serial,
+                               block=self._gpu_block, split=self._spirv_launcher, n_worlds=self.n_worlds)
+
+    @property
+    def _launch(self) -> CachedLaunch | None:
+        """The launcher's cached launch context, if any (tests read it, or set None to make the next
+        step call the kernel through Taichi)."""
+        return self._launcher.cached
+
+    @_launch.setter
+    def _launch(self, value: CachedLaunch | None) -> None:
+        self._launcher.cached = value
 
     def deactivate(self, mask: np.ndarray) -> None:
         """Freeze worlds (e.g. terminated episodes) so they cost nothing and stop moving."""
@@ -518,7 +517,7 @@ class BatchSim:
         if substeps_per_launch is not None:
             self._spirv_launcher.chunk = int(substeps_per_launch)
         self.capacity_tier += int(extra_capacity_tiers)
-        self._launch = None
+        self._launcher = self._make_launcher()
 
     def ignore_robot_self_collisions(self) -> None:
         """No instability rule for these worlds: evogym's rule counts only robots' self-collisions,

@@ -39,6 +39,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from tsim import backend
 from tsim.errors import SgrError
 from tsim.kernels.broadphase import LIST_PER_VOXEL
 from tsim.kernels.contacts import contacts
@@ -276,7 +277,7 @@ class Launcher:
         n = args[-1]
         if self._scratch is None or self._scratch[2] != (pc, ec, sc, n):
             nf, ni = scratch_lengths(pc, ec, sc)
-            real = ti.f32 if args[1].dtype == np.float32 else ti.f64
+            real = getattr(ti, backend.real().taichi)
             self._scratch = (ti.ndarray(real, n * nf), ti.ndarray(ti.i32, n * ni), (pc, ec, sc, n))
         return self._scratch[:2]
 

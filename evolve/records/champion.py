@@ -18,6 +18,7 @@ from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tasks.specs import TASKS
 from tsim import runtime
+from tsim.backend import DEFAULT_PRECISION
 from tsim.body import build_body, check_robot
 from tsim.errors import SgrError
 
@@ -105,7 +106,7 @@ def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseControlle
 def precision_of(champ: dict) -> str:
     """The real type a champion record was scored in, which its replays simulate in (f64 for a
     record from before the key)."""
-    return champ.get("precision") or "f64"
+    return champ.get("precision") or DEFAULT_PRECISION
 
 
 def episode_steps(task: str, steps: int | str | None) -> int:

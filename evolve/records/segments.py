@@ -16,6 +16,7 @@ from pathlib import Path
 import yaml
 
 from evolve.records.files import atomic_write
+from tsim.backend import DEFAULT_PRECISION
 
 SEGMENTS_FILE = "segments.json"
 
@@ -37,7 +38,8 @@ def segments(run: str | Path) -> list[dict]:
         return []
     if isinstance(raw, dict) and isinstance(raw.get("arch"), str):  # an older sgr's record
         return [{"after_generation": 0, "arch": raw["arch"], "device": None, "software": None,
-                 "precision": raw.get("precision") or "f64", "workers": raw.get("workers"), "started": None}]
+                 "precision": raw.get("precision") or DEFAULT_PRECISION, "workers": raw.get("workers"),
+                 "started": None}]
     return []
 
 

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import yaml
 
+from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
 
 UNKNOWN = "unknown"
@@ -183,7 +184,7 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
             "pop": str(raw.get("pop_size", 128)), "generations": str(raw.get("generations", 250)),
             "steps": "?" if steps is None else str(steps),
             "evaluation": _evaluation(raw.get("robust")), "selection": _selection(raw.get("final_selection")),
-            "precision": str(raw.get("precision") or "f64"), "arch": _arches(run_dir, raw),
+            "precision": str(raw.get("precision") or DEFAULT_PRECISION), "arch": _arches(run_dir, raw),
             "start": f"from g{start.get('generation', '?')}" if isinstance(start, dict) else "fresh"}
 
 

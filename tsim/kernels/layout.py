@@ -2,7 +2,7 @@
 
 All arrays are Taichi ndarrays or numpy arrays, so the kernels compile once per process for any
 batch; `counts`, `state` and `actions` change between launches, the others are static. "real" is
-the process's floating-point type (f64 by default, f32 on request; `tsim.runtime.precision`):
+the process's floating-point type (f64 by default, f32 on request; `tsim.backend.real`):
 - `counts[b, :]`   int: see the COUNT_* column names below.
 - `state[b, p, :]` real: pos(0:2) vel(2:4) pos_last(4:6) vel_true(6:8) of dynamic point p
   (robot points first, then free objects such as Thrower's package); in f32 also the low parts
@@ -24,10 +24,8 @@ the process's floating-point type (f64 by default, f32 on request; `tsim.runtime
 
 from __future__ import annotations
 
-from typing import NamedTuple
-
-from tsim import constants as C
-from tsim import runtime
+from tsim import backend
+from tsim.backends import PRECISIONS, Tolerances
 from tsim.runtime import ti
 
 # counts columns
@@ -79,30 +77,14 @@ def capacity(k: int) -> tuple[int, int, int]:
     return PC << k, EC << k, SC << k
 
 
-class Tolerances(NamedTuple):
-    """Margins that must lie far above the real type's rounding at world coordinates (and that
-    f64 sets to the values evogym's parity was established with). Read at compile time."""
-
-    box_margin: float  # a corner this far outside a voxel's box skips the point-in-voxel test
-    skin_slack: float  # above the rounding of `box + SKIN` at coordinates below ref_max
-    ref_max: float  # no pair list in worlds with a coordinate beyond this
-    sort_slack: float  # widens the sweep's candidate range beyond rounding
-    grid_slack: float  # widens the terrain grid range (in cells) beyond rounding
-
-
-TOLERANCES = {
-    "f64": Tolerances(box_margin=C.BOX_MARGIN, skin_slack=1e-9, ref_max=1e6, sort_slack=1e-6,
-                      grid_slack=1e-6),
-    # f32 rounds at ~6e-8 relative: ~6e-5 at coordinate 1,000, where its lists stop
-    "f32": Tolerances(box_margin=1e-5, skin_slack=1e-3, ref_max=1e3, sort_slack=1e-3,
-                      grid_slack=1e-3),
-}
+# the kernels' margins per real type: tsim/backend.py's `PRECISIONS` rows own them
+TOLERANCES: dict[str, Tolerances] = {name: p.tolerances for name, p in PRECISIONS.items()}
 
 
 def pairs() -> bool:
     """Whether the kernels keep positions and velocities as float32 pairs hi + lo (f32 only;
     f64 compiles without them, so its bits are what they were). Read at compile time."""
-    return runtime.precision() == "f32"
+    return backend.real().pairs
 
 
 def state_columns() -> int:
@@ -112,4 +94,4 @@ def state_columns() -> int:
 
 def tol() -> Tolerances:
     """The tolerances of the process's real type (called inside kernels under `ti.static`)."""
-    return TOLERANCES[runtime.precision()]
+    return backend.real().tolerances
