@@ -4,7 +4,7 @@
    shows the record's value(s), to the digits it prints; every figure cell of a Today table carries
    such a link. A record (docs/records/*.json) is what a benchmark or study wrote, with the machine,
    the commit, the date and the command (`sgr bench --record`, `python bench/... --record`).
-2. Every file path and `sgr` command named in README.md and docs/*.md exists: a backticked
+2. Every file path and `sgr` command named in README.md and docs/**/*.md exists: a backticked
    `bench/x.py`, `configs/...`, `docs/...` is a file of the repository (`../shared/...`: of the
    shared folder beside it), and `sgr <command>` is a command of the CLI's parser.
 """
@@ -19,11 +19,11 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 RECORDS = DOCS / "records"
 SHARED = ROOT.parent / "shared"
-PAGES = [ROOT / "README.md", *sorted(DOCS.glob("*.md"))]
+PAGES = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]  # docs/reference, docs/history too
 TODAY = {"BENCHMARKS.md": "Today's figures, per machine", "VALIDATION.md": "Today", "RESULTS.md": "Today"}
 RECORD_KEYS = {"name", "figures", "machine", "commit", "date", "command"}
 
-LINK = re.compile(r"\[([^\]]*)\]\((?:docs/)?records/([\w.-]+\.json)#([\w.-]+)\)")
+LINK = re.compile(r"\[([^\]]*)\]\((?:docs/|\.\./)?records/([\w.-]+\.json)#([\w.-]+)\)")
 NUMBER = re.compile(r"(?<![\w.])[-−]?\d[\d,]*(?:\.\d+)?(?:e[-+]?\d+)?")
 # a path the docs name: a top-level folder of the repository (or ../shared), then a file or folder
 PATH = re.compile(r"(?<![\w./-])((?:\.\./shared|bench|references|studies|device|results|tools|configs|docs|"
@@ -115,7 +115,7 @@ def test_every_figure_of_today_shows_its_records_value(doc):
     assert not table_cells_without_a_record(today), f"{doc}: figures without a record"
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_figure_a_page_links_to_a_record_shows_its_value(page):
     """README's figures too (and any page's, beyond Today)."""
     wrong = check_links(page.read_text())
@@ -179,7 +179,7 @@ def sgr_commands(text: str) -> set[str]:
     return {m for span in spans(text) for m in COMMAND.findall(span.strip().removeprefix("$ "))}
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_file_path_a_page_names_exists(page):
     missing = sorted(p for p in named_paths(page.read_text())
                      if not p.startswith("../shared/") and not (ROOT / p).exists() and p not in THE_READERS)
@@ -187,14 +187,14 @@ def test_every_file_path_a_page_names_exists(page):
 
 
 @pytest.mark.skipif(not SHARED.is_dir(), reason="no shared folder beside this checkout (../shared)")
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_shared_path_a_page_names_exists(page):
     missing = sorted(p for p in named_paths(page.read_text())
                      if p.startswith("../shared/") and not (ROOT / p).exists())
     assert not missing, f"{page.name} names shared files that do not exist: {missing}"
 
 
-@pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_sgr_command_a_page_names_exists(page):
     from evolve.cli import build_parser
 
