@@ -1,6 +1,6 @@
 """The measurement docs open with the current state (what the doc is, today's figures per machine,
-how to reproduce them) and keep their dated history below it, so a newcomer finds today's figures
-without reading the history."""
+how to reproduce them) and keep their dated history apart (docs/history/, or below Today in
+VALIDATION.md), so a newcomer finds today's figures without reading the history."""
 
 import re
 from pathlib import Path
@@ -11,17 +11,35 @@ DOCS = Path(__file__).resolve().parents[1] / "docs"
 DATED = re.compile(r"20\d\d-\d\d-\d\d|\bissue \d+|\b(Before|Earlier|Now)\b")
 
 
-@pytest.mark.parametrize("doc", ["BENCHMARKS.md", "RESULTS.md", "VALIDATION.md"])
-def test_a_measurement_doc_opens_with_today_and_keeps_its_history_below(doc):
-    text = (DOCS / doc).read_text()
+def _today(text: str) -> tuple[list[str], str]:
+    """A page's `## ` headings and its first section, which must be today's state with figures
+    and how to reproduce them (no dated heading)."""
     headings = re.findall(r"^## (.*)$", text, re.M)
     assert headings[0].startswith("Today"), headings[:3]
     assert not DATED.search(headings[0])
     today = text[text.index("## " + headings[0]):text.index("## " + headings[1])]
     assert "`sgr " in today or re.search(r"python (bench|studies)/", today)  # how to reproduce the figures
     assert re.search(r"\d\.\d", today)  # figures, not only words
-    later = headings[1:]
-    assert any(h.startswith(("History", "How the figures came")) for h in later[:1]), later[:2]
+    return headings, today
+
+
+@pytest.mark.parametrize("doc", ["BENCHMARKS.md", "RESULTS.md"])
+def test_a_measurement_doc_opens_with_today_and_links_to_its_dated_history_page(doc):
+    """Dated history lives in docs/history/<doc>, so the page itself is today's state only."""
+    text = (DOCS / doc).read_text()
+    headings, _ = _today(text)
+    assert not any(DATED.search(h) for h in headings), headings  # no dated entry left on the page
+    assert f"(history/{doc})" in text
+    history = (DOCS / "history" / doc).read_text()
+    dated = re.findall(r"^## (.*)$", history, re.M)
+    assert dated and DATED.search(dated[0]), dated[:2]  # newest first, each entry under its date
+    assert not any(h.startswith("Today") for h in dated)
+    assert f"(../{doc})" in history  # and back to today's figures
+
+
+def test_validation_opens_with_today_and_keeps_how_its_figures_came_to_be_below():
+    headings, _ = _today((DOCS / "VALIDATION.md").read_text())
+    assert headings[1].startswith("How the figures came"), headings[:2]
     first_dated = next((i for i, h in enumerate(headings) if DATED.search(h)), len(headings))
     assert first_dated >= 2  # every dated heading comes after today's section and the history's
 

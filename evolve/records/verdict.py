@@ -2,7 +2,7 @@
 
 Why: the simulator is deterministic and chaotic, so evolution scored by one exact episode can select
 a trajectory that only its exact action sequence produces; 0.1 % of actuator error then destroys it
-(docs/RESULTS.md "Champions that hold"). Every place that shows a champion (the console at a run's
+(docs/history/RESULTS.md "Champions that hold"). Every place that shows a champion (the console at a run's
 end, `sgr report`, `load_champion`) says which kind it is, by one rule, `RULE`:
 
 - the champion is replayed `REPLAYS` times with uniform(+-`EPS`) added to every action (replay i's
