@@ -49,3 +49,35 @@ def test_benchmarks_today_names_each_machine():
     today = text[:text.index("## History")]
     for machine in ("Intel Xeon", "AMD EPYC", "H200"):
         assert machine in today
+
+
+def _anchor(heading: str) -> str:
+    """A heading's anchor as GitHub makes it: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.strip().lower()).replace(" ", "-")
+
+
+def broken_links(page: Path) -> list[str]:
+    """The relative links of `page` whose file, or whose `#anchor` in that file, does not exist."""
+    broken = []
+    for target in re.findall(r"\]\((?!https?:|mailto:)([^)\s]+)\)", page.read_text()):
+        path, _, anchor = target.partition("#")
+        file = (page.parent / path).resolve() if path else page
+        if not file.exists():
+            broken.append(target)
+        elif anchor and file.suffix == ".md":
+            if anchor not in {_anchor(h) for h in re.findall(r"^#+ (.*)$", file.read_text(), re.M)}:
+                broken.append(target)
+    return broken
+
+
+@pytest.mark.parametrize("page", ["README.md", "history/BENCHMARKS.md", "history/RESULTS.md"])
+def test_every_link_of_the_docs_index_and_history_pages_leads_somewhere(page):
+    """The index (docs/README.md) is links only, and the moved history's relative links were rewritten."""
+    assert not broken_links(DOCS / page), broken_links(DOCS / page)
+
+
+def test_a_link_to_a_missing_file_or_heading_is_found_broken(tmp_path):
+    (tmp_path / "a.md").write_text("# A\n\n## Two words\n")
+    page = tmp_path / "index.md"
+    page.write_text("[ok](a.md#two-words) [gone](b.md) [no heading](a.md#three) [self](#a)")
+    assert broken_links(page) == ["b.md", "a.md#three", "#a"]
