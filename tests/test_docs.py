@@ -70,9 +70,11 @@ def broken_links(page: Path) -> list[str]:
     return broken
 
 
-@pytest.mark.parametrize("page", ["README.md", "history/BENCHMARKS.md", "history/RESULTS.md"])
+@pytest.mark.parametrize("page", ["README.md", "history/BENCHMARKS.md", "history/RESULTS.md",
+                                  "reference/tolerances.md"])
 def test_every_link_of_the_docs_index_and_history_pages_leads_somewhere(page):
-    """The index (docs/README.md) is links only, and the moved history's relative links were rewritten."""
+    """The index (docs/README.md) is links only, the moved history's relative links were rewritten, and
+    every figure of the tolerances page leads to the VALIDATION.md section that states it."""
     assert not broken_links(DOCS / page), broken_links(DOCS / page)
 
 
@@ -81,3 +83,19 @@ def test_a_link_to_a_missing_file_or_heading_is_found_broken(tmp_path):
     page = tmp_path / "index.md"
     page.write_text("[ok](a.md#two-words) [gone](b.md) [no heading](a.md#three) [self](#a)")
     assert broken_links(page) == ["b.md", "a.md#three", "#a"]
+
+
+def figures_outside_links(table: str) -> list[str]:
+    """The `bound` cells of a Markdown table that still hold a digit once their links are taken out."""
+    rows = [[cell.strip() for cell in re.split(r"(?<!\\)\|", line.strip().strip("|"))]
+            for line in table.splitlines() if line.startswith("| ") and "---" not in line]
+    column = rows[0].index("bound")
+    bare = [row[column] for row in rows[1:]]
+    return [cell for cell in bare if re.search(r"\d", re.sub(r"\[[^\]]*\]\([^)]*\)", "", cell))]
+
+
+def test_every_figure_of_the_tolerances_page_is_a_link():
+    """A tolerance stated here is a pointer to VALIDATION.md, where it is measured, never a copy."""
+    assert not figures_outside_links((DOCS / "reference" / "tolerances.md").read_text())
+    table = "| what | bound |\n|---|---|\n| x | [1e-6](a.md#b), 5e-5 |"
+    assert figures_outside_links(table) == ["[1e-6](a.md#b), 5e-5"]
