@@ -184,18 +184,17 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
             "pop": str(raw.get("pop_size", 128)), "generations": str(raw.get("generations", 250)),
             "steps": "?" if steps is None else str(steps),
             "evaluation": _evaluation(raw.get("robust")), "selection": _selection(raw.get("final_selection")),
-            "precision": str(raw.get("precision") or DEFAULT_PRECISION), "arch": _arches(run_dir, raw),
+            "precision": str(raw.get("precision") or DEFAULT_PRECISION), "arch": _arches(run_dir),
             "start": f"from g{start.get('generation', '?')}" if isinstance(start, dict) else "fresh"}
 
 
-def _arches(run_dir: Path, raw: dict) -> str:
+def _arches(run_dir: Path) -> str:
     """The arch(s) the run ran on, in the order of its segments (segments.json: "cuda, then cpu" for
-    a run resumed elsewhere); an older run's config.yaml `arch`; "not recorded" otherwise."""
+    a run resumed elsewhere; an older run's config.yaml `arch`, which `segments` reads as its
+    first); "not recorded" otherwise."""
     from evolve.records.segments import segments
 
     arches = list(dict.fromkeys(str(s.get("arch")) for s in segments(run_dir)))
-    if not arches and isinstance(raw.get("arch"), str):
-        arches = [raw["arch"]]
     return ", then ".join(arches) or "not recorded"
 
 

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import yaml
 from matplotlib.axes import Axes
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
@@ -83,18 +82,10 @@ def run_labels(run_dir: str | Path) -> tuple[str, str]:
     "unknown". Variants are their own method: "direct (per_cell)", "sgr robust" (robust
     evaluation), "sgr 10x10" (a body size other than the paper's 5x5), "sgr 10x10 from g50" (a run
     that started from another run's generation 50: `start_from`)."""
+    from evolve.report.groups import read_config
+
     run_dir = Path(run_dir)
-    raw: dict = {}
-    f = run_dir / "config.yaml"
-    if f.is_file():
-        try:
-            loaded = yaml.safe_load(f.read_text())
-        except UnicodeDecodeError:
-            raise SgrError(f"{f}: not a text file") from None
-        except yaml.YAMLError as exc:
-            mark = getattr(exc, "problem_mark", None)
-            raise SgrError(f"{f}: not valid YAML{f' (line {mark.line + 1})' if mark else ''}") from None
-        raw = loaded if isinstance(loaded, dict) else {}
+    raw = read_config(run_dir)
     parent = run_dir.resolve().parent.name or UNKNOWN
     method = str(raw.get("method") or parent)
     if raw.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own group
