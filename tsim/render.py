@@ -371,6 +371,14 @@ def _as_indexed(frame: np.ndarray) -> np.ndarray | None:
     return None if np.any(idx == 255) else idx
 
 
+def _check_frames(frames: Sequence[np.ndarray], fps: float) -> None:
+    """ValueError for what no animation can be written from: no frames, or a rate <= 0."""
+    if len(frames) == 0:
+        raise ValueError("no frames to write")
+    if fps <= 0:
+        raise ValueError(f"fps must be positive, got {fps}")
+
+
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
     """Write frames as a looping GIF; returns the path.
 
@@ -380,10 +388,7 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     directly, which skips imageio's per-frame colour quantization (about 10x faster); other RGB frames
     go through imageio's GIF writer.
     """
-    if len(frames) == 0:
-        raise ValueError("no frames to write")
-    if fps <= 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+    _check_frames(frames, fps)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     indexed = [f if f.ndim == 2 else _as_indexed(f) for f in (np.asarray(f) for f in frames)]
@@ -436,10 +441,7 @@ def write_mp4(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     if not video_available():
         from tsim.errors import SgrError
         raise SgrError(f"writing {Path(path).name} needs imageio's ffmpeg plugin: {VIDEO_EXTRA}")
-    if len(frames) == 0:
-        raise ValueError("no frames to write")
-    if fps <= 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+    _check_frames(frames, fps)
     import tempfile
 
     import imageio_ffmpeg
