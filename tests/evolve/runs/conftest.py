@@ -1,8 +1,10 @@
-"""What the run tests share: a tiny run of a method (2 generations of 8 genomes, 20-step episodes)."""
+"""What the run tests share: a tiny run of a method (2 generations of 8 genomes, 20-step episodes),
+and the figures a test's plotting saves."""
 
 from pathlib import Path
 
 import pytest
+from matplotlib.figure import Figure
 
 from evolve.runs.experiment import Experiment
 
@@ -21,3 +23,16 @@ def tiny_run(method: str, folder: Path) -> Path:
 def sgr_run(tmp_path_factory) -> Path:
     """A finished tiny SGR run, once per test file."""
     return tiny_run("sgr", tmp_path_factory.mktemp("tiny") / "sgr")
+
+
+@pytest.fixture
+def saved(monkeypatch) -> list[Figure]:
+    """The figures saved as PNGs during the test, in order."""
+    figs: list[Figure] = []
+    real = Figure.savefig
+
+    def spy(self, *a, **k):
+        figs.append(self)
+        return real(self, *a, **k)
+    monkeypatch.setattr(Figure, "savefig", spy)
+    return figs

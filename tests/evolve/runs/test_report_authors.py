@@ -2,9 +2,7 @@
 stand beside ours only where the runs used the paper's episode length (else they are marked not
 comparable) and only at generations the runs reached."""
 
-import pytest
 import yaml
-from matplotlib.figure import Figure
 
 from evolve.report.report import plot_curves, report_markdown, summarize
 
@@ -17,19 +15,6 @@ def _run(path, best, steps):
     rows += [f"{g},{b},{b},{b},1,1.0" for g, b in enumerate(best, start=1)]
     (path / "generations.csv").write_text("\n".join(rows) + "\n")
     return path
-
-
-@pytest.fixture
-def saved(monkeypatch):
-    """The figures plot_curves saves."""
-    figs = []
-    real = Figure.savefig
-
-    def spy(self, *a, **k):
-        figs.append(self)
-        return real(self, *a, **k)
-    monkeypatch.setattr(Figure, "savefig", spy)
-    return figs
 
 
 def test_short_episodes_mark_the_authors_figures_not_comparable(tmp_path, saved):

@@ -184,19 +184,6 @@ def test_sgr_plot_runs_star_works_after_plot_report_and_decode_wrote_there(tmp_p
     assert "runs/sgr-a-6x6: a champion.json alone" in (runs / "report.md").read_text()
 
 
-@pytest.fixture
-def saved(monkeypatch) -> list[Figure]:
-    """The figures saved as PNGs."""
-    figs: list[Figure] = []
-    real = Figure.savefig
-
-    def spy(self, *a, **k):
-        figs.append(self)
-        return real(self, *a, **k)
-    monkeypatch.setattr(Figure, "savefig", spy)
-    return figs
-
-
 def _fitness_axes(fig: Figure) -> dict[str, object]:
     return {ax.get_title(): ax for ax in fig.axes if ax.get_ylabel() == "best fitness"}
 
