@@ -344,12 +344,10 @@ class BatchEnv:
             # the last measurement (after the last step, a reset or `observe`) while the state
             # is the one it measured (`BatchSim.state_version`), else a new one
             last = self._last
-            if last is not None and last[0] == self.sim.state_version and last[4] is not None:
-                before = last[4]  # the last step's `after`, its lazily computed parts included
-            else:
-                if last is None or last[0] != self.sim.state_version:
-                    last = (0, *self._fused_coms(), None)
-                before = self._measure(last[1], last[3])
+            if last is None or last[0] != self.sim.state_version:
+                last = (None, *self._fused_coms(), None)
+            # the last step's `after`, its lazily computed parts included, or a measure of these COMs
+            before = last[4] if last[4] is not None else self._measure(last[1], last[3])
         else:
             before = self._measure(self._robot_coms()[0])
         active = ~self.terminated

@@ -119,7 +119,6 @@ class BatchSim:
         if len(bodies) == 0:
             raise ValueError("BatchSim needs at least one body")
         self.backend = backend_mod.get(arch, precision)
-        self._arch = self.backend.arch
         self.dtype = self.backend.dtype
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
