@@ -4,9 +4,10 @@
    shows the record's value(s), to the digits it prints; every figure cell of a Today table carries
    such a link. A record (docs/records/*.json) is what a benchmark or study wrote, with the machine,
    the commit, the date and the command (`sgr bench --record`, `python bench/... --record`).
-2. Every file path and `sgr` command named in README.md and docs/**/*.md exists: a backticked
-   `bench/x.py`, `configs/...`, `docs/...` is a file of the repository (`../shared/...`: of the
-   shared folder beside it), and `sgr <command>` is a command of the CLI's parser.
+2. Every file path and `sgr` command named in README.md, docs/**/*.md and results/*/README.md
+   exists: a backticked `bench/x.py`, `configs/...`, `docs/...` is a file of the repository
+   (`../shared/...`: of the shared folder beside it), and `sgr <command>` is a command of the CLI's
+   parser.
 """
 
 import json
@@ -19,7 +20,8 @@ ROOT = Path(__file__).resolve().parents[1]
 DOCS = ROOT / "docs"
 RECORDS = DOCS / "records"
 SHARED = ROOT.parent / "shared"
-PAGES = [ROOT / "README.md", *sorted(DOCS.rglob("*.md"))]  # docs/reference, docs/history too
+# docs/reference and docs/history too, and the README of every results folder (how its runs were made)
+PAGES = [ROOT / "README.md", *sorted(DOCS.rglob("*.md")), *sorted((ROOT / "results").glob("*/README.md"))]
 TODAY = {"BENCHMARKS.md": "Today's figures, per machine", "VALIDATION.md": "Today", "RESULTS.md": "Today"}
 RECORD_KEYS = {"name", "figures", "machine", "commit", "date", "command"}
 
@@ -169,7 +171,10 @@ def spans(text: str) -> list[str]:
 def named_paths(text: str) -> set[str]:
     found = set()
     for span in spans(text):
-        for path in PATH.findall(span):
+        for m in PATH.finditer(span):
+            path = m.group(1)
+            if re.match(r"-?[<{]", span[m.end():]):  # a pattern such as runs/sgr-<task>, not a path
+                continue
             if not re.search(r"[*<>{}]|\.\.\.|[A-Z]{3,}_?[A-Z]*/|/[A-Z_]{3,}(?:/|$)", path):
                 found.add(path.split("::")[0].rstrip("."))
     return found
@@ -206,6 +211,7 @@ def test_every_sgr_command_a_page_names_exists(page):
 def test_the_path_and_command_checks_can_fail():
     text = "Run `python bench/no_such_bench.py` then `sgr frobnicate RUN` (see `docs/BENCHMARKS.md`)."
     assert named_paths(text) == {"bench/no_such_bench.py", "docs/BENCHMARKS.md"}
+    assert named_paths("`results/big/runs/sgr-<task>-s<seed>` and `results/big/runs/{name}`") == set()
     assert sgr_commands(text) == {"frobnicate"}
 
 
