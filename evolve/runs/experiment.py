@@ -241,6 +241,9 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
+            import numpy as np
+
+            from evolve.methods.body_measures import describe, measures
             from evolve.records.replay import judge
 
             best = self.run.champion()
@@ -256,6 +259,8 @@ class Experiment:
                       f"{verdict.replays} (the median, return {verdict.median:.3f}); the exact "
                       f"episode: sgr render {self.run.path} --exact")
             print(f"champion {verdict.line()}", flush=True)
+            if best.get("body") is not None:
+                print(f"champion body: {describe(measures(np.asarray(best['body'])))}", flush=True)
 
 
 def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
