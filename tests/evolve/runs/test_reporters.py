@@ -246,3 +246,18 @@ def test_the_console_line_names_the_decoding_time_and_the_body_diversity(capsys)
     first, second = capsys.readouterr().out.splitlines()
     assert "(decode 0.12 sim 3.50 neat 0.25)  diversity 0.312 " in first
     assert "(decode 0.12 sim 3.50 neat 0.25)  " in second and "diversity" not in second
+
+
+def test_tensorboard_has_the_body_diversity_where_the_method_has_bodies():
+    """population/body_diversity is the row's value; a row without bodies (NaN) gives no such tag."""
+    from types import SimpleNamespace
+
+    from evolve.runs.reporters import tensorboard_scalars
+
+    exp = SimpleNamespace(search=SimpleNamespace(best=None))
+    row = {"best": 1.0, "mean": 0.5, "median": 0.5, "n_species": 3, "n_valid": 6, "n_invalid": 2,
+           "episodes": 6, "build_s": 0.1, "sim_s": 1.0, "neat_s": 0.2, "total_s": 1.3,
+           "body_diversity": 0.375}
+    assert tensorboard_scalars(exp, row)["population/body_diversity"] == 0.375
+    without = tensorboard_scalars(exp, {**row, "body_diversity": float("nan")})
+    assert "population/body_diversity" not in without
