@@ -253,14 +253,14 @@ class Experiment:
                    "episodes, " if held else "")
             print(f"champion: fitness {best['fitness']:.3f} ({how}generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+            if best.get("body") is not None:  # the verdict's line stays the last
+                print(f"champion body: {describe(measures(np.asarray(best['body'])))}")
             verdict = judge(self.run.path)
             if (self.run.path / "champion.gif").exists():
                 print(f"champion.gif: its typical episode, replay {verdict.median_replay} of "
                       f"{verdict.replays} (the median, return {verdict.median:.3f}); the exact "
                       f"episode: sgr render {self.run.path} --exact")
             print(f"champion {verdict.line()}", flush=True)
-            if best.get("body") is not None:
-                print(f"champion body: {describe(measures(np.asarray(best['body'])))}", flush=True)
 
 
 def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:

@@ -82,15 +82,16 @@ def test_the_gallery_caption_under_a_champions_picture_gives_its_body(tmp_path):
             "final diversity 0.125</figcaption>") in page
 
 
-def test_a_runs_end_names_its_champions_body_after_the_verdict(tmp_path, capsys):
+def test_a_runs_end_names_its_champions_body_before_the_verdict(tmp_path, capsys):
+    """Under the line naming champion.json; the verdict's line stays the last."""
     with Experiment.from_config({"method": "sgr", **TINY, "generations": 1}, tmp_path / "run") as exp:
         exp.run_all()
         exp.finish()
     lines = capsys.readouterr().out.splitlines()
     body = np.array(json.loads((tmp_path / "run" / "champion.json").read_text())["body"])
     m = measures(body)
-    verdict = next(i for i, x in enumerate(lines) if x.startswith("champion holds") or
-                   x.startswith("champion knife-edge"))
-    assert lines[verdict + 1] == (f"champion body: {m['height']}x{m['width']}, symmetry lr "
+    named = next(i for i, x in enumerate(lines) if x.startswith("champion: fitness"))
+    assert lines[-1].startswith(("champion holds", "champion knife-edge"))
+    assert lines[named + 1] == (f"champion body: {m['height']}x{m['width']}, symmetry lr "
                                   f"{m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, irregularity "
                                   f"{m['irregularity']}, actuators {100 * m['actuator']:.0f} %")
