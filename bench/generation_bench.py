@@ -64,7 +64,7 @@ def main() -> None:
         print(f"{cfg.method} {cfg.task} {'x'.join(map(str, cfg.robot_shape))} "
               f"pop {cfg.pop_size} x {steps} steps, "
               f"{exp.pool.workers} workers: median "
-              f"{med['total_s']:.2f} s/generation (build {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
+              f"{med['total_s']:.2f} s/generation (decode {med['build_s']:.2f}, sim {med['sim_s']:.2f}, "
               f"neat {med['neat_s']:.2f}); first generation {rows[0]['total_s']:.1f} s; "
               f"{out['robot_steps_per_s']:.0f} robot-steps/s")
 

@@ -97,3 +97,10 @@ def population_diversity(bodies: Sequence[np.ndarray]) -> float:
     1: every cell empty in one body and filled in the other); NaN for fewer than two bodies or
     bodies of different shapes."""
     return mean_pairwise_body_distance(bodies)
+
+
+def describe(m: dict[str, float]) -> str:
+    """A body's `measures` in a few words, e.g. "5x5, symmetry lr 1.00 tb 0.40, irregularity 9,
+    actuators 48 %"; the size is its bounding box's rows x columns, as `--shape` writes a shape."""
+    return (f"{m['height']}x{m['width']}, symmetry lr {m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, "
+            f"irregularity {m['irregularity']}, actuators {100 * m['actuator']:.0f} %")

@@ -150,10 +150,21 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
                 f"<img alt='{name} body' src='{_data_uri(e['body'], 'image/png')}'>"
                 f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
                 f"{r['seed']} · fitness {r['champion_fitness']:.3f}{_verdict_caption(r)}"
-                "</figcaption></figure>")
+                f"{_body_caption(r)}</figcaption></figure>")
         parts.append("</div>")
     parts += ["<p id='images'>images not checked (scripts off)</p>", CHECK, "</body></html>"]
     return "\n".join(parts)
+
+
+def _body_caption(row: dict) -> str:
+    """"<br>body 5x5, symmetry lr 1.00 tb 0.40, irregularity 9, actuators 48 %" and the final
+    population's body diversity, where the report measured them (evolve/methods/body_measures.py)."""
+    from evolve.methods.body_measures import describe
+
+    parts = [f"body {describe(row)}"] if "width" in row else []
+    if "body_diversity" in row:
+        parts.append(f"final diversity {row['body_diversity']:.3f}")
+    return "<br>" + html.escape(" · ".join(parts)) if parts else ""
 
 
 def _verdict_caption(row: dict) -> str:

@@ -164,6 +164,10 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         fitness = _recorded_fitness(d)
         if fitness is not None:
             row["champion_fitness"] = fitness
+        row.update(champion_body_measures(d))
+        diversity = cols.get("body_diversity", np.zeros(0))  # older runs: no column
+        if len(diversity) and math.isfinite(diversity[-1]):
+            row["body_diversity"] = float(diversity[-1])
         for g in CHECKPOINTS:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
@@ -173,6 +177,19 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
                 row["verdict"] = _verdict(row).label
         rows.append(row)
     return rows
+
+
+def champion_body_measures(run_dir: Path) -> dict[str, float]:
+    """The measures of champion.json's body (evolve/methods/body_measures.py) that summary.csv
+    keeps (BODY_COLUMNS); {} without a champion or a body to measure."""
+    from evolve.methods.body_measures import measures
+
+    try:
+        body = np.asarray(json.loads((run_dir / "champion.json").read_text())["body"], dtype=np.int64)
+        m = measures(body) if body.ndim == 2 else {}
+    except (OSError, ValueError, KeyError, TypeError):
+        return {}
+    return {k: m[k] for k in BODY_COLUMNS if k in m}
 
 
 def _recorded_fitness(run_dir: Path) -> float | None:
@@ -298,6 +315,31 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
                 cells.append(f"**{_verdict(r).label}**")
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
+    out.write(bodies_markdown(rows))
+    return out.getvalue()
+
+
+def bodies_markdown(rows: list[dict]) -> str:
+    """report.md's "Champion bodies": each run's champion body measured (`champion_body_measures`)
+    and its final population's body diversity; "" when no run has either."""
+    shown = [r for r in rows if "width" in r or "body_diversity" in r]
+    if not shown:
+        return ""
+    out = io.StringIO()
+    out.write("\n## Champion bodies\n\nEach run's champion body (docs/EVOLVE.md \"Body measures\"): the "
+              "rows x columns of its bounding box, its share of actuator voxels, its left-right and "
+              "top-bottom symmetry (1: its own mirror image), its irregularity (the compressed size of its "
+              "material grid, 0 for one material throughout); and the body diversity of the run's last "
+              "generation (the mean pairwise distance per cell of its valid bodies; - for runs made before "
+              "it was recorded).\n\n")
+    out.write("| run | body | actuators | symmetry lr | symmetry tb | irregularity | final diversity |\n"
+              + "|---" * 7 + "|\n")
+    for r in sorted(shown, key=lambda r: r["run"]):
+        cells = (["-"] * 5 if "width" not in r else
+                 [f"{r['height']}x{r['width']}", f"{100 * r['actuator']:.0f} %", f"{r['symmetry_lr']:.2f}",
+                  f"{r['symmetry_tb']:.2f}", str(r["irregularity"])])
+        diversity = f"{r['body_diversity']:.3f}" if "body_diversity" in r else "-"
+        out.write(f"| {r['run']} | " + " | ".join(cells) + f" | {diversity} |\n")
     return out.getvalue()
 
 
@@ -427,12 +469,18 @@ def _rule(rows: list[dict]) -> str:
 SETTING_COLUMNS = ("shape", "pop", "steps", "evaluation", "selection", "precision", "arch", "start")
 
 
+# summary.csv's columns of a run's champion body (evolve/methods/body_measures.py: its bounding box's
+# width and height, actuator share, symmetries, irregularity) and of its last generation's population
+# (body_diversity, generations.csv's last row): empty where a run has no body or no such column
+BODY_COLUMNS = ("width", "height", "actuator", "symmetry_lr", "symmetry_tb", "irregularity", "body_diversity")
+
+
 def write_summary_csv(rows: list[dict], path: Path) -> None:
     """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
-    then the settings of each run's group (SETTING_COLUMNS, where the rows have them): missing
-    values empty, other keys dropped."""
+    then the settings of each run's group (SETTING_COLUMNS, where the rows have them), then
+    BODY_COLUMNS: missing values empty, other keys dropped."""
     setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
-    columns = summary_columns(_levels(rows)) + list(setting)
+    columns = summary_columns(_levels(rows)) + list(setting) + list(BODY_COLUMNS)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()

@@ -241,6 +241,9 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
+            import numpy as np
+
+            from evolve.methods.body_measures import describe, measures
             from evolve.records.replay import judge
 
             best = self.run.champion()
@@ -250,6 +253,8 @@ class Experiment:
                    "episodes, " if held else "")
             print(f"champion: fitness {best['fitness']:.3f} ({how}generation {best['generation']}) -> "
                   f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
+            if best.get("body") is not None:  # the verdict's line stays the last
+                print(f"champion body: {describe(measures(np.asarray(best['body'])))}")
             verdict = judge(self.run.path)
             if (self.run.path / "champion.gif").exists():
                 print(f"champion.gif: its typical episode, replay {verdict.median_replay} of "

@@ -128,7 +128,9 @@ class Checkpointer:
 
 class ConsoleProgress:
     """The console's line per generation (nothing for a quiet run): fitness, species, valid bodies,
-    seconds per generation by phase, and the seconds since the loop started."""
+    seconds per generation by phase (decode: the genomes decoded into bodies and controllers,
+    generations.csv's build_s; sim; neat: selection, breeding and speciation), the population's body
+    diversity, and the seconds since the loop started."""
 
     def start(self, exp: Any) -> None:
         """The clock of the line's last column."""
@@ -143,8 +145,14 @@ class ConsoleProgress:
         print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
               f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
               f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
-              f"{row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} sim {row['sim_s']:.2f} "
-              f"neat {row['neat_s']:.2f})  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+              f"{row['total_s']:5.1f} s/gen (decode {row['build_s']:.2f} sim {row['sim_s']:.2f} "
+              f"neat {row['neat_s']:.2f}){_diversity(row)}  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+
+
+def _diversity(row: dict) -> str:
+    """The console's "  diversity 0.123" (nothing for a method without bodies: NaN)."""
+    d = float(row.get("body_diversity", math.nan))
+    return "" if math.isnan(d) else f"  diversity {d:.3f}"
 
 
 class PopulationWarning:
@@ -175,7 +183,8 @@ def builtin_reporters() -> list[Any]:
 def tensorboard_scalars(exp: Any, row: dict) -> dict[str, float]:
     """The scalars of a generation, by TensorBoard tag: fitness (best, mean, median, and the
     best-ever genome's, as the console's "ever"), population (species, genomes, the fraction of
-    valid bodies, episodes) and seconds (build, sim, neat, total)."""
+    valid bodies, episodes, body diversity where the method has bodies) and seconds (build: the
+    genomes' decoding, sim, neat, total)."""
     n = int(row["n_valid"]) + int(row["n_invalid"])
     best = exp.search.best
     out = {"fitness/best": row["best"], "fitness/mean": row["mean"], "fitness/median": row["median"],
@@ -183,6 +192,8 @@ def tensorboard_scalars(exp: Any, row: dict) -> dict[str, float]:
            "population/species": row["n_species"], "population/genomes": n,
            "population/valid_fraction": int(row["n_valid"]) / n if n else float("nan"),
            "population/episodes": row["episodes"]}
+    if not math.isnan(float(row.get("body_diversity", math.nan))):
+        out["population/body_diversity"] = row["body_diversity"]
     out.update({f"seconds/{k[:-2]}": row[k] for k in ("build_s", "sim_s", "neat_s", "total_s")})
     return {k: float(v) for k, v in out.items()}
 

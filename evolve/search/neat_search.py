@@ -230,6 +230,8 @@ class NeatSearch:
                 s.fitness_history[:] = [max(s.fitness_history)]
 
     def _decode_all(self) -> float:
+        """Decode the genomes not decoded yet; returns the seconds it took, which make a generation's
+        decoding time (generations.csv's build_s, the console's "decode")."""
         t = time.perf_counter()
         self.phenotypes = {k: self.phenotypes.get(k) or self.decode(g) for k, g in self.population.items()}
         # speciation compares with last generation's representatives: keep their bodies too

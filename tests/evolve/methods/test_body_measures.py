@@ -7,6 +7,7 @@ from evolve.methods.body_measures import (
     NAMES,
     boundaries,
     bounding_box,
+    describe,
     irregularity,
     measures,
     population_diversity,
@@ -77,3 +78,13 @@ def test_population_diversity_by_hand():
     assert population_diversity([a, b]) == pytest.approx(0.75)
     assert population_diversity([a, a, a]) == 0.0
     assert np.isnan(population_diversity([a]))
+
+
+def test_describe_gives_rows_x_columns_symmetries_and_the_actuator_share():
+    """ARCH: 3x3, left-right 1, top-bottom 2 of 8, 4 of its 7 voxels actuators (57 %); an L of 3
+    rows and 2 columns, soft only: "3x2" (rows first, as --shape writes a shape), no actuators."""
+    m = measures(ARCH)
+    assert describe(m) == (f"3x3, symmetry lr 1.00 tb 0.25, irregularity {m['irregularity']}, "
+                           "actuators 57 %")
+    ell = measures(np.array([[2, 0], [2, 0], [2, 2]]))
+    assert describe(ell).startswith("3x2, symmetry lr 0.33 ") and describe(ell).endswith("actuators 0 %")

@@ -67,3 +67,38 @@ def test_an_older_run_resumed_gains_the_column_and_keeps_every_other_value(tmp_p
                        "episodes"):
             assert old[column] == new[column], column
     assert not math.isnan(float(whole[0]["body_diversity"]))
+
+
+class BodiesBeforeEachGeneration:
+    """A reporter: the valid bodies of the population about to be evaluated, at the loop's start
+    and after each generation (the search has bred and decoded the next one by then)."""
+
+    def __init__(self):
+        self.bodies: list[list[np.ndarray]] = []
+
+    def start(self, exp):
+        self._see(exp)
+
+    def generation(self, exp, row):
+        self._see(exp)
+
+    def _see(self, exp):
+        s = exp.search
+        self.bodies.append([s.phenotypes[k].body for k in s.population if s.phenotypes[k].valid])
+
+
+def test_each_rows_body_diversity_is_that_of_the_valid_bodies_the_generation_evaluated(tmp_path):
+    """Recomputed pair by pair with eq. 2 from the bodies each generation held: the mean distance
+    per cell over every pair of its valid bodies."""
+    seen = BodiesBeforeEachGeneration()
+    cfg = {"method": "sgr", **TINY, "generations": 3}
+    with Experiment.from_config(cfg, tmp_path / "run", quiet=True) as exp:
+        exp.add_reporter(seen)
+        exp.run_all()
+    rows = list(csv.DictReader((tmp_path / "run" / "generations.csv").open()))
+    assert len(rows) == 3
+    for row, bodies in zip(rows, seen.bodies, strict=False):
+        cells = bodies[0].size
+        pairs = [body_distance(a, b) / cells for a, b in itertools.combinations(bodies, 2)]
+        assert len(bodies) == int(row["n_valid"]) and len(pairs) > 0
+        assert float(row["body_diversity"]) == pytest.approx(float(np.mean(pairs)), rel=1e-12)

@@ -227,3 +227,37 @@ def test_a_checkpointer_of_another_schedule_writes_every_generation(tmp_path):
             exp.run_all()
     assert newest["default"].names == ["gen-00000.json.gz", "gen-00000.json.gz", "gen-00003.json.gz"]
     assert newest["every"].names == ["gen-00001.json.gz", "gen-00002.json.gz", "gen-00003.json.gz"]
+
+
+def test_the_console_line_names_the_decoding_time_and_the_body_diversity(capsys):
+    """build_s is the generation's decoding: the line says "decode"; the body diversity follows,
+    left out for a method without bodies (NaN)."""
+    from types import SimpleNamespace
+
+    from evolve.runs.reporters import ConsoleProgress
+
+    exp = SimpleNamespace(quiet=False, search=SimpleNamespace(best=None), cfg=SimpleNamespace(generations=3))
+    line = ConsoleProgress()
+    line.start(exp)
+    row = {"generation": 2, "best": 1.0, "mean": 0.5, "n_species": 3, "n_valid": 7, "n_invalid": 1,
+           "total_s": 4.0, "build_s": 0.125, "sim_s": 3.5, "neat_s": 0.25, "body_diversity": 0.3125}
+    line.generation(exp, row)
+    line.generation(exp, {**row, "body_diversity": float("nan")})
+    first, second = capsys.readouterr().out.splitlines()
+    assert "(decode 0.12 sim 3.50 neat 0.25)  diversity 0.312 " in first
+    assert "(decode 0.12 sim 3.50 neat 0.25)  " in second and "diversity" not in second
+
+
+def test_tensorboard_has_the_body_diversity_where_the_method_has_bodies():
+    """population/body_diversity is the row's value; a row without bodies (NaN) gives no such tag."""
+    from types import SimpleNamespace
+
+    from evolve.runs.reporters import tensorboard_scalars
+
+    exp = SimpleNamespace(search=SimpleNamespace(best=None))
+    row = {"best": 1.0, "mean": 0.5, "median": 0.5, "n_species": 3, "n_valid": 6, "n_invalid": 2,
+           "episodes": 6, "build_s": 0.1, "sim_s": 1.0, "neat_s": 0.2, "total_s": 1.3,
+           "body_diversity": 0.375}
+    assert tensorboard_scalars(exp, row)["population/body_diversity"] == 0.375
+    without = tensorboard_scalars(exp, {**row, "body_diversity": float("nan")})
+    assert "population/body_diversity" not in without

@@ -1,0 +1,97 @@
+"""Body measures where people look (issue 47): `sgr report`'s summary.csv, report.md and the
+gallery's captions carry each run's champion body measures and its last generation's body
+diversity; a run made before body_diversity was recorded still reports, the column empty; the
+console names the champion's body at a run's end."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from evolve.methods.body_measures import measures
+from evolve.report.gallery import report_html
+from evolve.report.report import BODY_COLUMNS, champion_body_measures, write_report
+from evolve.runs.experiment import Experiment
+from tests.evolve.runs.conftest import TINY
+
+ROOT = Path(__file__).resolve().parents[3]
+# a run of an older sgr (generations.csv without body_diversity, rows counted from 0), committed
+OLD_RUN = ROOT / "results" / "run-records" / "sgr-Walker-v0-s0"
+
+
+def summary(out: Path) -> dict[str, dict]:
+    return {r["run"]: r for r in csv.DictReader((out.parent / "summary.csv").open())}
+
+
+def test_summary_csv_holds_the_champion_bodys_measures_and_the_last_generations_diversity(tmp_path, sgr_run):
+    out = write_report(sgr_run, tmp_path / "out" / "report.md", robustness=False, gallery=False)
+    row = summary(out)[sgr_run.name]
+    body = np.array(json.loads((sgr_run / "champion.json").read_text())["body"])
+    want = measures(body)
+    for column in BODY_COLUMNS[:-1]:
+        assert float(row[column]) == pytest.approx(want[column], rel=1e-12), column
+    last = list(csv.DictReader((sgr_run / "generations.csv").open()))[-1]
+    assert row["body_diversity"] == last["body_diversity"] != ""
+    # report.md's "Champion bodies" line of the run: rows x columns, then the final diversity
+    start = f"| {sgr_run.name} | {want['height']}x{want['width']} |"
+    line = next(x for x in out.read_text().splitlines() if x.startswith(start))
+    assert line.endswith(f" | {float(last['body_diversity']):.3f} |")
+
+
+def test_an_older_run_without_body_diversity_reports_its_champions_body_and_no_diversity(tmp_path):
+    """The committed run's champion is a staircase of vertical actuators (4, 3, 2, 1 from the top)
+    in a 5x5 grid: a 4x4 box, all actuators; left-right, row by row, the cells filled in the row or
+    its mirror and agreeing are 4 of 4, 2 of 4, 0 of 4, 0 of 2: 6 of 14; the staircase is its own
+    transpose, so top-bottom is the same 6 of 14."""
+    runs = tmp_path / "runs"
+    shutil.copytree(OLD_RUN, runs / OLD_RUN.name)
+    assert "body_diversity" not in (runs / OLD_RUN.name / "generations.csv").read_text().splitlines()[0]
+    out = write_report(runs, tmp_path / "out" / "report.md", robustness=False, gallery=False)
+    row = summary(out)[OLD_RUN.name]
+    assert (row["width"], row["height"], float(row["actuator"])) == ("4", "4", 1.0)
+    assert float(row["symmetry_lr"]) == float(row["symmetry_tb"]) == pytest.approx(6 / 14, rel=1e-12)
+    assert int(row["irregularity"]) > 0 and row["body_diversity"] == ""
+    assert f"| {OLD_RUN.name} | 4x4 | 100 % | 0.43 | 0.43 | {row['irregularity']} | - |" in out.read_text()
+
+
+def test_a_run_without_a_champion_body_leaves_the_columns_empty(tmp_path):
+    """champion.json without a body (or none at all): no measures, no failure."""
+    (tmp_path / "champion.json").write_text(json.dumps({"fitness": 1.0}))
+    assert champion_body_measures(tmp_path) == {}
+    assert champion_body_measures(tmp_path / "missing") == {}
+
+
+def test_the_gallery_caption_under_a_champions_picture_gives_its_body(tmp_path):
+    """report.html's figure of a champion: its body's size, symmetries, irregularity, actuator share
+    and the final population's diversity under the fitness."""
+    gif, png = tmp_path / "a.gif", tmp_path / "a-body.png"
+    gif.write_bytes(b"GIF89a")
+    png.write_bytes(b"\x89PNG")
+    curves = tmp_path / "curves.png"
+    curves.write_bytes(b"\x89PNG")
+    row = {"method": "sgr", "task": "Walker-v0", "seed": 0, "champion_fitness": 1.5, "run": "r",
+           "width": 3, "height": 4, "actuator": 0.5, "symmetry_lr": 1.0, "symmetry_tb": 0.25,
+           "irregularity": 7, "body_diversity": 0.125}
+    page = report_html("# Results\n", curves, [{"row": row, "run": tmp_path, "gif": gif, "body": png}])
+    assert ("fitness 1.500<br>body 4x3, symmetry lr 1.00 tb 0.25, irregularity 7, actuators 50 % · "
+            "final diversity 0.125</figcaption>") in page
+
+
+def test_a_runs_end_names_its_champions_body_before_the_verdict(tmp_path, capsys):
+    """Under the line naming champion.json; the verdict's line stays the last."""
+    with Experiment.from_config({"method": "sgr", **TINY, "generations": 1}, tmp_path / "run") as exp:
+        exp.run_all()
+        exp.finish()
+    lines = capsys.readouterr().out.splitlines()
+    body = np.array(json.loads((tmp_path / "run" / "champion.json").read_text())["body"])
+    m = measures(body)
+    named = next(i for i, x in enumerate(lines) if x.startswith("champion: fitness"))
+    assert lines[-1].startswith(("champion holds", "champion knife-edge"))
+    assert lines[named + 1] == (f"champion body: {m['height']}x{m['width']}, symmetry lr "
+                                  f"{m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, irregularity "
+                                  f"{m['irregularity']}, actuators {100 * m['actuator']:.0f} %")
