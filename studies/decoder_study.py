@@ -18,7 +18,9 @@ first set.
     python studies/decoder_study.py                               # all of it: many hours on 2 cores
     python studies/decoder_study.py --sets big --tasks Climber-v2 # one task of one set
     python studies/decoder_study.py --list                        # the runs, in order, and which are done
-    sgr report results/decoders                                   # then the report
+    python studies/decoder_study.py --table                       # docs/RESULTS.md's tables, from the records
+    python studies/decoder_study.py --pictures                    # results/decoders/bodies.png
+    sgr report results/decoders --replays 20                      # then the report
 """
 
 from __future__ import annotations
@@ -84,6 +86,89 @@ def keep(run: Path, records: Path) -> None:
             shutil.copy2(run / name, dest / name)
 
 
+def _records(records: Path, decoder: str, task: str, shape: tuple[int, int], seeds: list[int]) -> list[Path]:
+    return [records / f"{decoder}-{task}-{shape[0]}x{shape[1]}-s{seed}" for seed in seeds]
+
+
+def table(records: Path, sets: list[str], seeds: list[int], decoders: list[str]) -> str:
+    """docs/RESULTS.md's tables of the study, from the committed records alone: per set, a row per
+    task and a column per decoder, each cell the champions' mean return under uniform(+-1e-3) noise
+    (20 replays, the verdict's) over seeds, how many hold and the seconds per generation
+    (`studies.big_study.arm_cell`); then a row per decoder of its champions' body measures, the
+    mean over every champion of the set."""
+    from studies.big_study import arm_cell
+
+    out = []
+    for s in sets:
+        out += [f"**{s}**", "", "| task | " + " | ".join(decoders) + " |", "|---" * (len(decoders) + 1) + "|"]
+        for task, shape in SETS[s].items():
+            cells = [arm_cell(_records(records, d, task, shape, seeds)) for d in decoders]
+            out.append(f"| {task} ({shape[0]}x{shape[1]}) | " + " | ".join(cells) + " |")
+        out += ["", body_table(records, s, seeds, decoders), ""]
+    return "\n".join(out)
+
+
+MEASURED = ("symmetry_lr", "symmetry_tb", "irregularity", "boundaries", "actuator", "fill")
+
+
+def body_table(records: Path, s: str, seeds: list[int], decoders: list[str]) -> str:
+    """A row per decoder: the mean of each body measure (`MEASURED`) over its champions of set `s`,
+    and the mean final body diversity of their runs (generations.csv's last `body_diversity`)."""
+    import json
+    import math
+    import statistics
+
+    from evolve.methods.body_measures import measures
+    from evolve.report.plots import read_generations
+
+    lines = ["| decoder | champions | " + " | ".join(MEASURED) + " | final diversity |",
+             "|---" * (len(MEASURED) + 3) + "|"]
+    for d in decoders:
+        folders = [f for task, shape in SETS[s].items() for f in _records(records, d, task, shape, seeds)
+                   if (f / "champion.json").is_file()]
+        if not folders:
+            continue
+        ms = [measures(json.loads((f / "champion.json").read_text())["body"]) for f in folders]
+        div = [read_generations(f).get("body_diversity", [math.nan])[-1] for f in folders]
+        div = [x for x in div if math.isfinite(x)]
+        cells = [f"{statistics.fmean(m[k] for m in ms):.2f}" for k in MEASURED]
+        diversity = f"{statistics.fmean(div):.3f}" if div else "-"
+        lines.append(f"| {d} | {len(ms)} | " + " | ".join(cells) + f" | {diversity} |")
+    return "\n".join(lines)
+
+
+def pictures(records: Path, out: Path, sets: list[str], seeds: list[int], decoders: list[str]) -> Path:
+    """One picture of every champion body of the study: a row per set, task and seed, a column per
+    decoder, each labelled with its fitness; a run not finished yet is left blank."""
+    import json
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from evolve.report.gallery import body_image
+
+    rows = [(s, t, seed) for s in sets for t in SETS[s] for seed in seeds]
+    fig, axes = plt.subplots(len(rows), len(decoders), figsize=(1.9 * len(decoders), 1.9 * len(rows)),
+                             squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    for r, (s, task, seed) in enumerate(rows):
+        shape = SETS[s][task]
+        for c, d in enumerate(decoders):
+            f = _records(records, d, task, shape, [seed])[0] / "champion.json"
+            if f.is_file():
+                rec = json.loads(f.read_text())
+                axes[r][c].imshow(body_image(rec["body"], cell=8))
+                axes[r][c].set_title(f"{task} {shape[0]}x{shape[1]} s{seed}\n{d}: {rec['fitness']:.2f}",
+                                     fontsize=6)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--sets", nargs="+", default=list(SETS), choices=list(SETS))
@@ -94,7 +179,15 @@ def main() -> None:
     p.add_argument("--records", type=Path, default=ROOT / "results" / "decoders" / "runs")
     p.add_argument("--workers", type=int, default=1)
     p.add_argument("--list", action="store_true", help="print the runs in order and which are finished")
+    p.add_argument("--table", action="store_true", help="only print the study's tables from RECORDS")
+    p.add_argument("--pictures", action="store_true", help="only draw RECORDS/../bodies.png")
     a = p.parse_args()
+    if a.table:
+        print(table(a.records, a.sets, a.seeds, a.decoders))
+        return
+    if a.pictures:
+        print(pictures(a.records, a.records.parent / "bodies.png", a.sets, a.seeds, a.decoders))
+        return
     for name, args in runs(a.sets, a.tasks, a.seeds, a.decoders):
         run = a.out / name
         if a.list:
