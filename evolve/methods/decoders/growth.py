@@ -12,10 +12,12 @@ state is 0 again. So the body grows from the seed and is always connected. After
 takes the material of the largest of its state's numbers 1-4.
 
 The rule's weights are read from the CPPN HyperNEAT-style (output 0, through the weight
-expression) on a substrate of its own at z >= 4, above the paper's body substrate (z 1-3) and
-apart from the controller's (z < 0): input node (neighbour at offset (dx, dy), channel c) at
-(dx, dy, 4 + c/C) (above: dy = +1, right: dx = +1), hidden 1 x C at z=5 (tanh), outputs 1 x C at
-z=6 (tanh); biases are queries from the origin, as everywhere. Pure numpy, deterministic.
+expression) on a substrate of its own at 0 < z < 1, between the controller's (z < 0) and the
+paper's body substrate (z 1-3), so that its queries are apart from both yet of the size of theirs
+(at z of 4 and more, a CPPN whose output node is a Gaussian reads ~0 everywhere: no rule): input
+node (neighbour at offset (dx, dy), channel c) at (dx, dy, 0.25 + 0.25 c/C) (above: dy = +1,
+right: dx = +1), hidden 1 x C at z=0.6 (tanh), outputs 1 x C at z=0.8 (tanh); biases are queries
+from the origin, as everywhere. Pure numpy, deterministic.
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
 from evolve.methods.substrate import Substrate, grid_layer
 
 CHANNELS = 8
+Z_INPUT, Z_HIDDEN, Z_OUTPUT = 0.25, 0.6, 0.8  # the rule's layers (module docstring)
 # the cell itself, then its neighbours above, below, left and right, as (dx, dy) (row 0 = top = +y)
 NEIGHBOURS = ((0, 0), (0, 1), (0, -1), (-1, 0), (1, 0))
 
@@ -38,9 +41,10 @@ NEIGHBOURS = ((0, 0), (0, 1), (0, -1), (-1, 0), (1, 0))
 @cache
 def rule_substrate() -> Substrate:
     """The rule's network: 5C inputs (neighbour-major, then channel), C hidden, C outputs."""
-    inputs = np.array([(dx, dy, 4.0 + c / CHANNELS) for dx, dy in NEIGHBOURS for c in range(CHANNELS)],
-                      dtype=np.float64)
-    return Substrate((inputs, grid_layer(1, CHANNELS, 5.0), grid_layer(1, CHANNELS, 6.0)), ("tanh", "tanh"))
+    inputs = np.array([(dx, dy, Z_INPUT + 0.25 * c / CHANNELS) for dx, dy in NEIGHBOURS
+                       for c in range(CHANNELS)], dtype=np.float64)
+    return Substrate((inputs, grid_layer(1, CHANNELS, Z_HIDDEN), grid_layer(1, CHANNELS, Z_OUTPUT)),
+                     ("tanh", "tanh"))
 
 
 @cache
