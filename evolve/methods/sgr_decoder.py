@@ -92,7 +92,7 @@ def controller_from_cppn(cppn: CompiledCPPN, body: np.ndarray, task: str,
     b = build_body(body)
     n_obs = obs_dim(task, b.n_points)
     q, slices = _controller_queries(controller_side(n_obs), s.shape)
-    W1, b1, W2, b2 = dense_layers(cppn(q)[:, s.controller_output], slices, s.expression)
+    W1, b1, W2, b2 = dense_layers(cppn(q, (s.controller_output,))[:, 0], slices, s.expression)
     act = controller_substrate(controller_side(n_obs), s.shape).activations
     return DenseController([W1, W2], [b1, b2], list(act), n_obs, b.actuator_flat.copy())
 

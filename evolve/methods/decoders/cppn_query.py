@@ -46,6 +46,6 @@ class CppnQueryDecoder(BodyDecoder):
     def body(self, cppn: CompiledCPPN, shape: tuple[int, int], expression: Expression,
              settings: Mapping[str, Any]) -> np.ndarray:
         """The CPPN at each cell (module docstring); the weight expression plays no part."""
-        out = cppn(cell_queries(shape))
+        out = cppn(cell_queries(shape), tuple(range(self.body_outputs)))
         material = 1 + np.argmax(out[:, 1:5], axis=1)
         return np.where(out[:, 0] > 0.0, material, 0).reshape(shape).astype(np.int64)

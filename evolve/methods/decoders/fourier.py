@@ -54,6 +54,6 @@ class FourierDecoder(BodyDecoder):
              settings: Mapping[str, Any]) -> np.ndarray:
         """The body network (module docstring) on every cell."""
         q, slices = _queries(settings["frequencies"], settings["hidden"])
-        W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, expression)
+        W1, b1, W2, b2 = dense_layers(cppn(q, (0,))[:, 0], slices, expression)
         out = np.tanh(features(shape, settings["frequencies"]) @ W1 + b1) @ W2 + b2
         return np.argmax(out, axis=1).reshape(shape).astype(np.int64)

@@ -93,5 +93,5 @@ class GrowthDecoder(BodyDecoder):
              settings: Mapping[str, Any]) -> np.ndarray:
         """The rule's weights from the CPPN, then `grow`."""
         q, slices = _queries()
-        W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, expression)
+        W1, b1, W2, b2 = dense_layers(cppn(q, (0,))[:, 0], slices, expression)
         return grow(W1, b1, W2, b2, tuple(shape), steps_of(settings, shape))

@@ -33,7 +33,7 @@ class SubstrateDecoder(BodyDecoder):
              settings: Mapping[str, Any]) -> np.ndarray:
         """Argmax of the 2-3-5 body network's outputs at each cell's (x, y)."""
         q, slices = _body_queries()
-        W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, expression)
+        W1, b1, W2, b2 = dense_layers(cppn(q, (0,))[:, 0], slices, expression)
         x = cell_coordinates(shape)
         out = np.tanh(x @ W1 + b1) @ W2 + b2
         return np.argmax(out, axis=1).reshape(shape).astype(np.int64)
