@@ -93,3 +93,22 @@ def test_a_sigkilled_run_resumes_to_the_same_run(tmp_path, repo_root, name):
     assert crashed.champion() == reference.champion()
     assert json.loads((crashed.path / "champion.json").read_text())["controller"]["decoder"][
         "body_decoder"] == name
+
+
+def test_a_continuation_may_switch_to_a_decoder_whose_cppn_has_as_many_outputs(decoder_run, tmp_path, capsys):
+    """fourier and growth read one CPPN output, as the paper's substrate does: a run of one continues
+    with another; cppn's genomes have 5 outputs: refused in one line naming both counts."""
+    name, run = decoder_run
+    other = "growth" if name == "fourier" else "fourier"
+    out = tmp_path / "switched"
+    code = main(["evolve", "--from", str(run), "--body-decoder", other, "--generations", "4", "--out",
+                 str(out), "--quiet"])
+    if name == "cppn":
+        err = capsys.readouterr().err
+        assert code == 2 and err.count("\n") == 1
+        assert "evolved CPPNs with 5 outputs" in err and "this config's have 1" in err
+        return
+    assert code == 0
+    champ = json.loads((out / "champion.json").read_text())
+    assert champ["controller"]["decoder"]["body_decoder"] == other
+    assert rescore_champion(out) == champ["fitness"]
