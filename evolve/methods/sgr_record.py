@@ -33,6 +33,8 @@ DOC = ("The dense controller (sgr-dense-controller-1: x = observation zero-padde
        "'decoder' gives for its body and task (evolve/methods/sgr_decoder.py); sha256 is that of its weights "
        "and biases as little-endian float64, layer by layer (W then b, W row-major [in][out]). "
        "evolve.load_champion decodes it again and checks the digest.")
+DOC_DECODER = (" The body is the one that body decoder 'decoder'.body_decoder, with "
+               "'decoder'.body_decoder_settings, draws from the genome (evolve/methods/decoders/).")
 
 
 def digest(ctrl: DenseController) -> str:
@@ -64,7 +66,7 @@ def to_json(ctrl: DenseController, s: DecoderSettings) -> dict:
             "action_cells": ctrl.action_cells.tolist(),
             "action_map": "action = 1.1 + 0.5 * output[action_cells]",
             "sha256": digest(ctrl),
-            "doc": DOC}
+            "doc": DOC if s.body_decoder == DEFAULT else DOC + DOC_DECODER}
 
 
 def settings_of(c: dict) -> DecoderSettings:
