@@ -199,6 +199,7 @@ def test_a_champion_records_its_decoder_and_is_rebuilt_and_checked_by_its_digest
     c = sgr_record.recorded(g, p.controller, s, p.body, "Walker-v0")
     assert c["format"] == sgr_record.FORMAT and c["decoder"]["body_decoder"] == name
     assert c["decoder"]["body_decoder_settings"] == dict(s.body_settings)
+    assert c["doc"].endswith(sgr_record.DOC_DECODER)
     record = {"controller": c, "genome": genome_json(g), "body": p.body.tolist(), "task": "Walker-v0"}
     assert sgr_record.digest(sgr_record.rebuild(record)) == sgr_record.digest(p.controller)
     paper = {**record, "controller": {**c, "decoder": {k: v for k, v in c["decoder"].items()
@@ -213,6 +214,7 @@ def test_a_champion_of_the_papers_substrate_is_recorded_as_before_and_reads_as_i
     g, p = next((g, p) for g in genomes(cfg, 30) if (p := decode(g, cfg.genome_config, "Walker-v0", s)).valid)
     c = sgr_record.recorded(g, p.controller, s, p.body, "Walker-v0")
     assert set(c["decoder"]) == {"shape", "cppn_outputs", "weight_threshold", "max_weight"}
+    assert c["doc"] == sgr_record.DOC
     assert sgr_record.settings_of(c) == s
 
 
