@@ -250,3 +250,14 @@ def test_an_older_runs_config_without_the_keys_reads_as_the_papers_decoder(neat_
     del raw["body_decoder"], raw["body_decoder_settings"]
     problem = SgrProblem(raw, neat_config())
     assert problem.settings == DecoderSettings()
+
+
+def test_runs_of_another_body_decoder_are_reported_as_a_method_of_their_own(tmp_path):
+    """Reports and plots never average runs of two decoders: sgr with the growth decoder is
+    "sgr (growth)"; the paper's substrate, named or not (an older run), stays "sgr"."""
+    from evolve.report.groups import run_settings
+
+    base = {"method": "sgr", "task": "Walker-v0"}
+    assert run_settings(tmp_path, base)["method"] == "sgr"
+    assert run_settings(tmp_path, {**base, "body_decoder": "substrate"})["method"] == "sgr"
+    assert run_settings(tmp_path, {**base, "body_decoder": "growth"})["method"] == "sgr (growth)"
