@@ -241,6 +241,8 @@ def test_an_unknown_decoder_on_the_command_line_is_one_line_and_exit_2(tmp_path,
     assert err.count("\n") == 1
     assert "key 'body_decoder' must be one of substrate, cppn, fourier, growth" in err
     assert not (tmp_path / "r").exists()
+    assert main(["evolve", "--resume", str(tmp_path), "--body-decoder", "growth"]) == 2  # a run keeps its own
+    assert "--resume continues a run with its own config" in capsys.readouterr().err
     with pytest.raises(SgrError, match="key 'body_decoder'"):
         body_decoder("spiral")
 
