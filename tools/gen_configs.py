@@ -60,6 +60,7 @@ cppn_outputs: 1              # 1 as in the paper; 2 = separate body / controller
 weight_threshold: 0.2
 max_weight: 1.0
 body_distance_weight: 0.1    # v of the paper's eq. 1 (our choice, see docs/EVOLVE.md)
+body_decoder: substrate      # the paper's; or cppn, fourier, growth (docs/EVOLVE.md "Body decoders")
 checkpoint_every: 5
 render_champion: true
 """ + ROBUST_ACCUMULATED,

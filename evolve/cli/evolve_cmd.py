@@ -24,6 +24,9 @@ def register(sub) -> argparse.ArgumentParser:
     e.add_argument("--shape", metavar="RxC",
                    help="the body grid, rows x columns (e.g. 10x10): with --task the packaged "
                         "<task>-RxC config when there is one, else the task's config at this size")
+    e.add_argument("--body-decoder", metavar="NAME",
+                   help="how an sgr genome draws its body (config key body_decoder): substrate (the paper's, "
+                        "default), cppn, fourier or growth (docs/EVOLVE.md \"Body decoders\")")
     e.add_argument("--from", dest="start_from", metavar="RUN",
                    help="a new run that starts from RUN's population (its newest checkpoint), with "
                         "RUN's config (sgr; with --shape: at another size; --generations counts from "
@@ -92,7 +95,7 @@ def run(args: argparse.Namespace) -> int:
     shape = parse_shape(args.shape) if args.shape is not None else None
     if args.resume:
         if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
-                or args.precision or args.shape is not None or args.start_from):
+                or args.precision or args.shape is not None or args.start_from or args.body_decoder):
             raise SgrError("--resume continues a run with its own config; only --generations "
                            "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
@@ -106,7 +109,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
                  "workers": args.workers, "precision": args.precision, "tensorboard": args.tensorboard,
-                 "robot_shape": list(shape) if shape else None}
+                 "robot_shape": list(shape) if shape else None, "body_decoder": args.body_decoder}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         if args.start_from:
             config, name = continuation(args, overrides)
@@ -120,6 +123,8 @@ def run(args: argparse.Namespace) -> int:
             name = f"{cfg.method}-{config.stem}" if config.stem != cfg.method else config.stem
             if shape and not config.stem.endswith(f"-{shape[0]}x{shape[1]}"):
                 name += f"-{shape[0]}x{shape[1]}"
+            if args.body_decoder:
+                name += f"-{args.body_decoder}"
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{name}-seed{cfg.seed}-{stamp}")
         output_path(out, folder=True)
@@ -148,7 +153,8 @@ def continuation(args: argparse.Namespace, overrides: dict) -> tuple[Path, str]:
         overrides["generations"] = 2 * max(done, 1)
     shape = overrides.get("robot_shape")
     size = f"-{shape[0]}x{shape[1]}" if shape else ""
-    return src.path / "config.yaml", f"{src.path.name}-from{done}{size}"
+    decoder = f"-{args.body_decoder}" if args.body_decoder else ""
+    return src.path / "config.yaml", f"{src.path.name}-from{done}{size}{decoder}"
 
 
 def run_experiment(exp) -> int:

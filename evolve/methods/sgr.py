@@ -8,6 +8,8 @@ import numpy as np
 
 from evolve.methods import formats, sgr_record
 from evolve.methods.base import Problem
+from evolve.methods.decoders import DEFAULT as DEFAULT_DECODER
+from evolve.methods.decoders import body_decoder
 from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
 from evolve.nn.dense import FORMAT as DENSE_FORMAT
 from evolve.nn.dense import DenseController
@@ -32,27 +34,31 @@ class SgrProblem(Problem):
 
     name = "sgr"
     config_keys = {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
-                   "body_distance_weight": (float, 0.1)}
+                   "body_distance_weight": (float, 0.1), "body_decoder": (str, DEFAULT_DECODER),
+                   "body_decoder_settings": (dict, {})}
     default_files = {"neat_config": "sgr.ini"}
     absent_before = {"body_distance_weight": 0.0}  # an older run speciated by the genome alone
 
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.genome_config = neat_config.genome_config
-        self.settings = DecoderSettings(shape=tuple(self.cfg.robot_shape),
-                                        cppn_outputs=self.cfg.cppn_outputs,
-                                        threshold=self.cfg.weight_threshold, max_weight=self.cfg.max_weight)
+        self.settings = settings_of_config(self.cfg, tuple(self.cfg.robot_shape))
 
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
-        """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller)."""
+        """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller);
+        `body_decoder` a registered decoder (evolve/methods/decoders/) and
+        `body_decoder_settings` its settings."""
         if cfg.cppn_outputs not in (1, 2):
             raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg.cppn_outputs}")
+        body_decoder(cfg.body_decoder, source).resolve(cfg.body_decoder_settings, source)
 
     @classmethod
     def neat_overrides(cls, cfg: dict) -> dict:
-        """The CPPN: 7 inputs (x1, y1, z1, x2, y2, z2, bias) and `cppn_outputs` outputs."""
-        return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(cfg.cppn_outputs)}}
+        """The CPPN: 7 inputs (x1, y1, z1, x2, y2, z2, bias) and the outputs the body decoder reads
+        (1 for the paper's), plus the controller's own one with `cppn_outputs: 2`."""
+        outputs = body_decoder(cfg.body_decoder).body_outputs + cfg.cppn_outputs - 1
+        return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(outputs)}}
 
     def decode(self, genome) -> Phenotype:
         """Body and dense controller from the CPPN (`sgr_decoder.decode`); an invalid body gets no
@@ -87,8 +93,15 @@ class SgrProblem(Problem):
             return None
         keys = {k: default for k, (_, default) in cls.config_keys.items()} | dict(raw or {})
         body = np.asarray(record["body"])
-        settings = DecoderSettings(shape=(int(body.shape[0]), int(body.shape[1])),
-                                   cppn_outputs=int(keys["cppn_outputs"]),
-                                   threshold=float(keys["weight_threshold"]),
-                                   max_weight=float(keys["max_weight"]))
+        settings = settings_of_config(keys, (int(body.shape[0]), int(body.shape[1])))
         return sgr_record.to_json(controller, settings)
+
+
+def settings_of_config(cfg, shape: tuple[int, int]) -> DecoderSettings:
+    """The decoder settings of a config (a `RunConfig`, or a mapping of sgr's keys) at `shape`."""
+    get = cfg.__getitem__ if isinstance(cfg, dict) else lambda k: getattr(cfg, k)
+    decoder = body_decoder(get("body_decoder"))
+    return DecoderSettings(shape=shape, cppn_outputs=int(get("cppn_outputs")),
+                           threshold=float(get("weight_threshold")), max_weight=float(get("max_weight")),
+                           body_decoder=decoder.name,
+                           body_settings=decoder.resolve(get("body_decoder_settings")))

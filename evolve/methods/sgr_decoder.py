@@ -1,20 +1,24 @@
 """SGR decoding: one CPPN genome -> (body matrix, dense controller), HyperNEAT-style.
 
-The body network (z > 0) is evaluated on every cell of the body grid and each cell takes the
-argmax of its 5 material outputs; the controller network (z < 0) becomes a `DenseController`
-whose input grid is sized to the decoded body's observation. With one CPPN output both
-networks read it; with two, output 0 is the body's and output 1 the controller's.
+The body is drawn by the run's body decoder (config key `body_decoder`, evolve/methods/decoders/;
+the default, "substrate", is the paper's: the body network (z > 0) is evaluated on every cell of
+the body grid and each cell takes the argmax of its 5 material outputs); the controller network
+(z < 0) becomes a `DenseController` whose input grid is sized to the decoded body's observation.
+The body reads the CPPN's first `body_outputs` output columns (1, or the "cppn" decoder's 5); with
+`cppn_outputs: 1` the controller reads column 0 too, with 2 a column of its own after the body's.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import cache
+from typing import Any
 
 import numpy as np
 
+from evolve.methods.decoders import DEFAULT, body_decoder
 from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
-from evolve.methods.substrate import body_substrate, cell_coordinates, controller_side, controller_substrate
+from evolve.methods.substrate import controller_side, controller_substrate
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import DenseController
 from tasks.env import obs_dim
@@ -24,11 +28,14 @@ from tsim.body import build_body, has_actuator, is_connected
 @dataclass(frozen=True)
 class DecoderSettings:
     """What SGR decoding depends on, from the config: body grid shape (rows, cols), 1 or 2 CPPN
-    outputs, and the weight expression's threshold and max_weight."""
+    outputs, the weight expression's threshold and max_weight, the body decoder's name and its
+    settings (resolved: `BodyDecoder.resolve`, name-sorted pairs)."""
     shape: tuple[int, int] = (5, 5)
     cppn_outputs: int = 1
     threshold: float = 0.2
     max_weight: float = 1.0
+    body_decoder: str = DEFAULT
+    body_settings: tuple[tuple[str, Any], ...] = ()
 
     @property
     def expression(self) -> Expression:
@@ -36,9 +43,20 @@ class DecoderSettings:
         return Expression(self.threshold, self.max_weight)
 
     @property
+    def body_outputs(self) -> int:
+        """CPPN output columns the body decoder reads (0 .. body_outputs - 1)."""
+        return body_decoder(self.body_decoder).body_outputs
+
+    @property
+    def n_outputs(self) -> int:
+        """The CPPN's outputs: the body's, and the controller's own one with `cppn_outputs: 2`."""
+        return self.body_outputs + self.cppn_outputs - 1
+
+    @property
     def controller_output(self) -> int:
-        """CPPN output column the controller network reads: 0 when the one output is shared, else 1."""
-        return 0 if self.cppn_outputs == 1 else 1
+        """CPPN output column the controller network reads: 0 when the output is shared, else the
+        one after the body's (1 with the paper's substrate)."""
+        return 0 if self.cppn_outputs == 1 else self.body_outputs
 
 
 @dataclass
@@ -51,23 +69,15 @@ class Phenotype:
 
 
 @cache
-def _body_queries():
-    return substrate_queries(body_substrate())
-
-
-@cache
 def _controller_queries(k: int, shape: tuple[int, int]):
     return substrate_queries(controller_substrate(k, shape))
 
 
 def body_from_cppn(cppn: CompiledCPPN, s: DecoderSettings) -> np.ndarray:
-    """(H, W) int64 material codes 0-4, argmax of the body network's 5 outputs at each cell (CPPN
-    output 0); not checked: may be empty, disconnected or without an actuator."""
-    q, slices = _body_queries()
-    W1, b1, W2, b2 = dense_layers(cppn(q)[:, 0], slices, s.expression)
-    x = cell_coordinates(s.shape)
-    out = np.tanh(x @ W1 + b1) @ W2 + b2
-    return np.argmax(out, axis=1).reshape(s.shape).astype(np.int64)
+    """(H, W) int64 material codes 0-4 drawn by the body decoder `s` names (default: the argmax of
+    the paper's body network's 5 outputs at each cell, CPPN output 0); not checked: may be empty,
+    disconnected or without an actuator."""
+    return body_decoder(s.body_decoder).body(cppn, s.shape, s.expression, dict(s.body_settings))
 
 
 def is_valid_robot(body: np.ndarray) -> bool:
@@ -82,7 +92,7 @@ def controller_from_cppn(cppn: CompiledCPPN, body: np.ndarray, task: str,
     b = build_body(body)
     n_obs = obs_dim(task, b.n_points)
     q, slices = _controller_queries(controller_side(n_obs), s.shape)
-    W1, b1, W2, b2 = dense_layers(cppn(q)[:, s.controller_output], slices, s.expression)
+    W1, b1, W2, b2 = dense_layers(cppn(q, (s.controller_output,))[:, 0], slices, s.expression)
     act = controller_substrate(controller_side(n_obs), s.shape).activations
     return DenseController([W1, W2], [b1, b2], list(act), n_obs, b.actuator_flat.copy())
 

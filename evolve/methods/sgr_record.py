@@ -9,7 +9,9 @@ them is ~1 KB. So champion.json records the genome (its "genome" key, as before)
 layers' shapes and activations, and a SHA-256 of the weights; reading the file decodes the genome
 again and checks the digest, so a champion read back is bit for bit the one evolution scored, or an
 error says it is not. Files holding the weights in full (sgr-dense-controller-1) still load as they
-are.
+are. A body decoder other than the paper's substrate (evolve/methods/decoders/) is recorded in the
+settings as `body_decoder` and `body_decoder_settings`; a record without them (every one written
+before decoders were a choice) reads as the substrate's.
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import hashlib
 
 import numpy as np
 
+from evolve.methods.decoders import DEFAULT, body_decoder
 from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, controller_from_cppn
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import DenseController
@@ -30,6 +33,8 @@ DOC = ("The dense controller (sgr-dense-controller-1: x = observation zero-padde
        "'decoder' gives for its body and task (evolve/methods/sgr_decoder.py); sha256 is that of its weights "
        "and biases as little-endian float64, layer by layer (W then b, W row-major [in][out]). "
        "evolve.load_champion decodes it again and checks the digest.")
+DOC_DECODER = (" The body is the one that body decoder 'decoder'.body_decoder, with "
+               "'decoder'.body_decoder_settings, draws from the genome (evolve/methods/decoders/).")
 
 
 def digest(ctrl: DenseController) -> str:
@@ -49,24 +54,31 @@ def _layers(ctrl: DenseController) -> list[dict]:
 
 def to_json(ctrl: DenseController, s: DecoderSettings) -> dict:
     """The controller decoded with settings `s` as a record of its derivation (module docstring)."""
+    decoder = {"shape": list(s.shape), "cppn_outputs": s.cppn_outputs, "weight_threshold": s.threshold,
+               "max_weight": s.max_weight}
+    if s.body_decoder != DEFAULT:  # the paper's substrate's records stay as they were
+        decoder |= {"body_decoder": s.body_decoder, "body_decoder_settings": dict(s.body_settings)}
     return {"format": FORMAT,
-            "decoder": {"shape": list(s.shape), "cppn_outputs": s.cppn_outputs,
-                        "weight_threshold": s.threshold, "max_weight": s.max_weight},
+            "decoder": decoder,
             "input_size": ctrl.input_size,
             "input_padding": int(ctrl.weights[0].shape[0]) - ctrl.input_size,
             "layers": _layers(ctrl),
             "action_cells": ctrl.action_cells.tolist(),
             "action_map": "action = 1.1 + 0.5 * output[action_cells]",
             "sha256": digest(ctrl),
-            "doc": DOC}
+            "doc": DOC if s.body_decoder == DEFAULT else DOC + DOC_DECODER}
 
 
 def settings_of(c: dict) -> DecoderSettings:
-    """The decoder settings a record names."""
+    """The decoder settings a record names (no `body_decoder`: the paper's substrate); ValueError
+    for an unknown decoder or settings it does not take."""
     d = c["decoder"]
+    decoder = body_decoder(d.get("body_decoder", DEFAULT), "champion")  # SgrError: a ValueError
+    settings = decoder.resolve(d.get("body_decoder_settings"), "champion")
     return DecoderSettings(shape=(int(d["shape"][0]), int(d["shape"][1])),
                            cppn_outputs=int(d["cppn_outputs"]), threshold=float(d["weight_threshold"]),
-                           max_weight=float(d["max_weight"]))
+                           max_weight=float(d["max_weight"]), body_decoder=decoder.name,
+                           body_settings=settings)
 
 
 def rebuild(record: dict) -> DenseController:
@@ -75,7 +87,7 @@ def rebuild(record: dict) -> DenseController:
     recorded body or weights."""
     c = record["controller"]
     s = settings_of(c)
-    keys = GenomeKeys(CPPN_INPUTS, s.cppn_outputs)
+    keys = GenomeKeys(CPPN_INPUTS, s.n_outputs)
     cppn = CompiledCPPN(genome_from_record(record["genome"], keys), keys)
     body = np.asarray(record["body"], dtype=np.int64)
     if body.shape != s.shape or not np.array_equal(body_from_cppn(cppn, s), body):

@@ -170,6 +170,8 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
     method = str(raw.get("method") or (Path(run_dir).resolve().parent.name or UNKNOWN))
     if raw.get("layout") not in (None, "per_output"):  # the direct baseline's variant is its own method
         method = f"{method} ({raw['layout']})"
+    if raw.get("body_decoder") not in (None, "substrate"):  # and so is sgr with another body decoder
+        method = f"{method} ({raw['body_decoder']})"
     task = str(raw.get("task") or UNKNOWN)
     if not raw:
         return {"method": method, "task": task, **{k: "?" for k in POOLABLE}}

@@ -7,7 +7,8 @@ innovation and key counters, Python's random state) and evolves on from generati
 own config's robot_shape; `generations` counts from the start of the first run, as `sgr evolve
 --resume --generations N` does. Fitness measured at the old size does not carry over: every
 genome, species and the best-ever record start unscored, and species' stagnation clocks restart
-at G. This is for SGR, whose genomes are CPPNs and so free of the body's size (and of the task):
+at G. This is for SGR, whose genomes are CPPNs and so free of the body's size (and of the task; the
+new run may even draw bodies with another body decoder whose CPPN has as many outputs):
 direct NEAT's network has inputs and outputs per cell of its run's shape, and nested NEAT keeps a
 controller population per body. The run's config.yaml records where it came from: the run's
 absolute path and G.
@@ -18,6 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from evolve.config import RunConfig
+from evolve.methods.decoders import DEFAULT, body_decoder
 from evolve.records.rundir import RunDir, checkpoint_generation, read_checkpoint_file
 from evolve.search.state_codec import decode_search_state
 from tsim.errors import SgrError
@@ -40,9 +42,13 @@ def check_start_from(cfg: RunConfig, source: str) -> dict:
     src = run.config()
     if src.get("method") != "sgr":
         raise SgrError(f"{key}: {start['run']} is a {src.get('method')} run, not an sgr one")
-    if src.get("cppn_outputs", 1) != cfg.cppn_outputs:
-        raise SgrError(f"{key}: {start['run']} evolved CPPNs with {src.get('cppn_outputs', 1)} outputs, "
-                       f"this config has cppn_outputs {cfg.cppn_outputs}")
+    theirs, ours = cppn_outputs(src), cppn_outputs({"cppn_outputs": cfg.cppn_outputs,
+                                                     "body_decoder": cfg.body_decoder})
+    if theirs != ours:
+        raise SgrError(f"{key}: {start['run']} evolved CPPNs with {theirs} outputs (cppn_outputs "
+                       f"{src.get('cppn_outputs', 1)}, body_decoder {src.get('body_decoder', DEFAULT)}); "
+                       f"this config's have {ours} (cppn_outputs {cfg.cppn_outputs}, body_decoder "
+                       f"{cfg.body_decoder})")
     generation = start.get("generation", run.last_checkpoint_generation())
     if generation is None:
         raise SgrError(f"{key}: {start['run']} has no checkpoint to start from")
@@ -55,6 +61,12 @@ def check_start_from(cfg: RunConfig, source: str) -> dict:
         raise SgrError(f"{source}: key 'generations' counts from the start of {start['run']}, which "
                        f"has run {generation}: it must be above {generation}, got {cfg.generations}")
     return {"run": str(run.path), "generation": generation}
+
+
+def cppn_outputs(raw: dict) -> int:
+    """The CPPN outputs of an sgr run's genomes, from its config.yaml (`raw`): its body decoder's
+    (an older run's: the paper's substrate, 1), plus the controller's own with cppn_outputs 2."""
+    return body_decoder(raw.get("body_decoder", DEFAULT)).body_outputs + int(raw.get("cppn_outputs", 1)) - 1
 
 
 def continued_state(start_from: dict, neat_config) -> dict:

@@ -53,3 +53,25 @@ def test_wrong_input_width_is_rejected(ini):
         .create_new(cfg.genome_type, cfg.genome_config, 1)
     with pytest.raises(ValueError, match="CPPN expects"):
         CompiledCPPN(next(iter(g.values())), cfg.genome_config)(np.zeros((3, 6)))
+
+
+def test_asking_for_some_output_columns_gives_those_columns_of_the_full_pass_bit_for_bit(ini):
+    """`cppn(x, columns)` computes only the nodes those outputs depend on (a hidden node that feeds
+    only another output is skipped), and the numbers are the full pass's, bit for bit."""
+    cfg = _config(5, ini)
+    gc = cfg.genome_config
+    random.seed(11)
+    repro = neat.DefaultReproduction(cfg.reproduction_config, neat.reporting.ReporterSet(), None)
+    genomes = list(repro.create_new(cfg.genome_type, gc, 8).values())
+    for i, g in enumerate(genomes):
+        for _ in range(3 * i):
+            g.mutate(gc)
+    x = np.random.default_rng(1).uniform(-1.5, 1.5, (30, 7))
+    skipped = 0
+    for g in genomes:
+        cppn = CompiledCPPN(g, gc)
+        full = cppn(x)
+        for cols in [(0,), (4,), (1, 2, 3, 4), (3, 0)]:
+            assert np.array_equal(cppn(x, cols), full[:, list(cols)])
+            skipped += len(cppn.steps) - len(cppn.needed(cols) & {s[0] for s in cppn.steps})
+    assert skipped > 0
