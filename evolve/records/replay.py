@@ -121,12 +121,12 @@ def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndar
                           champ["episode_steps"], noise, precision=precision_of(champ))
 
 
-def rescore_champion(run_dir: str | Path) -> float:
+def rescore_champion(run_dir: str | Path, cell=None) -> float:
     """The champion's fitness scored again from champion.json alone, as evolution scored it: its
     episode return, or for a run with robust evaluation the statistic over the same K perturbed
     episodes (the run's seed and the evaluation's tag give their noise). Must equal the recorded
-    fitness."""
-    champ, body, ctrl = read_champion(run_dir)
+    fitness. `cell`: a map-elites run's elite of that cell (elites.json) instead."""
+    champ, body, ctrl = read_champion(run_dir, cell)
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
     if robust is None:
@@ -249,10 +249,11 @@ class Champion:
         return write_gif(frames, out, fps=fps)
 
 
-def load_champion(run_dir: str | Path) -> Champion:
+def load_champion(run_dir: str | Path, cell=None) -> Champion:
     """The champion of a run directory (its champion.json), checked to run: ValueError naming the
-    file and the key otherwise."""
-    record, body, ctrl = read_champion(run_dir)
+    file and the key otherwise. `cell` ((i, j) or "i,j"): a map-elites run's elite of that cell of
+    its archive (elites.json) instead."""
+    record, body, ctrl = read_champion(run_dir, cell)
     return Champion(task=record["task"], body=body, controller=ctrl,
                     episode_steps=episode_steps(record["task"], record["episode_steps"]),
                     fitness=float(record.get("fitness", float("nan"))), record=record)

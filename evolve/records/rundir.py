@@ -38,8 +38,10 @@ from evolve.records.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
-           "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
+           "build_s", "sim_s", "neat_s", "total_s", "coverage", "qd_score",
+           "body_diversity"]  # last three: added later (coverage, qd_score: map-elites; empty for NEAT)
 KEEP_CHECKPOINTS = 2
+ELITES_FILE = "elites.json"
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
@@ -257,7 +259,8 @@ class RunDir:
             self._write_rows([*self.rows(), row])
             return
         buf = io.StringIO()
-        csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow({k: row[k] for k in COLUMNS})
+        csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow(
+            {k: row.get(k, "") for k in COLUMNS})  # a column the method does not fill: empty
         try:
             with path.open("ab") as f:
                 f.write(buf.getvalue().encode())
@@ -295,6 +298,10 @@ class RunDir:
     def write_champion(self, champion: dict) -> None:
         """Replace champion.json atomically (laid out by `record_json`)."""
         atomic_write(self.path / "champion.json", record_json(champion).encode())
+
+    def write_elites(self, elites: dict) -> None:
+        """Replace elites.json (a map-elites run's archive, evolve/records/elites.py) atomically."""
+        atomic_write(self.path / ELITES_FILE, record_json(elites).encode())
 
     def champion(self) -> dict:
         """champion.json as a dict; ValueError when there is none yet or it is not valid JSON

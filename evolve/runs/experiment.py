@@ -22,7 +22,13 @@ from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
-from evolve.runs.reporters import ReporterSet, builtin_reporters, configured_reporters
+from evolve.runs.reporters import (
+    ArchiveFiles,
+    ChampionFile,
+    ReporterSet,
+    builtin_reporters,
+    configured_reporters,
+)
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -83,12 +89,15 @@ class Experiment:
         self.selection = cfg.final_selection
         robust = cfg.robust
         # (body_distance_weight is a key of sgr and direct; nested has none: plain NEAT speciation)
-        self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
-                                 seed=cfg.seed, body_distance_weight=self.problem.body_distance_weight(),
-                                 state=state, reevaluate=method.reevaluate_elites
-                                 or (robust is not None and robust.reevaluate),
-                                 accumulate=robust is not None and robust.accumulate,
-                                 race=robust.race if robust else 0, settle=robust.settle if robust else 0)
+        own = self.problem.make_search(self.neat_config, cfg.seed, state)  # map-elites' archive
+        self.search = own if own is not None else NeatSearch(
+            self.neat_config, self.problem.decode, self.problem.evaluate,
+            seed=cfg.seed, body_distance_weight=self.problem.body_distance_weight(),
+            state=state, reevaluate=method.reevaluate_elites or (robust is not None and robust.reevaluate),
+            accumulate=robust is not None and robust.accumulate,
+            race=robust.race if robust else 0, settle=robust.settle if robust else 0)
+        if hasattr(self.search, "elites"):  # an archive: elites.json after champion.json
+            self.reporters.insert_after(ChampionFile, ArchiveFiles())
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
