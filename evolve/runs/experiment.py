@@ -15,7 +15,7 @@ from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.records.rundir import RunDir
+from evolve.records.rundir import ELITES_FILE, RunDir
 from evolve.records.segments import record_segment
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
@@ -268,15 +268,19 @@ class Experiment:
 
 
 def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
-    """The files drawn from a run's results: fitness.png (with its champion) always, champion.gif
-    when `render_champion` is set (or the run has one: it must show the champion of
-    champion.json). Each is written whole or not at all, and while they are written the run is
+    """The files drawn from a run's results: fitness.png (with its champion) always, archive.png for
+    a map-elites run, champion.gif when `render_champion` is set (or the run has one: it must show
+    the champion of champion.json). Each is written whole or not at all, and while they are written the run is
     marked so that `sgr evolve --resume` writes them again after a failure."""
     from evolve.records.replay import champion_gif
     from evolve.report.plots import plot_run
 
     run.begin_end_files()
     plot_run(run.path, run.path / "fitness.png")
+    if (run.path / ELITES_FILE).is_file():  # a map-elites run's archive
+        from evolve.report.archive import plot_archive
+
+        plot_archive(run.path)
     if champion and (cfg.render_champion or (run.path / "champion.gif").exists()):
         champion_gif(run.path)
     run.end_files_written()

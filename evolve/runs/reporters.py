@@ -120,11 +120,17 @@ class ChampionFile:
 class ArchiveFiles:
     """A map-elites run's archive (evolve/methods/map_elites.py): every elite's record in
     elites.json after each generation (`load_champion(run, cell=...)`), written after
-    champion.json and before the checkpoint; archive.png is drawn with the end files."""
+    champion.json and before the checkpoint; archive.png (evolve/report/archive.py) on the
+    checkpoints' schedule (under a second) and with the end files."""
 
     def generation(self, exp: Any, row: dict) -> None:
-        """elites.json, replaced whole."""
+        """elites.json, replaced whole; archive.png when a checkpoint is due."""
         exp.run.write_elites(elites_record(exp.cfg, exp.problem, exp.search))
+        g, cfg = exp.search.generation, exp.cfg
+        if g % cfg.checkpoint_every == 0 or g == cfg.generations:
+            from evolve.report.archive import plot_archive
+
+            plot_archive(exp.run.path)
 
 
 def elites_record(cfg, problem, search) -> dict:
