@@ -5,6 +5,8 @@ gallery shows, chosen across the map. Read from elites.json alone (evolve/record
 
 from __future__ import annotations
 
+import base64
+import html
 from pathlib import Path
 
 import numpy as np
@@ -73,3 +75,70 @@ def spread_elites(run_dir: str | Path, n: int = 6) -> list[dict]:
         rest = [e for e in elites if e not in chosen]
         chosen.append(max(rest, key=gap) if chosen else rest[0])
     return chosen
+
+
+def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict]:
+    """For each map-elites run of `runs` (name -> run folder; those with elites.json), its archive
+    picture <name>-archive.png and the bodies of `n` elites chosen across the map
+    (<name>-elite-I-J.png) in `folder`; returns one entry per run: name, archive and elites (each
+    with its cell, fitness, descriptors and body picture)."""
+    import imageio.v3 as iio
+
+    from evolve.records.files import atomic_write
+    from evolve.records.rundir import ELITES_FILE
+
+    out = []
+    for name, run in runs.items():
+        if not (Path(run) / ELITES_FILE).is_file():
+            continue
+        folder.mkdir(parents=True, exist_ok=True)
+        safe = str(name).replace("/", "-")
+        png = plot_archive(run, folder / f"{safe}-archive.png")
+        shown = []
+        for e in spread_elites(run, n):
+            cell = "-".join(map(str, e["cell"]))
+            body = folder / f"{safe}-elite-{cell}.png"
+            atomic_write(body, iio.imwrite("<bytes>", body_image(np.asarray(e["champion"]["body"])),
+                                           extension=".png"))
+            shown.append({"cell": e["cell"], "fitness": float(e["champion"]["fitness"]),
+                          "measures": e["measures"], "body": body})
+        out.append({"name": str(name), "archive": png, "elites": shown})
+    return out
+
+
+def _caption(e: dict) -> str:
+    measures = ", ".join(f"{k} {v:.2f}" for k, v in e["measures"].items())
+    return f"cell {','.join(map(str, e['cell']))} · fitness {e['fitness']:.3f} · {measures}"
+
+
+def archives_markdown(entries: list[dict], base: Path) -> str:
+    """report.md's section on the map-elites runs' archives (paths relative to `base`)."""
+    if not entries:
+        return ""
+    lines = ["", "## Archives (map-elites)", "",
+             "Each map-elites run's archive: each cell's elite fitness, its body drawn small; then "
+             "elites chosen across the map (`sgr render RUN --cell I,J` renders any of them).", ""]
+    for a in entries:
+        lines += [f"### {a['name']}", "", f"![archive of {a['name']}]({a['archive'].relative_to(base)})", ""]
+        lines += [f"- {_caption(e)}: ![body]({e['body'].relative_to(base)})" for e in a["elites"]] + [""]
+    return "\n".join(lines)
+
+
+def _png_uri(path: Path) -> str:
+    return "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode()
+
+
+def archives_html(entries: list[dict]) -> list[str]:
+    """report.html's parts on the archives, images inlined as data URIs."""
+    if not entries:
+        return []
+    parts = ["<h2>Archives (map-elites)</h2><p>Each cell's elite fitness, its body drawn small; below, "
+             "elites chosen across the map.</p>"]
+    for a in entries:
+        name = html.escape(a["name"])
+        parts.append(f"<h3>{name}</h3><img alt='archive of {name}' src='{_png_uri(a['archive'])}'"
+                     " width='100%'><div class='gallery'>")
+        parts += [f"<figure><img alt='{name} elite' src='{_png_uri(e['body'])}'>"
+                  f"<figcaption>{html.escape(_caption(e))}</figcaption></figure>" for e in a["elites"]]
+        parts.append("</div>")
+    return parts
