@@ -9,6 +9,7 @@ import gzip
 import json
 from pathlib import Path
 
+import numpy as np
 import pytest
 import yaml
 
@@ -114,3 +115,53 @@ def test_a_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path):
     assert elites(crashed) == elites(ref)
     assert crashed.champion() == ref.champion()
     assert checkpoint(crashed.checkpoints()[0]) == checkpoint(ref.checkpoints()[0])
+
+
+def test_archive_png_heatmap_holds_each_cells_elite_fitness(tiny):
+    """archive.png is written with the last generation; its grid is each cell's elite fitness from
+    elites.json (NaN where empty)."""
+    from evolve.report.archive import archive_grid
+
+    assert (tiny.path / "archive.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    data = elites(tiny)
+    grid, shown = archive_grid(data)
+    assert grid.shape == (3, 3) and int(np.isfinite(grid).sum()) == len(data["elites"])
+    for e in data["elites"]:
+        assert grid[tuple(e["cell"])] == e["champion"]["fitness"] and shown[tuple(e["cell"])] is e
+
+
+def test_sgr_render_cell_renders_that_elite(tiny, tmp_path, capsys):
+    """`sgr render RUN --cell I,J --exact`: that elite's exact episode, its nominal return printed;
+    an empty cell is one error line."""
+    from evolve.cli import main
+
+    data = elites(tiny)
+    e = data["elites"][-1]
+    cell = ",".join(map(str, e["cell"]))
+    gif = tmp_path / "elite.gif"
+    assert main(["render", str(tiny.path), "--cell", cell, "--exact", "--width", "64", "--height", "32",
+                 "--out", str(gif)]) == 0
+    out = capsys.readouterr().out
+    nominal = load_champion(tiny.path, cell=e["cell"]).rollout()
+    assert gif.read_bytes()[:3] == b"GIF" and f"the elite of cell {cell}" in out and f"{nominal:.4f}" in out
+    filled = {tuple(x["cell"]) for x in data["elites"]}
+    empty = next(f"{i},{j}" for i in range(3) for j in range(3) if (i, j) not in filled)
+    assert main(["render", str(tiny.path), "--cell", empty]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1
+
+
+def test_the_report_shows_the_archive_and_elites_across_the_map(tiny, tmp_path):
+    """`sgr report`'s archives/: the run's archive picture and the bodies of distinct elites, the best
+    first, named in report.md and inlined in report.html."""
+    from evolve.report.archive import spread_elites
+    from evolve.report.report import write_report
+
+    out = write_report([tiny.path], tmp_path / "rep" / "report.md", robustness=False, gallery=False)
+    text = out.read_text()
+    assert "## Archives (map-elites)" in text and "archives/run-archive.png" in text
+    chosen = spread_elites(tiny.path, 3)
+    best = max(elites(tiny)["elites"], key=lambda e: e["champion"]["fitness"])
+    assert chosen[0]["cell"] == best["cell"] and len({tuple(c["cell"]) for c in chosen}) == len(chosen)
+    for c in chosen:
+        assert (out.parent / "archives" / f"run-elite-{c['cell'][0]}-{c['cell'][1]}.png").is_file()
+    assert "archive of run" in (out.parent / "report.html").read_text()
