@@ -35,6 +35,7 @@ import numpy as np
 from evolve.methods.descriptors import DESCRIPTORS
 from evolve.methods.sgr import SgrProblem
 from evolve.rollout.pool import RolloutPool
+from evolve.search.body_distance import mean_pairwise_body_distance
 from evolve.search.genome import peek
 from evolve.search.state_codec import (
     StateError,
@@ -281,6 +282,8 @@ class MapElitesSearch:
                "n_valid": n, "n_invalid": n_invalid, "episodes": int(episodes),
                "coverage": float(stats.coverage), "qd_score": float(stats.qd_score),
                "n_elites": len(self.elites),
+               "body_diversity": mean_pairwise_body_distance([e.phenotype.body
+                                                              for e in self.elites.values()]),
                "build_s": t1 - t0, "sim_s": t2 - t1, "neat_s": time.perf_counter() - t2,
                "total_s": time.perf_counter() - t0}
         self.generation += 1
