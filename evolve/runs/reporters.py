@@ -221,15 +221,17 @@ def builtin_reporters() -> list[Any]:
 def tensorboard_scalars(exp: Any, row: dict) -> dict[str, float]:
     """The scalars of a generation, by TensorBoard tag: fitness (best, mean, median, and the
     best-ever genome's, as the console's "ever"), population (species, genomes, the fraction of
-    valid bodies, episodes) and seconds (build, sim, neat, total)."""
+    valid bodies, episodes) and seconds (build, sim, neat, total); a map-elites run's archive
+    (coverage, QD score; no species)."""
     n = int(row["n_valid"]) + int(row["n_invalid"])
     best = exp.search.best
     out = {"fitness/best": row["best"], "fitness/mean": row["mean"], "fitness/median": row["median"],
            "fitness/best_ever": best["fitness"] if best else float("nan"),
-           "population/species": row["n_species"], "population/genomes": n,
+           "population/species": row.get("n_species", math.nan), "population/genomes": n,
            "population/valid_fraction": int(row["n_valid"]) / n if n else float("nan"),
            "population/episodes": row["episodes"]}
     out.update({f"seconds/{k[:-2]}": row[k] for k in ("build_s", "sim_s", "neat_s", "total_s")})
+    out.update({f"archive/{k}": row[k] for k in ("coverage", "qd_score") if k in row})  # map-elites
     return {k: float(v) for k, v in out.items()}
 
 
