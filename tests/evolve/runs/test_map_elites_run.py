@@ -165,3 +165,28 @@ def test_the_report_shows_the_archive_and_elites_across_the_map(tiny, tmp_path):
     for c in chosen:
         assert (out.parent / "archives" / f"run-elite-{c['cell'][0]}-{c['cell'][1]}.png").is_file()
     assert "archive of run" in (out.parent / "report.html").read_text()
+
+
+@pytest.mark.parametrize("damage, named", [
+    (lambda s: s.update(format="sgr-map-elites-0"), "search.format"),
+    (lambda s: s["elites"][0].update(tags=[]), "search.elites[0].tags"),
+    (lambda s: s["elites"][0].update(total="1.0"), "search.elites[0].total"),
+    (lambda s: s["elites"].pop(), "search.elites: "),
+    (lambda s: s["elites"][0].update(cell=s["elites"][0]["cell"] + 1000),
+     "do not fall in their recorded cells"),
+])
+def test_a_damaged_archive_checkpoint_is_refused_naming_the_field(tiny, damage, named):
+    """The checkpoint is data checked field by field: a damaged archive fails in one line naming
+    what is wrong, before anything runs (the elite's cell is checked against where its body falls)."""
+    from evolve.config import RunConfig
+    from evolve.methods.map_elites import MapElitesProblem, MapElitesSearch
+    from evolve.runs.checkpoint import decode_checkpoint
+    from evolve.search.neat_ini import load_neat_config
+    from evolve.search.state_codec import StateError
+
+    data = checkpoint(tiny.checkpoints()[0])
+    damage(data["search"])
+    cfg, nc = RunConfig.of(tiny.config()), load_neat_config(tiny.path / "neat.ini")
+    with pytest.raises(StateError, match=named.replace("[", "\\[").replace("]", "\\]")):
+        state = decode_checkpoint(data, cfg, nc)
+        MapElitesSearch(MapElitesProblem(cfg, nc), nc, seed=cfg.seed, state=state)
