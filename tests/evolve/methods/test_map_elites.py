@@ -149,3 +149,18 @@ def test_every_task_has_a_map_elites_config_with_the_budget_of_sgrs_100_generati
     assert len(runs) == 12
     sgr = [sum(int(r["episodes"]) for r in list(csv.DictReader(f.open()))[:100]) for f in runs]
     assert abs(most - sum(sgr) / len(sgr)) <= 0.05 * sum(sgr) / len(sgr), (most, sgr)
+
+
+def test_a_registered_descriptor_can_be_named_in_qd(monkeypatch):
+    """Descriptors are pluggable like tasks: one registered by name (here the voxel count) is a
+    `qd.descriptors` entry with its own default range and cells, measured on the body."""
+    from evolve.methods import descriptors
+
+    needs_ribs()
+    monkeypatch.setitem(descriptors.DESCRIPTORS, "dummy", None)  # restored after the test
+    descriptors.register("dummy", lambda body: float(np.count_nonzero(body)),
+                         lambda shape: (0.0, float(shape[0] * shape[1])), lambda shape: 5)
+    qd = search_of({"descriptors": ["dummy", "actuator"]}).qd
+    assert qd.ranges[0] == (0.0, 25.0) and qd.resolution == (5, 10)
+    body = np.array([[1, 3, 0], [2, 4, 4], [0, 0, 0]])
+    assert qd.measure(body).tolist() == pytest.approx([5.0, 3 / 5], abs=1e-12)
