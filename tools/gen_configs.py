@@ -1,4 +1,4 @@
-"""Write the packaged per-task configs, configs/{sgr,direct,nested}/<task>.yaml, for every one of
+"""Write the packaged per-task configs, configs/{sgr,direct,nested,map-elites}/<task>.yaml, for every one of
 sgr's 32 tasks from one template per method (a developer tool: it is not installed).
 
 Every config of a method is the same template with the task's name and episode length filled in:
@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 from tasks.specs import BUILTIN, TASKS  # noqa: E402
 
 PAPER_TASKS = ("Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0")  # the SGR paper's
-METHODS = ("sgr", "direct", "nested")
+METHODS = ("sgr", "direct", "nested", "map-elites")
 
 # the honest evaluation of docs/EVOLVE.md "Robust evaluation", as every packaged config has it
 ROBUST_ACCUMULATED = """\
@@ -103,6 +103,40 @@ render_champion: true
 robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
 reevaluate: true}
 """,
+    "map-elites": """\
+# MAP-Elites with SGR genomes on $task$about
+method: map-elites
+task: $task
+# The budget of SGR's 100 generations of configs/sgr/<task>.yaml: those runs simulated 8,109 to 9,107
+# episodes (mean 8,648; results/robust-fast/runs/sgr-*/generations.csv, column episodes). Here a
+# generation simulates its 64 valid children and re-scores at most 24 elites: at most 88 episodes, at
+# most 8,800 in 100 generations (fewer while the archive is small).
+generations: 100
+pop_size: 128                # sizes the final selection alone, as SGR's 128 genomes do
+seed: 0
+robot_shape: [5, 5]
+$episode
+neat_config: ../neat/sgr.ini  # NEAT's crossover and mutation; no speciation
+cppn_outputs: 1
+weight_threshold: 0.2
+max_weight: 1.0
+checkpoint_every: 5
+render_champion: true
+qd:
+  descriptors: [actuator, rigid]  # shares of the body's voxels (evolve/methods/descriptors.py)
+  resolution: [10, 10]            # cells per descriptor
+  batch: 64                       # valid children per generation, parents drawn uniformly from the elites
+  initial: 64                     # valid random genomes of the first generation
+  rescore: 24                     # elites re-scored per generation at most (fewest scores first)
+# Honest by default (docs/EVOLVE.md "Robust evaluation"): every action carries uniform(±1e-3)
+# actuator noise; one episode per child, an elite's fitness the mean of its scores so far (re-scored
+# until it has 8: settle); the champion chosen at the end among the archive's best elites
+# (final_selection; auto: sized to at most a fifth of pop_size x generations episodes).
+robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
+reevaluate: true, accumulate: true, settle: 8}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
+confirm: auto, holdout: auto}
+""",
 }
 
 # what each method's first line says of it, after the task's name
@@ -115,11 +149,15 @@ ABOUT = {
     "nested": (": outer NEAT over body networks, inner NEAT over controllers per body.",
                " (not in the SGR paper): outer NEAT over body networks, inner NEAT over\n"
                "# controllers per body; the paper's settings and evogym's episode length."),
+    "map-elites": (": an archive of the best robot per kind of body (docs/EVOLVE.md).",
+                   " (not in the SGR paper): an archive of the best robot per kind of body\n"
+                   "# (docs/EVOLVE.md); evogym's episode length."),
 }
 PAPER_EPISODE = {
     "sgr": "episode_steps: null          # null = the paper's episode length for the task",
     "direct": "episode_steps: null          # the paper's episode length",
     "nested": "episode_steps: null          # the paper's episode length",
+    "map-elites": "episode_steps: null          # the paper's episode length",
 }
 
 

@@ -37,6 +37,9 @@ def register(sub) -> argparse.ArgumentParser:
                    help="the replays' noise: uniform(+-EPS) or gaussian(0, EPS) (default uniform)")
     r.add_argument("--offset", type=nonnegative(float), default=0.0,
                    help="the replays' start shifted by uniform(+-OFFSET) (evogym units, voxel 0.1)")
+    r.add_argument("--cell", metavar="I,J",
+                   help="a map-elites run's elite of that cell of its archive (elites.json) instead of its "
+                        "champion; default --out RUN_DIR/elite-I-J.gif")
     r.set_defaults(fn=run)
     return r
 
@@ -60,13 +63,18 @@ def run(args: argparse.Namespace) -> int:
             raise SgrError("give either --exact or --replay I, not both")
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
-                           replay=replay, eps=args.noise, kind=args.noise_kind, offset=args.offset)
-        line = replay_line(args.run_dir, replay, args.noise, args.noise_kind, args.offset)
+                           replay=replay, eps=args.noise, kind=args.noise_kind, offset=args.offset,
+                           cell=args.cell)
+        line = replay_line(args.run_dir, replay, args.noise, args.noise_kind, args.offset, cell=args.cell)
         mp4 = out.with_suffix(".mp4")
-        also = f" and {mp4}" if args.out is None and replay == MEDIAN and mp4.is_file() else ""
-        print(f"wrote {out}{also}: {line}")
+        also = (f" and {mp4}" if args.out is None and replay == MEDIAN and args.cell is None and mp4.is_file()
+                else "")
+        which = f"the elite of cell {args.cell}: " if args.cell else ""
+        print(f"wrote {out}{also}: {which}{line}")
         return 0
     else:
+        if args.cell:
+            raise SgrError("--cell renders an elite of a map-elites run: give RUN_DIR")
         if not (args.task and args.body):
             raise SgrError("sgr render needs RUN_DIR, or --task and --body")
         if args.replay or args.exact:

@@ -19,6 +19,7 @@ import numpy as np
 from evolve.config import RunConfig
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
+from evolve.search.state_codec import decode_search_state, encode_search_state
 from tsim.errors import SgrError
 
 # config key -> (type or tuple of types, default)
@@ -144,6 +145,22 @@ class Problem:
 
     def restore(self, state: dict) -> None:
         """Take back what `decode_state` returned, in a fresh process."""
+
+    def make_search(self, neat_config, seed: int, state: dict | None = None) -> Any | None:
+        """The method's own search, or None for NEAT's (`NeatSearch`, built by the run). One of its
+        own has NeatSearch's face: `generation`, `step()` -> the generation's row, `best`,
+        `population`, `decode` and `state()` (evolve/methods/map_elites.py)."""
+        return None
+
+    @classmethod
+    def encode_search(cls, state: dict) -> dict:
+        """The search's `state()` as a checkpoint's JSON data (NEAT's: evolve/search/state_codec.py)."""
+        return encode_search_state(state)
+
+    @classmethod
+    def decode_search(cls, data, neat_config, cfg: RunConfig) -> dict:
+        """`encode_search`'s data checked and built back into the state the search restores from."""
+        return decode_search_state(data, neat_config)
 
 
 def positive(cfg: RunConfig, source: str, *keys: str) -> None:

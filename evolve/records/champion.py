@@ -13,7 +13,8 @@ import numpy as np
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
-from evolve.records.rundir import RunDir
+from evolve.records.elites import elite_record
+from evolve.records.rundir import ELITES_FILE, RunDir
 from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tasks.specs import TASKS
@@ -53,16 +54,18 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
                            best["generation"] + 1, evaluation)
 
 
-def read_champion(run_dir: str | Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
+def read_champion(run_dir: str | Path,
+                  cell=None) -> tuple[dict, np.ndarray, DenseController | GraphController]:
     """champion.json's record, body and controller (`load_champion` wraps them in a `Champion`);
     ValueError naming the file and the key when it is not a champion that runs (checked with one
-    forward pass of the controller)."""
-    f = Path(run_dir) / "champion.json"
+    forward pass of the controller). `cell` (a map-elites run's; (i, j) or "i,j"): the record of
+    that cell's elite in elites.json instead."""
+    f = Path(run_dir) / ("champion.json" if cell is None else ELITES_FILE)
     if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
         run = RunDir(run_dir)
         run.load_task(run.config())
     try:
-        champ = RunDir(run_dir).champion()
+        champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SgrError(f"{f}: not valid JSON ({exc})") from None
     if not isinstance(champ, dict):

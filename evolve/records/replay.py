@@ -22,6 +22,7 @@ from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
 from evolve.records import verdict as verdict_rule
 from evolve.records.champion import episode_steps, precision_of, read_champion
+from evolve.records.elites import parse_cell
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
 from tasks.env import obs_dim
@@ -34,7 +35,7 @@ MEDIAN = "median"  # champion_gif's default replay: the verdict's typical pertur
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
                  height: int = 320, fps: float = 30.0, replay: int | str = MEDIAN,
                  eps: float = verdict_rule.EPS, kind: str = "uniform", offset: float = 0.0, seed: int = 0,
-                 every: int = 1) -> Path:
+                 every: int = 1, cell=None) -> Path:
     """Render one of the champion's episodes in its task (same episode length as its evaluation; a
     frame every `every` steps): by default ("median") its typical perturbed episode, the replay
     whose return is the median of the verdict's `verdict.REPLAYS` replays under `kind` noise of
@@ -43,15 +44,17 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     one draw of a chaotic system, which may be far from what the robot usually does. Default `out`:
     the run's champion.gif for the median, else its own file (`replay_gif_name`); champion.gif gets an
     MP4 of the same frames beside it where imageio's ffmpeg plugin is installed (champion.mp4), and an
-    `out` ending in .mp4 is an MP4."""
+    `out` ending in .mp4 is an MP4. `cell` (a map-elites run's, (i, j) or "i,j"): that cell's elite
+    instead (elites.json), default `out` RUN/elite-I-J.gif (`elite_gif_name`)."""
     from tasks.render_episode import render_episode
     from tsim.render import write_animation
 
-    champ, body, ctrl = read_champion(run_dir)
-    index = typical_replay(run_dir, eps, kind, offset, seed)[0] if replay == MEDIAN else int(replay)
+    champ, body, ctrl = read_champion(run_dir, cell)
+    index = (typical_replay(run_dir, eps, kind, offset, seed, cell=cell)[0] if replay == MEDIAN
+             else int(replay))
     noise = _replay_noise(index + 1, eps, kind, offset, seed).take([index])
-    mp4_beside = out is None and replay == MEDIAN
-    out = out or Path(run_dir) / replay_gif_name(replay)
+    mp4_beside = out is None and replay == MEDIAN and cell is None
+    out = out or Path(run_dir) / (replay_gif_name(replay) if cell is None else elite_gif_name(cell, replay))
     shift = noise.shifts()
 
     def policy(t: int, obs: np.ndarray) -> np.ndarray:
@@ -67,11 +70,11 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
 
 def typical_replay(run_dir: str | Path, eps: float = verdict_rule.EPS, kind: str = "uniform",
                    offset: float = 0.0, seed: int = 0,
-                   replays: int = verdict_rule.REPLAYS) -> tuple[int, np.ndarray]:
+                   replays: int = verdict_rule.REPLAYS, cell=None) -> tuple[int, np.ndarray]:
     """The replay (1 to `replays`) whose return is the median of the champion's perturbed replays
     (`verdict.median_replay`; with the defaults, the verdict's replays), and all the returns
-    (element 0 the exact episode)."""
-    returns = replay_champion(run_dir, replays, eps, seed, kind, offset)
+    (element 0 the exact episode). `cell`: a map-elites run's elite instead."""
+    returns = replay_champion(run_dir, replays, eps, seed, kind, offset, cell)
     return verdict_rule.median_replay(returns), returns
 
 
@@ -83,19 +86,29 @@ def replay_gif_name(replay: int | str) -> str:
     return "champion-exact.gif" if replay == 0 else f"champion-replay{replay}.gif"
 
 
+def elite_gif_name(cell, replay: int | str = MEDIAN) -> str:
+    """The GIF of a map-elites run's elite of `cell`: elite-I-J.gif (its typical replay),
+    elite-I-J-exact.gif, elite-I-J-replayK.gif."""
+    cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in cell)
+    name = "elite-" + "-".join(map(str, cell))
+    if replay == MEDIAN:
+        return f"{name}.gif"
+    return f"{name}-exact.gif" if replay == 0 else f"{name}-replay{replay}.gif"
+
+
 def replay_line(run_dir: str | Path, replay: int | str = MEDIAN, eps: float = verdict_rule.EPS,
-                kind: str = "uniform", offset: float = 0.0, seed: int = 0) -> str:
+                kind: str = "uniform", offset: float = 0.0, seed: int = 0, cell=None) -> str:
     """What `sgr render` prints beside the GIF: the champion's nominal return and, for a perturbed
     replay, that replay's return (the episode the GIF shows), to answer "does it hold?"; for the
     median, which replay it is and what the replays return."""
     noise = f"±{eps:g} {kind} action noise" + (f", start ±{offset:g}" if offset else "")
     if replay == MEDIAN:
-        index, returns = typical_replay(run_dir, eps, kind, offset, seed)
+        index, returns = typical_replay(run_dir, eps, kind, offset, seed, cell=cell)
         noisy = returns[1:]
         return (f"the median of {len(noisy)} replays ({noise}), replay {index}: return "
                 f"{returns[index]:.4f} (replays {noisy.min():.4f} to {noisy.max():.4f}), nominal "
                 f"return {returns[0]:.4f}; the exact episode: --exact")
-    returns = replay_champion(run_dir, replay, eps, seed, kind, offset)
+    returns = replay_champion(run_dir, replay, eps, seed, kind, offset, cell)
     nominal = f"nominal return {returns[0]:.4f}"
     if replay == 0:
         return f"the exact episode: {nominal}"
@@ -121,12 +134,12 @@ def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndar
                           champ["episode_steps"], noise, precision=precision_of(champ))
 
 
-def rescore_champion(run_dir: str | Path) -> float:
+def rescore_champion(run_dir: str | Path, cell=None) -> float:
     """The champion's fitness scored again from champion.json alone, as evolution scored it: its
     episode return, or for a run with robust evaluation the statistic over the same K perturbed
     episodes (the run's seed and the evaluation's tag give their noise). Must equal the recorded
-    fitness."""
-    champ, body, ctrl = read_champion(run_dir)
+    fitness. `cell`: a map-elites run's elite of that cell (elites.json) instead."""
+    champ, body, ctrl = read_champion(run_dir, cell)
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
     if robust is None:
@@ -145,13 +158,14 @@ def rescore_champion(run_dir: str | Path) -> float:
 
 
 def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, seed: int = 0,
-                    kind: str = "uniform", offset: float = 0.0) -> np.ndarray:
+                    kind: str = "uniform", offset: float = 0.0, cell=None) -> np.ndarray:
     """Episode returns of champion.json's robot in its task, from the JSON alone: element 0
     unperturbed (for a nominal run it must equal the recorded fitness), then `replays` episodes
     with `kind` noise of scale `eps` (uniform: +-eps; gaussian: sd eps) added to every action and
     the start shifted by uniform(+-offset), all simulated as one batch. Replay i's noise is a pure
-    function of (seed, eps, kind, offset, i) (`evolve/rollout/robust.py`)."""
-    champ, body, ctrl = read_champion(run_dir)
+    function of (seed, eps, kind, offset, i) (`evolve/rollout/robust.py`). `cell`: a map-elites
+    run's elite of that cell instead (elites.json)."""
+    champ, body, ctrl = read_champion(run_dir, cell)
     # every world replays evolution's episode (`rollout_policy`: seed 0, the constructed env's
     # episode), so the perturbed runs differ from it by the perturbation alone
     return _replay(champ, body, ctrl, _replay_noise(replays + 1, eps, kind, offset, seed))
@@ -249,10 +263,11 @@ class Champion:
         return write_gif(frames, out, fps=fps)
 
 
-def load_champion(run_dir: str | Path) -> Champion:
+def load_champion(run_dir: str | Path, cell=None) -> Champion:
     """The champion of a run directory (its champion.json), checked to run: ValueError naming the
-    file and the key otherwise."""
-    record, body, ctrl = read_champion(run_dir)
+    file and the key otherwise. `cell` ((i, j) or "i,j"): a map-elites run's elite of that cell of
+    its archive (elites.json) instead."""
+    record, body, ctrl = read_champion(run_dir, cell)
     return Champion(task=record["task"], body=body, controller=ctrl,
                     episode_steps=episode_steps(record["task"], record["episode_steps"]),
                     fitness=float(record.get("fitness", float("nan"))), record=record)

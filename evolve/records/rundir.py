@@ -39,7 +39,10 @@ from tsim.errors import SgrError
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
+# a map-elites run's (evolve/methods/map_elites.py): its rows have the archive's coverage and QD score
+QD_COLUMNS = [*COLUMNS, "coverage", "qd_score"]
 KEEP_CHECKPOINTS = 2
+ELITES_FILE = "elites.json"
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
@@ -54,6 +57,11 @@ def checkpoint_generation(path: Path) -> int | None:
     The one place checkpoint names are parsed."""
     m = CHECKPOINT.fullmatch(Path(path).name)
     return int(m.group(1)) if m else None
+
+
+def _columns(rows: list[dict]) -> list[str]:
+    """generations.csv's columns for `rows`: QD_COLUMNS when they are a map-elites run's."""
+    return QD_COLUMNS if any("coverage" in r for r in rows) else COLUMNS
 
 
 def _ends_a_line(path: Path) -> bool:
@@ -231,33 +239,36 @@ class RunDir:
         return list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))  # whole lines only
 
     def _write_rows(self, rows: list[dict]) -> None:
+        columns = _columns(rows)
         buf = io.StringIO()
-        w = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+        w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n")
         w.writeheader()
         for r in rows:
-            w.writerow({k: r.get(k, "") for k in COLUMNS})  # a column a run's older rows lack: empty
+            w.writerow({k: r.get(k, "") for k in columns})  # a column a run's older rows lack: empty
         atomic_write(self.path / "generations.csv", buf.getvalue().encode())
-        self._header_ok = True
+        self._header = ",".join(columns)
 
-    def _header_is_ours(self, path: Path) -> bool:
-        """Whether generations.csv's header is COLUMNS (read once per RunDir): a run made before a
+    def _header_is_ours(self, path: Path, columns: list[str] = COLUMNS) -> bool:
+        """Whether generations.csv's header is `columns` (read once per RunDir): a run made before a
         column was added has its file rewritten with the new header by the next append."""
-        if not getattr(self, "_header_ok", False):
+        if getattr(self, "_header", None) is None:
             with path.open() as f:
-                self._header_ok = f.readline().rstrip("\n") == ",".join(COLUMNS)
-        return self._header_ok
+                self._header = f.readline().rstrip("\n")
+        return self._header == ",".join(columns)
 
     def append_row(self, row: dict) -> None:
         """Append one generation's row (keys COLUMNS, floats written with repr so they read back
         exactly), fsynced; a last line cut short is dropped by rewriting the file."""
         row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
         path = self.path / "generations.csv"
-        if not _ends_a_line(path) or not self._header_is_ours(path):  # no file, a line cut short,
+        columns = _columns([row])
+        if not _ends_a_line(path) or not self._header_is_ours(path, columns):  # no file, a line cut short,
             # or an older header: rewrite it whole
             self._write_rows([*self.rows(), row])
             return
         buf = io.StringIO()
-        csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n").writerow({k: row[k] for k in COLUMNS})
+        csv.DictWriter(buf, fieldnames=columns, lineterminator="\n").writerow({k: row.get(k, "") for k in
+                                                                                columns})
         try:
             with path.open("ab") as f:
                 f.write(buf.getvalue().encode())
@@ -295,6 +306,10 @@ class RunDir:
     def write_champion(self, champion: dict) -> None:
         """Replace champion.json atomically (laid out by `record_json`)."""
         atomic_write(self.path / "champion.json", record_json(champion).encode())
+
+    def write_elites(self, elites: dict) -> None:
+        """Replace elites.json (a map-elites run's archive, evolve/records/elites.py) atomically."""
+        atomic_write(self.path / ELITES_FILE, record_json(elites).encode())
 
     def champion(self) -> dict:
         """champion.json as a dict; ValueError when there is none yet or it is not valid JSON

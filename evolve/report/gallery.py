@@ -133,8 +133,10 @@ var s=document.getElementById('images');s.textContent=ok+' of '+im.length+' imag
 s.dataset.ok=ok;s.dataset.total=im.length;s.style.color=ok==im.length?'#1a7f37':'#cf222e';});</script>"""
 
 
-def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str = "sgr report") -> str:
-    """The whole report as one HTML page with every image inlined (no network, no other file)."""
+def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Sequence[str] = (),
+                title: str = "sgr report") -> str:
+    """The whole report as one HTML page with every image inlined (no network, no other file);
+    `extra`: more of its HTML, after the gallery (map-elites archives: evolve/report/archive.py)."""
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
              f"<style>{STYLE}</style></head><body>", markdown_html(markdown),
              "<h2>Curves</h2>", f"<img alt='curves' src='{_data_uri(curves, 'image/png')}' width='100%'>"]
@@ -152,6 +154,7 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], title: str
                 f"{r['seed']} · fitness {r['champion_fitness']:.3f}{_verdict_caption(r)}"
                 f"{_body_caption(r)}</figcaption></figure>")
         parts.append("</div>")
+    parts += list(extra)
     parts += ["<p id='images'>images not checked (scripts off)</p>", CHECK, "</body></html>"]
     return "\n".join(parts)
 

@@ -586,8 +586,10 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
     report.html beside it, of the runs at any depth below one folder or several (e.g. a sweep and
     its robust twin), grouped by the settings that make them comparable (but those in `pool`);
     each champion replayed `replays` times at each noise level in `levels`; `gallery`: the best
-    seed's champion per group as a GIF and a body picture in gallery/, inlined in report.html.
+    seed's champion per group as a GIF and a body picture in gallery/, inlined in report.html;
+    a map-elites run's archive and elites chosen across it in archives/ (evolve/report/archive.py).
     `say` gets one line per path skipped and per group."""
+    from evolve.report.archive import archives_html, archives_markdown, write_archives
     from evolve.report.gallery import gallery_entries, report_html, write_gallery
 
     folders = [folder] if isinstance(folder, str | Path) else list(folder)
@@ -605,11 +607,13 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
         for (label, task), rs in groups.items():
             say(f"  {label} / {task}: {len(rs)} run{'s' if len(rs) != 1 else ''} "
                 f"({', '.join(r['run'] for r in rs)})")
-    text = report_markdown(rows, skipped, pool)
+    archives = write_archives({r["run"]: r["path"] for r in rows}, out.parent / "archives")
+    text = report_markdown(rows, skipped, pool) + archives_markdown(archives, out.parent)
     atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
     curves = plot_curves(runs, out.parent / "curves.png", pool)
     shown = (write_gallery(gallery_entries(rows, {r["run"]: r["path"] for r in rows}), out.parent / "gallery")
              if gallery else [])
-    atomic_write(out.parent / "report.html", report_html(text, curves, shown).encode())
+    page = report_html(text, curves, shown, archives_html(archives))
+    atomic_write(out.parent / "report.html", page.encode())
     return out

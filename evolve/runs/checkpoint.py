@@ -17,13 +17,13 @@ from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.records.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config
-from evolve.search.state_codec import StateError, decode_search_state, encode_search_state
+from evolve.search.state_codec import StateError
 
 
 def checkpoint_data(search, problem) -> dict:
     """A checkpoint's data (without format and generation, which RunDir adds) of a NeatSearch
     and its method's Problem."""
-    return {"method": problem.name, "search": encode_search_state(search.state()),
+    return {"method": problem.name, "search": type(problem).encode_search(search.state()),
             "problem": problem.state()}
 
 
@@ -34,7 +34,7 @@ def decode_checkpoint(data: dict, cfg: RunConfig | Mapping, neat_config) -> dict
     cfg = RunConfig.of(cfg)
     if data.get("method") != cfg.method:
         raise StateError(f"checkpoint of method {data.get('method')!r}, the run's is {cfg.method!r}")
-    state = decode_search_state(data.get("search"), neat_config)
+    state = METHODS[cfg.method].decode_search(data.get("search"), neat_config, cfg)
     if state["generation"] != data["generation"]:
         raise StateError("search.generation differs from the checkpoint's generation")
     state["problem"] = METHODS[cfg.method].decode_state(data.get("problem"), cfg)

@@ -15,14 +15,20 @@ from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.records.rundir import RunDir
+from evolve.records.rundir import ELITES_FILE, RunDir
 from evolve.records.segments import record_segment
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
 from evolve.runs.config import config_from_dict, load_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
-from evolve.runs.reporters import ReporterSet, builtin_reporters, configured_reporters
+from evolve.runs.reporters import (
+    ArchiveFiles,
+    ChampionFile,
+    ReporterSet,
+    builtin_reporters,
+    configured_reporters,
+)
 from evolve.runs.stops import Interrupted, stop_after_generation
 from evolve.search.neat_ini import load_neat_config, neat_config_from_text, neat_ini_text
 from evolve.search.neat_search import NeatSearch
@@ -83,12 +89,15 @@ class Experiment:
         self.selection = cfg.final_selection
         robust = cfg.robust
         # (body_distance_weight is a key of sgr and direct; nested has none: plain NEAT speciation)
-        self.search = NeatSearch(self.neat_config, self.problem.decode, self.problem.evaluate,
-                                 seed=cfg.seed, body_distance_weight=self.problem.body_distance_weight(),
-                                 state=state, reevaluate=method.reevaluate_elites
-                                 or (robust is not None and robust.reevaluate),
-                                 accumulate=robust is not None and robust.accumulate,
-                                 race=robust.race if robust else 0, settle=robust.settle if robust else 0)
+        own = self.problem.make_search(self.neat_config, cfg.seed, state)  # map-elites' archive
+        self.search = own if own is not None else NeatSearch(
+            self.neat_config, self.problem.decode, self.problem.evaluate,
+            seed=cfg.seed, body_distance_weight=self.problem.body_distance_weight(),
+            state=state, reevaluate=method.reevaluate_elites or (robust is not None and robust.reevaluate),
+            accumulate=robust is not None and robust.accumulate,
+            race=robust.race if robust else 0, settle=robust.settle if robust else 0)
+        if hasattr(self.search, "elites"):  # an archive: elites.json after champion.json
+            self.reporters.insert_after(ChampionFile, ArchiveFiles())
 
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
@@ -264,15 +273,19 @@ class Experiment:
 
 
 def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
-    """The files drawn from a run's results: fitness.png (with its champion) always, champion.gif
-    when `render_champion` is set (or the run has one: it must show the champion of
-    champion.json). Each is written whole or not at all, and while they are written the run is
+    """The files drawn from a run's results: fitness.png (with its champion) always, archive.png for
+    a map-elites run, champion.gif when `render_champion` is set (or the run has one: it must show
+    the champion of champion.json). Each is written whole or not at all, and while they are written the run is
     marked so that `sgr evolve --resume` writes them again after a failure."""
     from evolve.records.replay import champion_gif
     from evolve.report.plots import plot_run
 
     run.begin_end_files()
     plot_run(run.path, run.path / "fitness.png")
+    if (run.path / ELITES_FILE).is_file():  # a map-elites run's archive
+        from evolve.report.archive import plot_archive
+
+        plot_archive(run.path)
     if champion and (cfg.render_champion or (run.path / "champion.gif").exists()):
         champion_gif(run.path)
     run.end_files_written()

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any
 
 from evolve.records.champion import best_ever_record
+from evolve.records.elites import FORMAT as ELITES_FORMAT
 
 HOOKS = ("start", "generation", "end")
 INSTALL_TENSORBOARD = "pip install 'sgr[tensorboard]' (or: pip install tensorboardX)"
@@ -64,6 +65,11 @@ class ReporterSet:
                 return
         raise ValueError(f"no reporter of type {kind.__name__} to replace: "
                          f"{', '.join(type(r).__name__ for r in self.reporters) or 'none'}")
+
+    def insert_after(self, kind: type, reporter: Any) -> None:
+        """Put `reporter` just after the reporter of type `kind` (at the end when there is none)."""
+        at = next((i + 1 for i, r in enumerate(self.reporters) if type(r) is kind), len(self.reporters))
+        self.reporters.insert(at, _checked(reporter))
 
     def _call(self, hook: str, *args: Any) -> None:
         for r in self.reporters:
@@ -111,6 +117,36 @@ class ChampionFile:
             exp.run.write_champion(best_ever_record(exp.cfg, exp.problem, exp.search.best))
 
 
+class ArchiveFiles:
+    """A map-elites run's archive (evolve/methods/map_elites.py): every elite's record in
+    elites.json after each generation (`load_champion(run, cell=...)`), written after
+    champion.json and before the checkpoint; archive.png (evolve/report/archive.py) on the
+    checkpoints' schedule (under a second) and with the end files."""
+
+    def generation(self, exp: Any, row: dict) -> None:
+        """elites.json, replaced whole; archive.png when a checkpoint is due."""
+        exp.run.write_elites(elites_record(exp.cfg, exp.problem, exp.search))
+        g, cfg = exp.search.generation, exp.cfg
+        if g % cfg.checkpoint_every == 0 or g == cfg.generations:
+            from evolve.report.archive import plot_archive
+
+            plot_archive(exp.run.path)
+
+
+def elites_record(cfg, problem, search) -> dict:
+    """elites.json's data of a `MapElitesSearch` after its generation (counted from 1)."""
+    qd = search.qd
+    stats = search.archive.stats
+    elites = []
+    for index in sorted(search.elites):
+        entry = search.elite_entry(index)
+        elites.append({"cell": list(entry["cell"]), "measures": entry["measures"],
+                       "champion": best_ever_record(cfg, problem, entry)})
+    return {"format": ELITES_FORMAT, "generation": search.generation, "descriptors": list(qd.descriptors),
+            "ranges": [list(r) for r in qd.ranges], "resolution": list(qd.resolution),
+            "coverage": float(stats.coverage), "qd_score": float(stats.qd_score), "elites": elites}
+
+
 class Checkpointer:
     """A checkpoint every `every` generations (default: the config's `checkpoint_every`), after the
     last one, and after the generation under way when a stop was asked for (Ctrl-C, SIGTERM): the
@@ -142,6 +178,14 @@ class ConsoleProgress:
             return
         elapsed = time.perf_counter() - self.t_start
         best = exp.search.best["fitness"] if exp.search.best else math.nan
+        if "coverage" in row:  # an archive (map-elites)
+            print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
+                  f"coverage {row['coverage']:6.1%} ({row['n_elites']} elites)  QD score "
+                  f"{row['qd_score']:9.3f}  valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
+                  f"episodes {row['episodes']:>4}  {row['total_s']:5.1f} s/gen (build {row['build_s']:.2f} "
+                  f"sim {row['sim_s']:.2f} archive {row['neat_s']:.2f})  {elapsed:6.0f} s",
+                  file=sys.stdout, flush=True)
+            return
         print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
               f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
               f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "
@@ -164,7 +208,9 @@ class PopulationWarning:
         self.warned = False
 
     def generation(self, exp: Any, row: dict) -> None:
-        """Warn, the first time the population is too large."""
+        """Warn, the first time the population is too large (an archive has no population)."""
+        if "n_species" not in row:
+            return
         n, pop = row["n_valid"] + row["n_invalid"], int(exp.cfg.pop_size)
         if self.warned or n <= 1.25 * pop:
             return
@@ -183,18 +229,20 @@ def builtin_reporters() -> list[Any]:
 def tensorboard_scalars(exp: Any, row: dict) -> dict[str, float]:
     """The scalars of a generation, by TensorBoard tag: fitness (best, mean, median, and the
     best-ever genome's, as the console's "ever"), population (species, genomes, the fraction of
-    valid bodies, episodes, body diversity where the method has bodies) and seconds (build: the
-    genomes' decoding, sim, neat, total)."""
+    valid bodies, episodes, body diversity where the method has bodies), seconds (build: the
+    genomes' decoding, sim, neat, total) and a map-elites run's archive (coverage, QD score; no
+    species)."""
     n = int(row["n_valid"]) + int(row["n_invalid"])
     best = exp.search.best
     out = {"fitness/best": row["best"], "fitness/mean": row["mean"], "fitness/median": row["median"],
            "fitness/best_ever": best["fitness"] if best else float("nan"),
-           "population/species": row["n_species"], "population/genomes": n,
+           "population/species": row.get("n_species", math.nan), "population/genomes": n,
            "population/valid_fraction": int(row["n_valid"]) / n if n else float("nan"),
            "population/episodes": row["episodes"]}
     if not math.isnan(float(row.get("body_diversity", math.nan))):
         out["population/body_diversity"] = row["body_diversity"]
     out.update({f"seconds/{k[:-2]}": row[k] for k in ("build_s", "sim_s", "neat_s", "total_s")})
+    out.update({f"archive/{k}": row[k] for k in ("coverage", "qd_score") if k in row})  # map-elites
     return {k: float(v) for k, v in out.items()}
 
 

@@ -1,0 +1,437 @@
+"""The map-elites method: quality diversity with SGR genomes (docs/EVOLVE.md "MAP-Elites").
+
+Instead of one population converging on one champion, an archive keeps the best robot found in
+each cell of a grid over descriptors of the body (evolve/methods/descriptors.py: actuator share,
+rigid share, width, ...). Each generation draws parents uniformly from the archive's elites, makes
+children with NEAT's own operators (crossover, then mutation, with the run's neat-python config),
+decodes them as SGR does (an invalid body is dropped and never simulated), evaluates them with
+the run's `robust` evaluation and offers them to the archive, where a child takes a cell when
+the cell is empty or it beats the cell's elite.
+
+The archive is pyribs' `GridArchive` (an optional extra: `pip install 'sgr[qd]'`). pyribs stores
+solutions as float vectors, so its solution is the genome's key, and the genomes (with their
+scores) live in this search's store of elites keyed by the archive's cell index. Honest by
+default, elites are re-scored as evaluations accumulate (`robust: accumulate`): up to
+`qd.rescore` elites with the fewest scores get one more evaluation a generation until they have
+`settle`; an elite's objective is the mean of its scores so far. pyribs only ever raises a cell's
+objective, so after the re-scoring the archive is rebuilt from the store (cleared, the elites added
+with their new means, then the children offered): the store is what the checkpoint holds, the
+archive is a function of it. An elite whose mean turns NaN (an unstable episode) leaves the archive.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import statistics
+import time
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from evolve.methods.descriptors import DESCRIPTORS
+from evolve.methods.sgr import SgrProblem
+from evolve.rollout.pool import RolloutPool
+from evolve.search.body_distance import mean_pairwise_body_distance
+from evolve.search.genome import peek
+from evolve.search.state_codec import (
+    StateError,
+    check,
+    decode_genomes,
+    decode_random,
+    encode_genomes,
+    encode_random,
+    get,
+    is_int,
+    row,
+)
+from tsim.errors import SgrError
+
+INSTALL_QD = "pip install 'sgr[qd]' (or: pip install ribs)"
+QD_KEYS = ("descriptors", "ranges", "resolution", "batch", "initial", "rescore", "score_offset")
+DEFAULT_DESCRIPTORS = ("actuator", "rigid")
+MAX_TRIES = 20  # genomes made per child asked for, at most, before a generation goes on with fewer valid
+STATE_FORMAT = "sgr-map-elites-1"
+
+
+def require_ribs() -> None:
+    """SgrError in one line saying how to install pyribs, when it is missing."""
+    try:
+        import ribs.archives  # noqa: F401
+    except ImportError:
+        raise SgrError(f"method 'map-elites' needs pyribs, which is not installed: {INSTALL_QD}") from None
+
+
+@dataclass(frozen=True)
+class QdSettings:
+    """The `qd` config key: the descriptors (names in evolve/methods/descriptors.py) and their
+    ranges, the archive's cells per descriptor (`resolution`), the valid children per generation
+    (`batch`; default the config's pop_size), the valid genomes of the first generation (`initial`;
+    default `batch`), the elites re-scored per generation at most (`rescore`; default batch / 4)
+    and the offset of the QD score (the sum over elites of fitness - `score_offset`)."""
+    descriptors: tuple[str, ...]
+    ranges: tuple[tuple[float, float], ...]
+    resolution: tuple[int, ...]
+    batch: int
+    initial: int
+    rescore: int
+    score_offset: float
+
+    @classmethod
+    def from_config(cls, raw: object, shape: tuple[int, int], pop_size: int,
+                    source: str = "config") -> QdSettings:
+        """The checked `qd` mapping ({} : every default); SgrError naming the key otherwise."""
+        name = f"{source}: key 'qd"
+        if not isinstance(raw, dict):
+            raise SgrError(f"{name}' must be a mapping ({', '.join(QD_KEYS)}), got {raw!r}")
+        for k in raw:
+            if k not in QD_KEYS:
+                raise SgrError(f"{name}': unknown key {k!r}; known keys: {', '.join(QD_KEYS)}")
+        names = raw.get("descriptors", list(DEFAULT_DESCRIPTORS))
+        if (not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names)
+                or len(set(names)) != len(names)):
+            raise SgrError(f"{name}.descriptors' must be a list of distinct descriptor names, got {names!r}")
+        for n in names:
+            if n not in DESCRIPTORS:
+                raise SgrError(f"{name}.descriptors': unknown descriptor {n!r}; known descriptors: "
+                               f"{', '.join(DESCRIPTORS)}")
+        given = raw.get("ranges", {})
+        if not isinstance(given, dict):
+            raise SgrError(f"{name}.ranges' must be a mapping of descriptor to [low, high], got {given!r}")
+        for k, v in given.items():
+            if k not in names:
+                raise SgrError(f"{name}.ranges': {k!r} is not one of qd.descriptors ({', '.join(names)})")
+            ok = (isinstance(v, list) and len(v) == 2
+                  and all(isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
+                          for x in v)
+                  and v[0] < v[1])
+            if not ok:
+                raise SgrError(f"{name}.ranges.{k}' must be [low, high] with low < high, got {v!r}")
+        ranges = tuple((float(given[n][0]), float(given[n][1])) if n in given
+                       else tuple(map(float, DESCRIPTORS[n].range_of(shape))) for n in names)
+        res = raw.get("resolution")
+        if res is None:
+            res = [int(DESCRIPTORS[n].cells_of(shape)) for n in names]
+        elif is_int(res):
+            res = [res] * len(names)
+        if not (isinstance(res, list) and len(res) == len(names) and all(is_int(r) and r >= 1 for r in res)):
+            raise SgrError(f"{name}.resolution' must be an int >= 1 or a list of one per descriptor, "
+                           f"got {res!r}")
+        counts = {}
+        for key, fallback in (("batch", pop_size), ("initial", None), ("rescore", None)):
+            v = raw.get(key, fallback)
+            if v is None:
+                v = counts["batch"] if key == "initial" else counts["batch"] // 4
+            least = 0 if key == "rescore" else 1
+            if not is_int(v) or v < least:
+                raise SgrError(f"{name}.{key}' must be an int >= {least}, got {v!r}")
+            counts[key] = v
+        offset = raw.get("score_offset", 0.0)
+        if isinstance(offset, bool) or not isinstance(offset, int | float) or not math.isfinite(offset):
+            raise SgrError(f"{name}.score_offset' must be a number, got {offset!r}")
+        return cls(tuple(names), ranges, tuple(res), counts["batch"], counts["initial"], counts["rescore"],
+                   float(offset))
+
+    def measure(self, body: np.ndarray) -> np.ndarray:
+        """The descriptors of a (valid) body, in order."""
+        return np.array([DESCRIPTORS[n].fn(body) for n in self.descriptors], dtype=np.float64)
+
+
+class MapElitesProblem(SgrProblem):
+    """SGR genomes (one CPPN: body and controller, evolve/methods/sgr.py) searched by MAP-Elites
+    (`MapElitesSearch`) instead of NEAT's speciated population."""
+
+    name = "map-elites"
+    config_keys = {**{k: v for k, v in SgrProblem.config_keys.items() if k != "body_distance_weight"},
+                   "qd": (dict, {})}
+    absent_before = {}
+
+    def __init__(self, cfg, neat_config, pool: RolloutPool | None = None):
+        super().__init__(cfg, neat_config, pool)
+        self.qd = QdSettings.from_config(dict(self.cfg.qd), tuple(self.cfg.robot_shape), self.cfg.pop_size)
+
+    @classmethod
+    def validate(cls, cfg, source: str) -> None:
+        """SGR's checks, the `qd` key's, no `start_from` (a NEAT population), and pyribs installed."""
+        super().validate(cfg, source)
+        QdSettings.from_config(dict(cfg.qd), tuple(cfg.robot_shape), cfg.pop_size, source)
+        if cfg.start_from is not None:
+            raise SgrError(f"{source}: key 'start_from' is not for method 'map-elites': it continues a "
+                           "NEAT population")
+        require_ribs()
+
+    def make_search(self, neat_config, seed: int, state: dict | None = None) -> MapElitesSearch:
+        """The MAP-Elites search over this problem (`state`: a checkpoint's, decoded)."""
+        require_ribs()
+        return MapElitesSearch(self, neat_config, seed=seed, state=state)
+
+    @classmethod
+    def encode_search(cls, state: dict) -> dict:
+        """`MapElitesSearch.state()` is JSON data already."""
+        return state
+
+    @classmethod
+    def decode_search(cls, data, neat_config, cfg) -> dict:
+        """A checkpoint's search data checked field by field (`MapElitesSearch.decode_state`)."""
+        return MapElitesSearch.decode_state(data, neat_config)
+
+
+@dataclass
+class Elite:
+    """A genome in (or offered to) the archive: its phenotype, descriptors, and the sum and tags of
+    its scores (its fitness is their mean, summed in the order they came)."""
+    genome: Any
+    phenotype: Any
+    measures: np.ndarray
+    total: float
+    tags: list[str]
+    born: int  # the search's generation (from 0) it was made in
+
+    @property
+    def fitness(self) -> float:
+        """The mean of its scores."""
+        return self.total / len(self.tags)
+
+
+class MapElitesSearch:
+    """MAP-Elites over a `MapElitesProblem`: `step` per generation; `elites` maps a cell index of
+    the archive to its `Elite`; `best` is the best elite (as `NeatSearch.best`); `state` checkpoints
+    it exactly (JSON data)."""
+
+    def __init__(self, problem: MapElitesProblem, neat_config, *, seed: int, state: dict | None = None):
+        from neat.innovation import InnovationTracker
+        from ribs.archives import GridArchive
+
+        self.problem, self.config, self.qd = problem, neat_config, problem.qd
+        self.decode = problem.decode
+        robust = problem.cfg.robust
+        self.reevaluate = robust is not None and robust.reevaluate
+        self.accumulate = robust is not None and robust.accumulate
+        self.settle = robust.settle if robust is not None else 0
+        self.archive = GridArchive(solution_dim=1, dims=list(self.qd.resolution), ranges=list(self.qd.ranges),
+                                   qd_score_offset=self.qd.score_offset, dtype=np.float64)
+        self.elites: dict[int, Elite] = {}
+        self.best: dict | None = None
+        gc = neat_config.genome_config
+        if state is None:
+            self.generation, self.next_key = 0, 1
+            gc.node_indexer = None  # neat-python starts it after the output nodes
+            self.tracker = InnovationTracker()
+            self._random_state = random.Random(seed).getstate()
+        else:
+            self._restore(state)
+        gc.innovation_tracker = self.tracker
+
+    @contextmanager
+    def _own_random(self) -> Iterator[None]:
+        """Python's `random` (which neat-python's operators draw from) is this search's own state
+        while inside; the caller's is put back after."""
+        caller = random.getstate()
+        random.setstate(self._random_state)
+        try:
+            yield
+        finally:
+            self._random_state = random.getstate()
+            random.setstate(caller)
+
+    @property
+    def population(self) -> dict[int, Any]:
+        """The elites' genomes by key, each with its fitness (final selection's candidates)."""
+        return {e.genome.key: e.genome for e in self.elites.values()}
+
+    def cell(self, index: int) -> tuple[int, ...]:
+        """The grid coordinates of a cell index of the archive."""
+        return tuple(int(i) for i in self.archive.int_to_grid_index([index])[0])
+
+    # ------------------------------------------------------------------ one generation
+    def step(self) -> dict:
+        """Breed, evaluate and insert one generation; returns its row of generations.csv."""
+        with self._own_random():
+            return self._step()
+
+    def _step(self) -> dict:
+        t0 = time.perf_counter()
+        self.tracker.reset_generation()
+        children, n_invalid = self._breed()
+        t1 = time.perf_counter()
+        again = self._to_rescore()
+        g = self.generation
+        phenotypes = [p for _, p in children] + [self.elites[c].phenotype for c in again]
+        tags = [f"{g}/{c.key}" for c, _ in children] + [f"{g}/{self.elites[c].genome.key}" for c in again]
+        fit, episodes = self.problem.evaluate(phenotypes, tags) if phenotypes else (np.zeros(0), 0)
+        t2 = time.perf_counter()
+        n = len(children)
+        for c, f, tag in zip(again, fit[n:], tags[n:], strict=True):
+            e = self.elites[c]
+            if self.accumulate:
+                e.total, e.tags = e.total + float(f), [*e.tags, tag]
+            else:
+                e.total, e.tags = float(f), [tag]
+        offered = [Elite(c, p, self.qd.measure(p.body), float(f), [tag], g)
+                   for (c, p), f, tag in zip(children, fit[:n], tags[:n], strict=True)]
+        self.insert(offered, keep=list(self.elites.values()))
+        fits = [e.fitness for e in self.elites.values()]
+        stats = self.archive.stats
+        row = {"generation": g,
+               "best": max(fits) if fits else math.nan,
+               "mean": statistics.fmean(fits) if fits else math.nan,
+               "median": statistics.median(fits) if fits else math.nan,
+               "n_valid": n, "n_invalid": n_invalid, "episodes": int(episodes),
+               "coverage": float(stats.coverage), "qd_score": float(stats.qd_score),
+               "n_elites": len(self.elites),
+               "body_diversity": mean_pairwise_body_distance([e.phenotype.body
+                                                              for e in self.elites.values()]),
+               "build_s": t1 - t0, "sim_s": t2 - t1, "neat_s": time.perf_counter() - t2,
+               "total_s": time.perf_counter() - t0}
+        self.generation += 1
+        return row
+
+    def _breed(self) -> tuple[list[tuple[Any, Any]], int]:
+        """The generation's valid children (genome, phenotype) and the number of invalid ones made:
+        `initial` new genomes while the archive is empty, else `batch` children of two parents
+        drawn uniformly from the elites (crossover, then mutation); at most MAX_TRIES genomes per
+        child asked for."""
+        want = self.qd.batch if self.elites else self.qd.initial
+        cells = sorted(self.elites)
+        gtype, gc = self.config.genome_type, self.config.genome_config
+        out, invalid = [], 0
+        for _ in range(MAX_TRIES * want):
+            if len(out) == want:
+                break
+            child = gtype(self.next_key)
+            self.next_key += 1
+            if cells:
+                a = self.elites[random.choice(cells)].genome
+                b = self.elites[random.choice(cells)].genome
+                child.configure_crossover(a, b, gc)
+                child.mutate(gc)
+            else:
+                child.configure_new(gc)
+            p = self.decode(child)
+            if p.valid:
+                out.append((child, p))
+            else:
+                invalid += 1
+        return out, invalid
+
+    def _to_rescore(self) -> list[int]:
+        """The cells whose elites get another evaluation this generation: with `accumulate`, those
+        with fewer than `settle` scores (0: no limit), fewest first (ties: the lower cell index);
+        with `reevaluate` alone, every elite (fitness = its latest score); at most `rescore`."""
+        if not self.reevaluate:
+            return []
+        cells = [c for c in sorted(self.elites)
+                 if not (self.accumulate and self.settle and len(self.elites[c].tags) >= self.settle)]
+        cells.sort(key=lambda c: len(self.elites[c].tags))  # stable: cell order within a count
+        return cells[:self.qd.rescore]
+
+    def insert(self, offered: list[Elite], keep: list[Elite] | None = None) -> None:
+        """Rebuild the archive from `keep` (default: the elites as they are; each with its current
+        fitness), then offer it `offered`: a cell takes the best of what falls in it when that
+        beats its elite (pyribs' rule). Entries with a NaN fitness are left out."""
+        keep = list(self.elites.values()) if keep is None else keep
+        self.archive.clear()
+        pool: dict[int, Elite] = {}
+        for group in (keep, offered):
+            entries = [e for e in group if math.isfinite(e.fitness)]
+            if not entries:
+                continue
+            pool.update((e.genome.key, e) for e in entries)
+            self.archive.add(solution=np.array([[float(e.genome.key)] for e in entries]),
+                             objective=np.array([e.fitness for e in entries], dtype=np.float64),
+                             measures=np.stack([e.measures for e in entries]))
+        index, solution = self.archive.data(["index", "solution"], return_type="tuple")
+        pairs = sorted(zip(index.tolist(), solution.tolist(), strict=True))
+        self.elites = {int(i): pool[int(s[0])] for i, s in pairs}
+        for e in self.elites.values():
+            e.genome.fitness = e.fitness
+        self._track_best()
+
+    def _track_best(self) -> None:
+        """`best`: the elite of the highest fitness (ties: the lower key), as NeatSearch's best."""
+        if not self.elites:
+            self.best = None
+            return
+        c, e = max(self.elites.items(), key=lambda kv: (kv[1].fitness, -kv[1].genome.key))
+        self.best = self.elite_entry(c)
+
+    def elite_entry(self, index: int) -> dict:
+        """An elite as `NeatSearch.best` holds the best genome (what champion records are made of),
+        with its cell."""
+        e = self.elites[index]
+        return {"fitness": e.fitness, "generation": e.born, "key": e.genome.key, "genome": e.genome,
+                "phenotype": e.phenotype, "tags": list(e.tags), "cell": self.cell(index),
+                "measures": dict(zip(self.qd.descriptors, e.measures.tolist(), strict=True))}
+
+    # ------------------------------------------------------------------ checkpoint state
+    def state(self) -> dict:
+        """Everything that decides the rest of the run, as JSON data: the elites (genomes, scores,
+        their generation), the key counters, the innovation tracker and Python's `random`. Their
+        phenotypes, descriptors and cells, and the pyribs archive, are rebuilt from them."""
+        gc = self.config.genome_config
+        node_key, gc.node_indexer = peek(gc.node_indexer)
+        cells = sorted(self.elites)
+        return {"format": STATE_FORMAT, "generation": self.generation, "next_key": self.next_key,
+                "node_indexer": node_key,
+                "innovations": {"global_counter": self.tracker.global_counter,
+                                "generation": [[i, o, t, n] for (i, o, t), n
+                                               in self.tracker.generation_innovations.items()]},
+                "random": encode_random(self._random_state),
+                "genomes": encode_genomes([self.elites[c].genome for c in cells]),
+                "elites": [{"cell": c, "total": self.elites[c].total, "tags": list(self.elites[c].tags),
+                            "born": self.elites[c].born} for c in cells]}
+
+    @staticmethod
+    def decode_state(data, neat_config, path: str = "search") -> dict:
+        """`state`'s data checked field by field (StateError naming the first bad one), genomes
+        built from the run's own neat-python config."""
+        from neat.innovation import InnovationTracker
+
+        if get(data, "format", path, "str") != STATE_FORMAT:
+            raise StateError(f"{path}.format: expected {STATE_FORMAT!r}")
+        out = {"generation": get(data, "generation", path, "int"),
+               "next_key": get(data, "next_key", path, "int"),
+               "node_indexer": get(data, "node_indexer", path, "int?"),
+               "random": decode_random(get(data, "random", path, "dict"), f"{path}.random")}
+        inn = get(data, "innovations", path, "dict")
+        tracker = InnovationTracker(get(inn, "global_counter", f"{path}.innovations", "int"))
+        for j, it in enumerate(get(inn, "generation", f"{path}.innovations", "list")):
+            i, o, t, n = row(it, f"{path}.innovations.generation[{j}]", ("int", "int", "str", "int"))
+            tracker.generation_innovations[(i, o, t)] = n
+        out["tracker"] = tracker
+        genomes = decode_genomes(get(data, "genomes", path, "dict"), f"{path}.genomes",
+                                 neat_config.genome_type, neat_config.genome_config)
+        elites = get(data, "elites", path, "list")
+        if len(elites) != len(genomes):
+            raise StateError(f"{path}.elites: {len(elites)} elites for {len(genomes)} genomes")
+        out["elites"] = []
+        for j, (e, genome) in enumerate(zip(elites, genomes, strict=True)):
+            p = f"{path}.elites[{j}]"
+            tags = [check(t, f"{p}.tags", "str") for t in get(e, "tags", p, "list")]
+            if not tags:
+                raise StateError(f"{p}.tags: an elite has at least one score")
+            out["elites"].append((get(e, "cell", p, "int"), genome, get(e, "total", p, "float"), tags,
+                                  get(e, "born", p, "int")))
+        return out
+
+    def _restore(self, state: Mapping) -> None:
+        import itertools
+
+        self.generation, self.next_key = state["generation"], state["next_key"]
+        self.tracker = state["tracker"]
+        self._random_state = state["random"]
+        nxt = state["node_indexer"]
+        self.config.genome_config.node_indexer = None if nxt is None else itertools.count(nxt)
+        keep = []
+        for cell, genome, total, tags, born in state["elites"]:
+            p = self.decode(genome)
+            if not p.valid:
+                raise StateError(f"search.elites: the elite of cell {cell} decodes to an invalid body")
+            keep.append((cell, Elite(genome, p, self.qd.measure(p.body), total, list(tags), born)))
+        self.insert([], keep=[e for _, e in keep])
+        if sorted(self.elites) != sorted(c for c, _ in keep):
+            raise StateError("search.elites: the elites do not fall in their recorded cells "
+                             "(the run's qd settings changed?)")

@@ -1,0 +1,55 @@
+"""elites.json, a map-elites run's archive as data: every elite's champion record (what
+champion.json holds for the best one: body, controller, genome, fitness and how it was scored),
+with its cell and descriptors, so any elite is a runnable robot (`load_champion(run, cell=(i, j))`).
+Written by the run's `ArchiveFiles` reporter (evolve/runs/reporters.py, `elites_record`).
+
+    {"format": "sgr-elites-1", "generation": g, "descriptors": ["actuator", "rigid"],
+     "ranges": [[0, 1], [0, 1]], "resolution": [10, 10], "coverage": 0.31, "qd_score": 123.4,
+     "elites": [{"cell": [i, j], "measures": {"actuator": 0.4, ...}, "champion": {...}}, ...]}
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from evolve.records.rundir import ELITES_FILE
+from tsim.errors import SgrError
+
+FORMAT = "sgr-elites-1"
+
+
+def read_elites(run_dir: str | Path) -> dict:
+    """A run's elites.json as read; SgrError when there is none or it is not one."""
+    f = Path(run_dir) / ELITES_FILE
+    if not f.is_file():
+        raise SgrError(f"{run_dir} has no {ELITES_FILE}: only a map-elites run keeps an archive of elites")
+    try:
+        data = json.loads(f.read_text())
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise SgrError(f"{f}: not valid JSON ({exc})") from None
+    if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("elites"), list):
+        raise SgrError(f"{f}: not an archive of elites (format {FORMAT})")
+    return data
+
+
+def parse_cell(text: str) -> tuple[int, ...]:
+    """A cell written "i,j" (`sgr render --cell`) as integers; SgrError otherwise."""
+    try:
+        cell = tuple(int(x) for x in text.split(","))
+    except ValueError:
+        raise SgrError(f"a cell is its indices separated by commas (e.g. 3,4), got {text!r}") from None
+    return cell
+
+
+def elite_record(run_dir: str | Path, cell) -> dict:
+    """The champion record of the elite in `cell` (a tuple of indices, or "i,j") of a run's archive;
+    SgrError naming the cell when it is empty."""
+    cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in cell)
+    data = read_elites(run_dir)
+    for e in data["elites"]:
+        if isinstance(e, dict) and tuple(e.get("cell", ())) == cell and isinstance(e.get("champion"), dict):
+            return e["champion"]
+    filled = ", ".join(",".join(map(str, e["cell"])) for e in data["elites"][:8] if isinstance(e, dict))
+    raise SgrError(f"{Path(run_dir) / ELITES_FILE}: no elite in cell {','.join(map(str, cell))} "
+                   f"(of {len(data['elites'])} filled: {filled}{', ...' if len(data['elites']) > 8 else ''})")

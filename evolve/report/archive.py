@@ -1,0 +1,144 @@
+"""A map-elites run's archive as a picture (archive.png): a heatmap of each cell's elite fitness over
+the first two descriptors, with each elite's body drawn small in its cell; and the elites a report's
+gallery shows, chosen across the map. Read from elites.json alone (evolve/records/elites.py).
+"""
+
+from __future__ import annotations
+
+import base64
+import html
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from evolve.records.elites import read_elites
+from evolve.report.gallery import body_image
+from evolve.report.plots import save_png
+
+
+def archive_grid(data: dict) -> tuple[np.ndarray, dict[tuple[int, int], dict]]:
+    """The (cells of descriptor 1, cells of descriptor 2) grid of elite fitness (NaN: empty) and the
+    elite drawn in each (i, j); with more than two descriptors a cell shows the best elite over the
+    others, with one a single row."""
+    res = list(data["resolution"]) + [1]
+    grid = np.full((res[0], res[1]), np.nan)
+    shown: dict[tuple[int, int], dict] = {}
+    for e in data["elites"]:
+        cell = list(e["cell"]) + [0]
+        ij = (int(cell[0]), int(cell[1]))
+        fit = float(e["champion"]["fitness"])
+        if np.isnan(grid[ij]) or fit > grid[ij]:
+            grid[ij], shown[ij] = fit, e
+    return grid, shown
+
+
+def plot_archive(run_dir: str | Path, out: str | Path | None = None, bodies: bool = True) -> Path:
+    """archive.png (default RUN/archive.png): the heatmap, each cell's body drawn small over it when
+    `bodies`; titled with the coverage and the QD score. Returns the PNG path."""
+    data = read_elites(run_dir)
+    grid, shown = archive_grid(data)
+    names = list(data["descriptors"]) + [""]
+    ranges = [list(r) for r in data["ranges"]] + [[0.0, 1.0]]
+    n_i, n_j = grid.shape
+    fig = Figure(figsize=(min(12, 2 + 0.6 * n_i), min(10, 1.5 + 0.6 * n_j)))
+    ax = fig.add_subplot(1, 1, 1)
+    extent = (ranges[0][0], ranges[0][1], ranges[1][0], ranges[1][1])
+    img = ax.imshow(grid.T, origin="lower", extent=extent, aspect="auto", cmap="viridis")
+    fig.colorbar(img, ax=ax, label="elite fitness")
+    if bodies:
+        wi, wj = (extent[1] - extent[0]) / n_i, (extent[3] - extent[2]) / n_j
+        for (i, j), e in shown.items():
+            pic = body_image(np.asarray(e["champion"]["body"]), cell=6)
+            x0, y0 = extent[0] + i * wi, extent[2] + j * wj
+            ax.imshow(pic, extent=(x0 + 0.15 * wi, x0 + 0.85 * wi, y0 + 0.15 * wj, y0 + 0.85 * wj),
+                      interpolation="nearest", aspect="auto")
+        ax.set_xlim(extent[0], extent[1])
+        ax.set_ylim(extent[2], extent[3])
+    ax.set_xlabel(names[0])
+    ax.set_ylabel(names[1] or "")
+    ax.set_title(f"archive after generation {data['generation']}: {len(data['elites'])} elites, coverage "
+                 f"{data['coverage']:.1%}, QD score {data['qd_score']:.3f}", fontsize=9)
+    fig.tight_layout()
+    return save_png(fig, out or Path(run_dir) / "archive.png")
+
+
+def spread_elites(run_dir: str | Path, n: int = 6) -> list[dict]:
+    """Up to `n` elites chosen across the map for a gallery: the best one, then each next the elite
+    farthest (in cells) from those chosen (ties: the fitter), so the gallery spans the archive."""
+    elites = sorted(read_elites(run_dir)["elites"], key=lambda e: -float(e["champion"]["fitness"]))
+    chosen: list[dict] = []
+    for _ in range(min(n, len(elites))):
+        def gap(e: dict) -> float:
+            return min((float(np.abs(np.subtract(e["cell"], c["cell"])).sum()) for c in chosen),
+                       default=0.0)
+        rest = [e for e in elites if e not in chosen]
+        chosen.append(max(rest, key=gap) if chosen else rest[0])
+    return chosen
+
+
+def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict]:
+    """For each map-elites run of `runs` (name -> run folder; those with elites.json), its archive
+    picture <name>-archive.png and the bodies of `n` elites chosen across the map
+    (<name>-elite-I-J.png) in `folder`; returns one entry per run: name, archive and elites (each
+    with its cell, fitness, descriptors and body picture)."""
+    import imageio.v3 as iio
+
+    from evolve.records.files import atomic_write
+    from evolve.records.rundir import ELITES_FILE
+
+    out = []
+    for name, run in runs.items():
+        if not (Path(run) / ELITES_FILE).is_file():
+            continue
+        folder.mkdir(parents=True, exist_ok=True)
+        safe = str(name).replace("/", "-")
+        png = plot_archive(run, folder / f"{safe}-archive.png")
+        shown = []
+        for e in spread_elites(run, n):
+            cell = "-".join(map(str, e["cell"]))
+            body = folder / f"{safe}-elite-{cell}.png"
+            atomic_write(body, iio.imwrite("<bytes>", body_image(np.asarray(e["champion"]["body"])),
+                                           extension=".png"))
+            shown.append({"cell": e["cell"], "fitness": float(e["champion"]["fitness"]),
+                          "measures": e["measures"], "body": body})
+        out.append({"name": str(name), "archive": png, "elites": shown})
+    return out
+
+
+def _caption(e: dict) -> str:
+    measures = ", ".join(f"{k} {v:.2f}" for k, v in e["measures"].items())
+    return f"cell {','.join(map(str, e['cell']))} · fitness {e['fitness']:.3f} · {measures}"
+
+
+def archives_markdown(entries: list[dict], base: Path) -> str:
+    """report.md's section on the map-elites runs' archives (paths relative to `base`)."""
+    if not entries:
+        return ""
+    lines = ["", "## Archives (map-elites)", "",
+             "Each map-elites run's archive: each cell's elite fitness, its body drawn small; then "
+             "elites chosen across the map (`sgr render RUN --cell I,J` renders any of them).", ""]
+    for a in entries:
+        lines += [f"### {a['name']}", "", f"![archive of {a['name']}]({a['archive'].relative_to(base)})", ""]
+        lines += [f"- {_caption(e)}: ![body]({e['body'].relative_to(base)})" for e in a["elites"]] + [""]
+    return "\n".join(lines)
+
+
+def _png_uri(path: Path) -> str:
+    return "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode()
+
+
+def archives_html(entries: list[dict]) -> list[str]:
+    """report.html's parts on the archives, images inlined as data URIs."""
+    if not entries:
+        return []
+    parts = ["<h2>Archives (map-elites)</h2><p>Each cell's elite fitness, its body drawn small; below, "
+             "elites chosen across the map.</p>"]
+    for a in entries:
+        name = html.escape(a["name"])
+        parts.append(f"<h3>{name}</h3><img alt='archive of {name}' src='{_png_uri(a['archive'])}'"
+                     " width='100%'><div class='gallery'>")
+        parts += [f"<figure><img alt='{name} elite' src='{_png_uri(e['body'])}'>"
+                  f"<figcaption>{html.escape(_caption(e))}</figcaption></figure>" for e in a["elites"]]
+        parts.append("</div>")
+    return parts
