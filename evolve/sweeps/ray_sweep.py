@@ -176,9 +176,13 @@ class RayBackend:
         for ref in refs:
             ray.cancel(ref, force=False)
         try:
-            while refs:  # in short turns: a signal's handler runs between them, and the cluster is watched
-                _, refs = ray.wait(refs, num_returns=len(refs), timeout=WAIT_TURN_S)
+            # the cluster watched meanwhile; a signal comes in the sleep, not in Ray's wait, which would
+            # turn the handler's `Interrupted` (SIGTERM: exit 143) into a plain KeyboardInterrupt
+            while refs:
+                _, refs = ray.wait(refs, num_returns=len(refs), timeout=0)
                 self._check_cluster()
+                if refs:
+                    time.sleep(WAIT_TURN_S)
         except BackendLost:
             return
         except KeyboardInterrupt:
