@@ -37,6 +37,7 @@ import yaml
 
 from evolve.records import verdict as verdict_rule
 from evolve.records.files import atomic_write
+from evolve.records.segments import backend_summary
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
 from tsim.errors import SgrError
@@ -160,7 +161,7 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         row = {"method": g.label, "task": g.task, "seed": raw.get("seed"), "generations": len(best),
                "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
                "episode_steps": episode_length(raw, g.task), "settings": g.settings, "classic": g.classic,
-               "path": d}
+               "path": d, "backend": backend_summary(d)}
         fitness = _recorded_fitness(d)
         if fitness is not None:
             row["champion_fitness"] = fitness
@@ -316,6 +317,7 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
             out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     out.write(bodies_markdown(rows))
+    out.write(backends_markdown(rows))
     return out.getvalue()
 
 
@@ -341,6 +343,18 @@ def bodies_markdown(rows: list[dict]) -> str:
         diversity = f"{r['body_diversity']:.3f}" if "body_diversity" in r else "-"
         out.write(f"| {r['run']} | " + " | ".join(cells) + f" | {diversity} |\n")
     return out.getvalue()
+
+
+def backends_markdown(rows: list[dict]) -> str:
+    """report.md's "Backends": where each run ran (`evolve.records.segments.backend_summary`), so
+    that a run resumed on another arch says so; "" when no run recorded it."""
+    if not any(r.get("backend") for r in rows):
+        return ""
+    return ("\n## Backends\n\nWhere each run ran (its segments.json): the arch it started on, each "
+            "arch a resume moved it to and from which generation, and its precision; - for runs made "
+            "before this was recorded.\n\n| run | backend |\n|---|---|\n"
+            + "".join(f"| {r['run']} | {r.get('backend') or '-'} |\n"
+                      for r in sorted(rows, key=lambda r: r["run"])))
 
 
 GROUP_HEAD = {"method": "method", "task": "task", "shape": "shape", "pop": "pop",
@@ -478,9 +492,10 @@ BODY_COLUMNS = ("width", "height", "actuator", "symmetry_lr", "symmetry_tb", "ir
 def write_summary_csv(rows: list[dict], path: Path) -> None:
     """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
     then the settings of each run's group (SETTING_COLUMNS, where the rows have them), then
-    BODY_COLUMNS: missing values empty, other keys dropped."""
+    `backend` (where the run ran: `backend_summary`), then BODY_COLUMNS: missing values empty, other
+    keys dropped."""
     setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
-    columns = summary_columns(_levels(rows)) + list(setting) + list(BODY_COLUMNS)
+    columns = summary_columns(_levels(rows)) + list(setting) + ["backend"] + list(BODY_COLUMNS)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()

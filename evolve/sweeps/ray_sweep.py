@@ -1,6 +1,12 @@
 """The Ray sweep backend: each run of a sweep is a Ray task that advances the run's directory (on a
 filesystem every node shares) with `sgr evolve --resume` on whichever node has room.
 
+A sweep stopped by Ctrl-C or SIGTERM stops its runs as the local backend does: it cancels their
+tasks without force (Ray raises KeyboardInterrupt in each task), each task passes the stop on to
+its run's process (SIGUSR1, evolve/runs/stops.py) and waits while the run ends its generation with a
+checkpoint. A second Ctrl-C or SIGTERM while the sweep waits cancels with force: the tasks' workers
+are killed, and the runs' processes with them, each keeping its last checkpoint.
+
 A node that is lost takes its runs' processes with it; their tasks fail, and `run_sweep` resumes
 each run from its own checkpoints on a node that is left. A cluster that goes away altogether (its
 head unreachable, or no node with a CPU left) for CLUSTER_LOST_S stops the sweep with one line that
@@ -16,21 +22,46 @@ from pathlib import Path
 
 from evolve.own_modules import child_env, python_command
 from evolve.rollout.ray_cluster import connect
+from evolve.runs.stops import PASSED_ON
 from evolve.sweeps.sweep import BackendLost, die_with_parent, trust_flag
 
 CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
 HEALTH_EVERY_S = 1.0
+WAIT_TURN_S = 0.2  # a run's task looks for a cancel this often
 
 
 def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> int:
-    """A Ray task: advance one run to its end in a subprocess on this node; its exit code."""
+    """A Ray task: advance one run to its end in a subprocess on this node; its exit code. Cancelled
+    without force (the sweep stops), it lets the run end its generation with a checkpoint first."""
     env = child_env()  # -P (python_command) and sgr's folder first: no file of the working folder is imported
-    with open(Path(run_path) / "log.txt", "ab") as log:
-        # the run dies with this worker (a cancelled task, a sweep that stopped): no run goes on alone
-        proc = subprocess.Popen(python_command("evolve.cli", "evolve", "--resume", run_path,
-                                               "--workers", str(workers), "--quiet", *flags),
-                                stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
-    return proc.wait()
+    proc = None
+    try:
+        with open(Path(run_path) / "log.txt", "ab") as log:
+            # the run dies with this worker (a task cancelled with force, a sweep killed): no run goes on
+            # alone
+            proc = subprocess.Popen(python_command("evolve.cli", "evolve", "--resume", run_path,
+                                                   "--workers", str(workers), "--quiet", *flags),
+                                    stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
+        return _wait(proc)
+    except KeyboardInterrupt:  # ray.cancel(force=False): the sweep stops
+        if proc is None:
+            raise
+        proc.send_signal(PASSED_ON)  # as LocalBackend.stop: the run ends its generation, checkpoints, exits
+        while True:  # however long its generation takes; a force cancel kills this worker, and the run
+            try:
+                return proc.wait()
+            except KeyboardInterrupt:
+                continue
+
+
+def _wait(proc: subprocess.Popen) -> int:
+    """proc's exit code. Ray's KeyboardInterrupt (a cancel) reaches only Python code, not a process
+    blocked in waitpid: wait in short turns."""
+    while True:
+        try:
+            return proc.wait(timeout=WAIT_TURN_S)
+        except subprocess.TimeoutExpired:
+            continue
 
 
 class RayBackend:
@@ -131,15 +162,31 @@ class RayBackend:
             pass
 
     def stop(self) -> None:
-        """Cancel the running tasks: their workers are killed, and each run's process with its
-        worker; every run keeps its last checkpoint. Nothing to do once the cluster is lost."""
+        """Ask every running run to stop and wait, as LocalBackend.stop: each task is cancelled
+        without force and passes the stop on to its run, which ends its generation and writes a
+        checkpoint. A second Ctrl-C or SIGTERM while waiting cancels with force: the tasks' workers
+        are killed, and each run's process with its worker, each run keeping its last checkpoint.
+        Nothing to do once the cluster is lost; lost while waiting, the wait ends."""
         import ray
 
-        if self._unwell_since is not None:
-            self.procs = {}
-            return
-        for ref in self.procs.values():
-            ray.cancel(ref, force=True)
-        if self.procs:
-            ray.wait(list(self.procs.values()), num_returns=len(self.procs), timeout=30)
+        refs = list(self.procs.values())
         self.procs = {}
+        if self._unwell_since is not None or not refs:
+            return
+        for ref in refs:
+            ray.cancel(ref, force=False)
+        try:
+            # the cluster watched meanwhile; a signal comes in the sleep, not in Ray's wait, which would
+            # turn the handler's `Interrupted` (SIGTERM: exit 143) into a plain KeyboardInterrupt
+            while refs:
+                _, refs = ray.wait(refs, num_returns=len(refs), timeout=0)
+                self._check_cluster()
+                if refs:
+                    time.sleep(WAIT_TURN_S)
+        except BackendLost:
+            return
+        except KeyboardInterrupt:
+            for ref in refs:
+                ray.cancel(ref, force=True)
+            ray.wait(refs, num_returns=len(refs), timeout=30)
+            raise

@@ -361,10 +361,12 @@ def _run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool, every: float) -
                 last_report = time.monotonic()
                 say(_progress(sweep, backend, t0, gens_at_start))
     except KeyboardInterrupt as exc:
-        backend.stop()
-        signum = getattr(exc, "signum", signal.SIGINT)
-        by = f" by {signal.Signals(signum).name}" if signum != signal.SIGINT else ""  # (Ctrl-C: as ever)
-        say(f"interrupted{by}; continue with: sgr sweep --resume {sweep.path}")
+        try:
+            backend.stop()
+        finally:  # a second signal while the runs stop (it kills them) is raised, with the same words
+            signum = getattr(exc, "signum", signal.SIGINT)
+            by = f" by {signal.Signals(signum).name}" if signum != signal.SIGINT else ""  # (Ctrl-C: as ever)
+            say(f"interrupted{by}; continue with: sgr sweep --resume {sweep.path}")
         raise
     except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
         backend.stop()

@@ -3,8 +3,10 @@ nodes, each a raylet with its own CPU and resource) loses machines, and the resu
 (a) a sweep on it gives the local backend's results; (b) a worker node removed while the sweep runs:
 its run resumes on the other node from its checkpoints and equals the local sweep's; (c) `workers:
 ray` within one run: a node removed mid-generation, its chunk is simulated again on the other node
-and the run is unchanged; (d) the whole cluster goes away: the sweep stops with one line naming the
-resume command. Tests run in this order and share one cluster (the last one shuts it down)."""
+and the run is unchanged; (c) a sweep given SIGTERM: each run ends the generation under way with a
+checkpoint and the resumed sweep equals an uninterrupted one, and a second SIGTERM kills the runs at
+once; (d) the whole cluster goes away: the sweep stops with one line naming the resume command.
+Tests run in this order and share one cluster (the last one shuts it down)."""
 
 from __future__ import annotations
 
@@ -85,6 +87,14 @@ def local_results(tmp_path_factory) -> dict:
 
 def _ppid(pid: int) -> int:
     return int(Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[1])
+
+
+def _running(pid: int) -> bool:
+    """Whether process `pid` exists and is not a zombie."""
+    try:
+        return "zombie" not in Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
 
 
 def node_of(cluster: Cluster, pid: int):
@@ -217,6 +227,85 @@ def test_c_workers_ray_a_node_removed_mid_generation_is_simulated_elsewhere_unch
     assert fitness(tmp_path / "ray") == fitness(tmp_path / "local")
     _worker_node(cluster, "node_d")
     cluster.wait_for_nodes()
+
+
+def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_the_sweep_resumes(
+        cluster, tmp_path):
+    """SIGTERM to a `--backend ray` sweep (on the cluster, one run on each worker node) once a run
+    has ended a generation: each run's task passes the stop on, so a run ends the generation under
+    way and writes its checkpoint there (none is due: checkpoint_every 1000; a killed task would
+    leave generation 0's), the sweep exits 143 with the resume command, and the resumed sweep equals
+    an uninterrupted local one. (The other run may not have begun its generations yet, its
+    simulator still compiling, or even its program starting: it then ends with nothing lost.)"""
+    spec = tmp_path / "sweep.yaml"  # two alike runs, generations of about a second, no checkpoint due
+    spec.write_text(yaml.safe_dump({**SWEEP, "methods": ["sgr"], "seeds": 2, "overrides": {
+        **SWEEP["overrides"], "generations": 6, "episode_steps": 1000, "checkpoint_every": 1000}}))
+    out = tmp_path / "sweep"
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "sweep", "--config", str(spec), "--out",
+                             str(out), "--backend", "ray", "--address", cluster.address, "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runs = [RunDir(out / "runs" / f"sgr-Walker-v0-s{seed}") for seed in (0, 1)]
+    deadline = time.monotonic() + 180
+    while not any((r.path / "generations.csv").is_file() and len(r.rows()) >= 1 for r in runs):
+        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
+        time.sleep(0.01)
+    before = [len(r.rows()) if (r.path / "generations.csv").is_file() else 0 for r in runs]
+    proc.send_signal(signal.SIGTERM)
+    stdout, err = proc.communicate(timeout=180)
+    assert proc.returncode == 143, stdout + err
+    assert "interrupted by SIGTERM; continue with: sgr sweep --resume" in stdout
+    for run, rows in zip(runs, before, strict=True):
+        n = len(run.rows()) if (run.path / "generations.csv").is_file() else 0
+        assert rows <= n < 6, run.path.name
+        assert run.last_checkpoint_generation() == n, run.path.name  # the stop's: the generation ended
+        if rows:
+            log = (run.path / "log.txt").read_text()
+            assert "asked by the sweep: stopping after this generation, with a checkpoint" in log
+            assert f"stopped after generation {n} of 6, with a checkpoint" in log
+        pid = (run.path / ".lock").read_text().strip() if (run.path / ".lock").is_file() else ""
+        assert not pid or not Path(f"/proc/{pid}").exists()  # the run's process ended, waited for
+    assert max(before) >= 1
+
+    assert run_sweep(Sweep.open(out), RayBackend(1), quiet=True) == 0
+    whole = Sweep.create(spec, tmp_path / "whole")
+    assert run_sweep(whole, LocalBackend(2), quiet=True) == 0
+    for run in runs:
+        assert fitness(run.path) == fitness(whole.path / "runs" / run.path.name), run.path.name
+        assert len(fitness(run.path)) == 6
+
+
+def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_checkpoint(cluster, tmp_path):
+    """SIGTERM, then SIGTERM again 0.3 s later, early in a generation of seconds: the sweep cancels
+    its tasks with force, so the runs' processes die with their workers without ending the
+    generation (no row, no checkpoint for it: the last is generation 0's), and the sweep exits 143."""
+    spec = tmp_path / "sweep.yaml"  # generations of seconds (long episodes)
+    spec.write_text(yaml.safe_dump({**SWEEP, "methods": ["sgr"], "seeds": 2, "overrides": {
+        **SWEEP["overrides"], "generations": 6, "episode_steps": 4000, "checkpoint_every": 1000}}))
+    out = tmp_path / "sweep"
+    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "sweep", "--config", str(spec), "--out",
+                             str(out), "--backend", "ray", "--address", cluster.address, "--quiet"],
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    runs = [RunDir(out / "runs" / f"sgr-Walker-v0-s{seed}") for seed in (0, 1)]
+    deadline = time.monotonic() + 180
+    while not any((r.path / "generations.csv").is_file() and len(r.rows()) >= 1 for r in runs):
+        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
+        time.sleep(0.01)
+    before = [len(r.rows()) if (r.path / "generations.csv").is_file() else 0 for r in runs]
+    proc.send_signal(signal.SIGTERM)
+    time.sleep(0.3)
+    proc.send_signal(signal.SIGTERM)
+    stdout, err = proc.communicate(timeout=60)
+    assert proc.returncode == 143, stdout + err
+    assert "interrupted by SIGTERM; continue with: sgr sweep --resume" in stdout
+    for run, rows in zip(runs, before, strict=True):
+        if rows:
+            assert len(run.rows()) == rows, run.path.name  # the generation under way did not end
+            assert run.last_checkpoint_generation() == 0, run.path.name
+        pid = (run.path / ".lock").read_text().strip() if (run.path / ".lock").is_file() else ""
+        deadline = time.monotonic() + 10
+        while pid and _running(int(pid)):
+            assert time.monotonic() < deadline, f"{run.path.name}: its process outlived the sweep"
+            time.sleep(0.05)
 
 
 def test_d_a_sweep_whose_cluster_goes_away_stops_with_one_line_naming_the_resume_command(cluster, tmp_path):
