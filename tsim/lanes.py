@@ -1,0 +1,205 @@
+"""The lanes kernel: each world's env step on L lanes (threads) of one thread block, GPU and Vulkan
+only (issue #48 item 1; `BatchSim.choose_kernel(lanes=L)`).
+
+Today's step kernel gives each world one thread, everything serial in it. Here world b is thread
+block b of L threads (L a power of two, compile time): a substep's contacts run on lane 0 as the
+CPU runs them (`contacts.contacts`, the same function: its pair order decides the contact forces'
+sums), then its integration, constraints and snapshot are spread over the lanes, points and
+edges dealt to them (tsim/kernels/lanes.py: each point gathers its springs' forces in the
+scatter's order, so the sums are the same sums; the rigid voxels' pass stays on lane 0). Phases
+end at `ti.simt.block.sync()`. Taichi's CPU backend has no block barrier, so the CPU never
+compiles this: its kernels and its f64 bits are what they were.
+
+The lanes' shared arrays are the SPIR-V launch's global scratch (`spirv.global_scratch`, one
+world's slice of two global ndarrays; a third holds each world's incidence lists), not
+`ti.simt.block.SharedArray`: the scratch must outlive a launch, because on Mesa's lavapipe an env
+step is split into launches (`spirv.Launcher`: the driver's loop budget) and the lanes kernel
+takes the same phases (BEGIN, SUBSTEPS, CONTACTS, MOVE, END) and the same launcher. On a GPU's
+driver a step is BEGIN, one launch of every substep, END; lanes read consecutive points and edges
+of their world (coalesced) where today's threads each walk their own world.
+"""
+
+from typing import NamedTuple
+
+import numpy as np
+
+from tsim import spirv
+from tsim.kernels.contacts import contacts
+from tsim.kernels.lanes import build_incidence, incidence_sizes, move_lanes, sync
+from tsim.kernels.layout import (
+    I32_1,
+    I32_2,
+    I32_3,
+    N_EDGE_F,
+    N_EDGES,
+    N_PTS,
+    N_SURF,
+    N_SURF_ROBOT,
+    NONFINITE,
+    REAL_1,
+    REAL_2,
+    RUNNING,
+    STATUS,
+    UNSTABLE,
+    pairs,
+    state_columns,
+)
+from tsim.kernels.scratch import Part, Terrain
+from tsim.kernels.step import load_edges, load_points, store_world, terrain_top
+from tsim.runtime import PROFILE_SKIP, ti
+from tsim.spirv import BEGIN, CONTACTS, END, MOVE, ST_COUNT, ST_STATUS, SUBSTEPS, Slice, global_scratch, laps
+
+MAX_LANES = 1024  # a thread block's most threads (CUDA, and Vulkan's guaranteed minimum is 128)
+
+
+def check_lanes(lanes: object) -> int:
+    """`lanes` as the lanes per world, or ValueError: a power of two from 1 to MAX_LANES."""
+    if not (isinstance(lanes, int) and not isinstance(lanes, bool) and 1 <= lanes <= MAX_LANES
+            and lanes & (lanes - 1) == 0):
+        raise ValueError(f"lanes must be a power of two from 1 to {MAX_LANES}, got {lanes!r}")
+    return lanes
+
+
+class Incidence(NamedTuple):
+    """A world's incidence lists (`kernels.lanes.incidence_sizes`)."""
+
+    ist: Slice
+    imid: Slice
+    icur: Slice
+    inc: Slice
+
+
+def incidence(arr, b, pc: int, ec: int) -> Incidence:
+    """World b's incidence lists as slices of the global i32 array arr."""
+    sizes = incidence_sizes(pc, ec)
+    per_world = sum(sizes.values())
+    out = {}
+    off = 0
+    for name, n in sizes.items():
+        out[name] = Slice(arr, b * per_world + off, n)
+        off += n
+    return Incidence(**out)
+
+
+@ti.func
+def contacts_lane0(b, counts: ti.template(), s: ti.template(), slots: ti.template(),
+                   ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
+                   sweep_mode: ti.template(), pair_list: ti.template(), part: ti.template(), last):
+    """`spirv.contacts_of` (a substep's contacts, serial: lane 0 calls it)."""
+    count = 0
+    if ti.static("contacts" not in PROFILE_SKIP):
+        ter_top = terrain_top(ter_f)
+        ter = ti.static(Terrain(f=ter_f, i=ter_i, grid=ter_grid, top=ter_top))
+        count = contacts(b, counts[b, N_PTS], counts, s, ter, sweep_mode, pair_list, part)
+    if last:
+        slots[ST_COUNT] = count
+        if count < 0:
+            slots[ST_STATUS] = NONFINITE
+
+
+@ti.func
+def move_all(b, lane, lanes: ti.template(), counts: ti.template(), vox_i: ti.template(),
+             lists: ti.template(), s: ti.template(), inc: ti.template(), slots: ti.template()):
+    """A running world's substep after its contacts, on every lane (`spirv.move_of`); every lane
+    reads the status before lane 0 may write it. Starts after and ends at a barrier."""
+    running = slots[ST_STATUS] == RUNNING
+    sync()
+    if running:
+        move_lanes(b, counts[b, N_PTS], counts[b, N_EDGES], lane, lanes, counts, vox_i, lists, s, inc)
+        if lane == 0:
+            if slots[ST_COUNT] > counts[b, N_SURF_ROBOT]:
+                slots[ST_STATUS] = UNSTABLE
+    sync()
+
+
+@ti.kernel
+def lanes_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32_1, edge_f: REAL_1,
+                 vox_i: I32_3, lists: I32_3, actions: REAL_2, ter_f: REAL_2, ter_i: I32_2,
+                 ter_grid: I32_2, n_sub: ti.i32, P: ti.i32, E: ti.i32, pc: ti.template(),
+                 ec: ti.template(), sc: ti.template(), sweep_mode: ti.template(),
+                 pair_list: ti.template(), block: ti.template(), n: ti.template(), gf: REAL_1,
+                 gi: I32_1, piece: ti.i32, pieces: ti.i32, overrun: I32_1, lanes: ti.template(),
+                 gl: I32_1):
+    """`spirv.phase_kernel` with `lanes` threads per world (one thread block each; `block` is
+    unused): thread t runs lane t % lanes of world t // lanes. BEGIN and END (once per env step),
+    and a substep's contacts, run on lane 0; the rest of a substep on every lane. gl holds the
+    worlds' incidence lists (`incidence`); overrun[t] = 1 where the driver's loop budget ran out
+    in thread t."""
+    ti.loop_config(block_dim=lanes)
+    for t in range(n * lanes):
+        b = t // lanes
+        lane = t % lanes
+        if b < counts.shape[0]:
+            w = ti.static(global_scratch(gf, gi, b, pc, ec, sc))
+            s = ti.static(w.s)
+            inc = ti.static(incidence(gl, b, pc, ec))
+            if ti.static(phase == BEGIN):
+                if lane == 0:
+                    w.slots[ST_STATUS] = counts[b, STATUS]
+                    if counts[b, STATUS] == RUNNING:
+                        ns = ti.static(state_columns())
+                        s.sweep[0] = -1
+                        s.sweep[1] = 0
+                        s.plist[0] = 0
+                        s.one[0] = 1.0
+                        for i in range(counts[b, N_SURF]):
+                            s.order[i] = i
+                        if ti.static(pairs()):
+                            for i in range(2 * counts[b, N_PTS]):
+                                s.plo[i] = 0.0
+                                s.vlo[i] = 0.0
+                                s.pllo[i] = 0.0
+                        load_edges(b, counts[b, N_EDGES], b * E * 4, b * E * N_EDGE_F, edge_i, edge_f,
+                                   actions, s.ea, s.eb, s.ek, s.egoal, s.erest, s.leq)
+                        load_points(b, counts[b, N_PTS], b * P * ns, counts, state, vox_i, lists, s)
+                        build_incidence(counts[b, N_PTS], counts[b, N_EDGES], s, inc)
+            if ti.static(phase == SUBSTEPS):
+                for _ in range(n_sub):
+                    running = w.slots[ST_STATUS] == RUNNING
+                    sync()  # every lane has read the status before lane 0 may change it
+                    if running:
+                        if lane == 0:
+                            contacts_lane0(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode,
+                                           pair_list, None, True)
+                        sync()
+                        move_all(b, lane, lanes, counts, vox_i, lists, s, inc, w.slots)
+            if ti.static(phase == CONTACTS):
+                if lane == 0:
+                    if w.slots[ST_STATUS] == RUNNING:
+                        part = ti.static(Part(piece=piece, pieces=pieces, i=w.part_i, f=w.part_f))
+                        contacts_lane0(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode,
+                                       pair_list, part, piece == pieces - 1)
+            if ti.static(phase == MOVE):
+                move_all(b, lane, lanes, counts, vox_i, lists, s, inc, w.slots)
+            if ti.static(phase == END):
+                if lane == 0:
+                    if counts[b, STATUS] == RUNNING:
+                        store_world(b, counts[b, N_PTS], b * P * ti.static(state_columns()), counts,
+                                    state, w.slots[ST_STATUS], s)
+            # every thread's own entry, written whatever it finds (`spirv.phase_kernel`)
+            overrun[t] = ti.select(laps(n_sub + 1) == n_sub + 1, 0, 1)
+
+
+class LanesLauncher(spirv.Launcher):
+    """`spirv.Launcher` (BEGIN, substeps in launches that fit the driver's loop budget, END)
+    launching `lanes_kernel` with `lanes` lanes per world."""
+
+    def __init__(self, n_worlds: int, lanes: int):
+        super().__init__(n_worlds)
+        self.lanes = check_lanes(lanes)
+        self.overrun = np.zeros(n_worlds * lanes, dtype=np.int32)
+        self._incidence: tuple | None = None
+
+    def _incidence_for(self, args: tuple):
+        pc, ec = args[spirv.PC_ARG:spirv.PC_ARG + 2]
+        n = args[-1]
+        if self._incidence is None or self._incidence[1] != (pc, ec, n):
+            self._incidence = (ti.ndarray(ti.i32, n * sum(incidence_sizes(pc, ec).values())), (pc, ec, n))
+        return self._incidence[0]
+
+    def _launch(self, phase: int, args: tuple, gf, gi, n_sub: int, piece: int = 0,
+                pieces: int = 1) -> bool:
+        """One launch of `phase`; False if the driver's loop budget ran out in it."""
+        lanes_kernel(phase, *args[:spirv.N_SUB_ARG], n_sub, *args[spirv.N_SUB_ARG + 1:], gf, gi, piece,
+                     pieces, self.overrun, self.lanes, self._incidence_for(args))
+        return not self.overrun.any()
