@@ -25,7 +25,7 @@ import numpy as np
 
 from tsim import spirv
 from tsim.kernels.contacts import contacts
-from tsim.kernels.lanes import build_incidence, incidence_sizes, move_lanes, sync
+from tsim.kernels.lanes import incidence_sizes, move_lanes, sync
 from tsim.kernels.layout import (
     I32_1,
     I32_2,
@@ -65,7 +65,6 @@ class Incidence(NamedTuple):
 
     ist: Slice
     imid: Slice
-    icur: Slice
     inc: Slice
 
 
@@ -79,6 +78,31 @@ def incidence(arr, b, pc: int, ec: int) -> Incidence:
         out[name] = Slice(arr, b * per_world + off, n)
         off += n
     return Incidence(**out)
+
+
+def incidence_lists(edge_i: np.ndarray, n_edges: np.ndarray, pc: int, ec: int, n: int) -> np.ndarray:
+    """Every world's incidence lists, flat, world after world (`incidence`; n worlds' room, the
+    batch tier): per point p its first ends' edges then its second ends' edges, each ascending,
+    from edge_i (B, E, 4) of which world b's first n_edges[b] rows are its edges."""
+    B, E = edge_i.shape[:2]
+    valid = np.arange(E)[None, :] < np.asarray(n_edges)[:, None]
+    w = np.broadcast_to(np.arange(B)[:, None], (B, E))[valid]
+    e = np.broadcast_to(np.arange(E)[None, :], (B, E))[valid]
+    ends = [edge_i[:, :, k][valid].astype(np.int64) for k in (0, 1)]
+    per = [np.bincount(w * pc + x, minlength=B * pc).reshape(B, pc) for x in ends]
+    ist = np.zeros((B, pc + 1), dtype=np.int64)
+    ist[:, 1:] = np.cumsum(per[0] + per[1], axis=1)
+    imid = ist[:, :pc] + per[0]
+    inc = np.zeros((B, 2 * ec), dtype=np.int64)
+    for x, base in zip(ends, (ist[:, :pc], imid), strict=True):
+        key = w * pc + x
+        order = np.argsort(key, kind="stable")  # (world, edge) order within a point: ascending
+        k = key[order]
+        rank = np.arange(len(k)) - np.searchsorted(k, k, "left")
+        inc[w[order], base.reshape(-1)[k] + rank] = e[order]
+    out = np.zeros((n, sum(incidence_sizes(pc, ec).values())), dtype=np.int32)
+    out[:B] = np.concatenate([ist, imid, inc], axis=1)
+    return out.reshape(-1)
 
 
 @ti.func
@@ -152,7 +176,6 @@ def lanes_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
                         load_edges(b, counts[b, N_EDGES], b * E * 4, b * E * N_EDGE_F, edge_i, edge_f,
                                    actions, s.ea, s.eb, s.ek, s.egoal, s.erest, s.leq)
                         load_points(b, counts[b, N_PTS], b * P * ns, counts, state, vox_i, lists, s)
-                        build_incidence(counts[b, N_PTS], counts[b, N_EDGES], s, inc)
             if ti.static(phase == SUBSTEPS):
                 for _ in range(n_sub):
                     running = w.slots[ST_STATUS] == RUNNING
@@ -191,10 +214,17 @@ class LanesLauncher(spirv.Launcher):
         self._incidence: tuple | None = None
 
     def _incidence_for(self, args: tuple):
+        """The worlds' incidence lists (`incidence_lists`), made at the first launch (edges do not
+        change) and kept on the device."""
         pc, ec = args[spirv.PC_ARG:spirv.PC_ARG + 2]
         n = args[-1]
         if self._incidence is None or self._incidence[1] != (pc, ec, n):
-            self._incidence = (ti.ndarray(ti.i32, n * sum(incidence_sizes(pc, ec).values())), (pc, ec, n))
+            counts, edge_i = args[0], args[2]
+            flat = edge_i if isinstance(edge_i, np.ndarray) else edge_i.to_numpy()
+            lists = incidence_lists(flat.reshape(counts.shape[0], -1, 4), counts[:, N_EDGES], pc, ec, n)
+            arr = ti.ndarray(ti.i32, lists.shape[0])
+            arr.from_numpy(lists)
+            self._incidence = (arr, (pc, ec, n))
         return self._incidence[0]
 
     def _launch(self, phase: int, args: tuple, gf, gi, n_sub: int, piece: int = 0,

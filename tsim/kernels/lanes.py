@@ -26,10 +26,10 @@ from tsim.runtime import PROFILE_SKIP, ti
 
 
 def incidence_sizes(pc: int, ec: int) -> dict[str, int]:
-    """A world's incidence lists in the lanes kernel's i32 scratch (capacity pc points, ec edges):
-    per point its entries' start `ist` (pc + 1), where its second ends start `imid`, a cursor
-    `icur`, and the edges `inc` (each edge twice)."""
-    return {"ist": pc + 1, "imid": pc, "icur": pc, "inc": 2 * ec}
+    """A world's incidence lists (capacity pc points, ec edges; `tsim.lanes.incidence_lists`
+    makes them): point p's edges are inc[ist[p]:imid[p]] (those whose first end it is) then
+    inc[imid[p]:ist[p + 1]] (whose second end it is), each ascending."""
+    return {"ist": pc + 1, "imid": pc, "inc": 2 * ec}
 
 
 @ti.func
@@ -42,31 +42,6 @@ def sync():
 def own(n, lane, lanes: ti.template()):
     """How many of n elements lane `lane` holds (element lane + k * lanes for k below it)."""
     return (n - lane + lanes - 1) // lanes
-
-
-@ti.func
-def build_incidence(n_pts, n_edges, s: ti.template(), inc: ti.template()):
-    """World's incidence lists from s.ea, s.eb (one lane, O(points + edges)): point p's edges are
-    inc.inc[inc.ist[p]:inc.imid[p]] (its first ends) then inc.inc[inc.imid[p]:inc.ist[p + 1]]
-    (its second ends), each ascending."""
-    for p in range(n_pts + 1):
-        inc.ist[p] = 0
-    for e in range(n_edges):
-        inc.ist[s.ea[e] + 1] += 1
-        inc.ist[s.eb[e] + 1] += 1
-    for p in range(n_pts):
-        inc.ist[p + 1] += inc.ist[p]
-        inc.icur[p] = inc.ist[p]
-    for e in range(n_edges):
-        a = s.ea[e]
-        inc.inc[inc.icur[a]] = e
-        inc.icur[a] += 1
-    for p in range(n_pts):
-        inc.imid[p] = inc.icur[p]
-    for e in range(n_edges):
-        q = s.eb[e]
-        inc.inc[inc.icur[q]] = e
-        inc.icur[q] += 1
 
 
 @ti.func
