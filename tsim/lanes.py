@@ -23,9 +23,9 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tsim import spirv
+from tsim import backend, spirv
 from tsim.kernels.contacts import contacts
-from tsim.kernels.lanes import incidence_sizes, move_lanes, sync
+from tsim.kernels.lanes import incidence_sizes, move_lanes, own, sync
 from tsim.kernels.layout import (
     I32_1,
     I32_2,
@@ -44,7 +44,7 @@ from tsim.kernels.layout import (
     pairs,
     state_columns,
 )
-from tsim.kernels.scratch import Part, Terrain
+from tsim.kernels.scratch import Part, Scratch, Terrain
 from tsim.kernels.step import load_edges, load_points, store_world, terrain_top
 from tsim.runtime import PROFILE_SKIP, ti
 from tsim.spirv import BEGIN, CONTACTS, END, MOVE, ST_COUNT, ST_STATUS, SUBSTEPS, Slice, global_scratch, laps
@@ -58,6 +58,48 @@ def check_lanes(lanes: object) -> int:
             and lanes & (lanes - 1) == 0):
         raise ValueError(f"lanes must be a power of two from 1 to {MAX_LANES}, got {lanes!r}")
     return lanes
+
+
+# the scratch arrays the lanes read and write in every phase of a substep: in shared memory for a
+# launch of substeps where they fit (`fits_shared`), copied in at its start and out at its end
+# (not fcol: the contacts add into it with `+=`, an atomic on these arrays, see tsim/kernels/lanes.py)
+SHARED_REAL = ("pos", "vel", "pl", "vt", "xs", "vs", "frc", "adx", "adv", "plo", "vlo", "pllo",
+               "xlo", "e0", "leq", "ek", "egoal", "erest", "ccx", "ccy")
+SHARED_INT = ("ea", "eb")
+SHARED_BYTES = 32 * 1024  # lavapipe's shared memory per workgroup; a CUDA block may have 48 KB
+
+
+def shared_lengths(pc: int, ec: int, sc: int) -> tuple[int, int]:
+    """Per world, the lengths of the real and the i32 shared arrays (`SHARED_REAL`, `SHARED_INT`)."""
+    real, ints = spirv.real_sizes(pc, ec, sc), spirv.int_sizes(pc, ec, sc)
+    return sum(real[k] for k in SHARED_REAL), sum(ints[k] for k in SHARED_INT)
+
+
+def fits_shared(pc: int, ec: int, sc: int) -> bool:
+    """Whether a world's `SHARED_REAL` and `SHARED_INT` arrays fit SHARED_BYTES (tier 0 does: ~19 KB
+    in f64; tier 1 does not)."""
+    nf, ni = shared_lengths(pc, ec, sc)
+    return nf * np.dtype(backend.real().dtype).itemsize + 4 * ni <= SHARED_BYTES
+
+
+def shared_layout(pc: int, ec: int, sc: int) -> tuple:
+    """The shared arrays' lengths (`shared_lengths`) and Taichi's real type of the process."""
+    return (*shared_lengths(pc, ec, sc), getattr(ti, backend.real().taichi))
+
+
+def shared_scratch(s: Scratch, shf, shi, pc: int, ec: int, sc: int) -> tuple[Scratch, tuple]:
+    """The scratch s with its `SHARED_REAL` and `SHARED_INT` arrays as slices of the shared arrays
+    shf and shi, and the copies between them: ((shared, global, length), ...)."""
+    real, ints = spirv.real_sizes(pc, ec, sc), spirv.int_sizes(pc, ec, sc)
+    fields = {}
+    plan = []
+    for arr, names, sizes in ((shf, SHARED_REAL, real), (shi, SHARED_INT, ints)):
+        off = 0
+        for name in names:
+            fields[name] = Slice(arr, off, sizes[name])
+            plan.append((fields[name], getattr(s, name), sizes[name]))
+            off += sizes[name]
+    return s._replace(**fields), tuple(plan)
 
 
 class Incidence(NamedTuple):
@@ -136,6 +178,36 @@ def move_all(b, lane, lanes: ti.template(), counts: ti.template(), vox_i: ti.tem
     sync()
 
 
+@ti.func
+def copy_over(plan: ti.template(), lane, lanes: ti.template(), into_shared: ti.template()):
+    """Each (shared, global, length) of `plan` copied whole, into the shared array or out of it,
+    the entries dealt to the lanes."""
+    for i in ti.static(range(len(plan))):
+        for k in range(own(plan[i][2], lane, lanes)):
+            j = lane + k * lanes
+            if ti.static(into_shared):
+                plan[i][0][j] = plan[i][1][j]
+            else:
+                plan[i][1][j] = plan[i][0][j]
+
+
+@ti.func
+def substeps(b, lane, lanes: ti.template(), n_sub, counts: ti.template(), vox_i: ti.template(),
+             lists: ti.template(), ter_f: ti.template(), ter_i: ti.template(), ter_grid: ti.template(),
+             sweep_mode: ti.template(), pair_list: ti.template(), s: ti.template(), inc: ti.template(),
+             slots: ti.template()):
+    """n_sub substeps of a world: each its contacts on lane 0, then the rest on every lane."""
+    for _ in range(n_sub):
+        running = slots[ST_STATUS] == RUNNING
+        sync()  # every lane has read the status before lane 0 may change it
+        if running:
+            if lane == 0:
+                contacts_lane0(b, counts, s, slots, ter_f, ter_i, ter_grid, sweep_mode, pair_list, None,
+                               True)
+            sync()
+            move_all(b, lane, lanes, counts, vox_i, lists, s, inc, slots)
+
+
 @ti.kernel
 def lanes_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32_1, edge_f: REAL_1,
                  vox_i: I32_3, lists: I32_3, actions: REAL_2, ter_f: REAL_2, ter_i: I32_2,
@@ -143,7 +215,7 @@ def lanes_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
                  ec: ti.template(), sc: ti.template(), sweep_mode: ti.template(),
                  pair_list: ti.template(), block: ti.template(), n: ti.template(), gf: REAL_1,
                  gi: I32_1, piece: ti.i32, pieces: ti.i32, overrun: I32_1, lanes: ti.template(),
-                 gl: I32_1):
+                 gl: I32_1, shared: ti.template()):
     """`spirv.phase_kernel` with `lanes` threads per world (one thread block each; `block` is
     unused): thread t runs lane t % lanes of world t // lanes. BEGIN and END (once per env step),
     and a substep's contacts, run on lane 0; the rest of a substep on every lane. gl holds the
@@ -177,15 +249,19 @@ def lanes_kernel(phase: ti.template(), counts: I32_2, state: REAL_1, edge_i: I32
                                    actions, s.ea, s.eb, s.ek, s.egoal, s.erest, s.leq)
                         load_points(b, counts[b, N_PTS], b * P * ns, counts, state, vox_i, lists, s)
             if ti.static(phase == SUBSTEPS):
-                for _ in range(n_sub):
-                    running = w.slots[ST_STATUS] == RUNNING
-                    sync()  # every lane has read the status before lane 0 may change it
-                    if running:
-                        if lane == 0:
-                            contacts_lane0(b, counts, s, w.slots, ter_f, ter_i, ter_grid, sweep_mode,
-                                           pair_list, None, True)
-                        sync()
-                        move_all(b, lane, lanes, counts, vox_i, lists, s, inc, w.slots)
+                if ti.static(shared):  # the substeps' arrays in shared memory, copied in and out
+                    nsh = ti.static(shared_layout(pc, ec, sc))
+                    shf = ti.simt.block.SharedArray((nsh[0],), nsh[2])
+                    shi = ti.simt.block.SharedArray((nsh[1],), ti.i32)
+                    sh = ti.static(shared_scratch(s, shf, shi, pc, ec, sc))
+                    copy_over(sh[1], lane, lanes, True)
+                    sync()
+                    substeps(b, lane, lanes, n_sub, counts, vox_i, lists, ter_f, ter_i, ter_grid,
+                             sweep_mode, pair_list, sh[0], inc, w.slots)
+                    copy_over(sh[1], lane, lanes, False)
+                else:
+                    substeps(b, lane, lanes, n_sub, counts, vox_i, lists, ter_f, ter_i, ter_grid,
+                             sweep_mode, pair_list, s, inc, w.slots)
             if ti.static(phase == CONTACTS):
                 if lane == 0:
                     if w.slots[ST_STATUS] == RUNNING:
@@ -207,9 +283,11 @@ class LanesLauncher(spirv.Launcher):
     """`spirv.Launcher` (BEGIN, substeps in launches that fit the driver's loop budget, END)
     launching `lanes_kernel` with `lanes` lanes per world."""
 
-    def __init__(self, n_worlds: int, lanes: int):
+    def __init__(self, n_worlds: int, lanes: int, shared: bool = True):
         super().__init__(n_worlds)
         self.lanes = check_lanes(lanes)
+        self.shared = shared  # a launch of substeps in shared memory where the arrays fit
+        self.launched_shared = False  # whether one did (tests read it)
         self.overrun = np.zeros(n_worlds * lanes, dtype=np.int32)
         self._incidence: tuple | None = None
 
@@ -230,6 +308,8 @@ class LanesLauncher(spirv.Launcher):
     def _launch(self, phase: int, args: tuple, gf, gi, n_sub: int, piece: int = 0,
                 pieces: int = 1) -> bool:
         """One launch of `phase`; False if the driver's loop budget ran out in it."""
+        shared = phase == SUBSTEPS and self.shared and fits_shared(*args[spirv.PC_ARG:spirv.PC_ARG + 3])
+        self.launched_shared |= shared
         lanes_kernel(phase, *args[:spirv.N_SUB_ARG], n_sub, *args[spirv.N_SUB_ARG + 1:], gf, gi, piece,
-                     pieces, self.overrun, self.lanes, self._incidence_for(args))
+                     pieces, self.overrun, self.lanes, self._incidence_for(args), shared)
         return not self.overrun.any()

@@ -109,23 +109,27 @@ TOP_TIER = 3  # the largest capacity tier the 32 tasks need (BridgeWalker-v0, Tr
 def lanes_states(tasks: list[str], steps: int, robots: int, lanes: list[int]) -> dict:
     """{L: {task: (B, P, 4) positions and velocities}} after `steps` env steps of `robots` random 5x5
     robots per task under alternating actions (as test_vulkan's `run_states`), each task and L
-    from a fresh env, on the lanes kernel. Every task runs the same compiled variant (the top
-    capacity tier, sweeps and pair lists on where they pay: the same results either way,
-    tests/tsim/test_kernels.py), so lavapipe compiles each phase once per L."""
+    from a fresh env, on the lanes kernel; and {"shared": {L: tasks}}, those whose substeps ran in
+    shared memory. Few compiled variants, so that lavapipe compiles little: sweeps and pair lists
+    on where they pay (the same results either way, tests/tsim/test_kernels.py), the top capacity
+    tier (global scratch only), except at the last L for the tasks that fit tier 0 (shared memory)."""
     from tasks.env import BatchEnv
-    out: dict = {}
+    out: dict = {"shared": {}}
     for L in lanes:
         for task in tasks:
             rng = np.random.default_rng(0)
             env = BatchEnv(task, [sample_robot((5, 5), rng) for _ in range(robots)], episode_steps=50)
             sim = env.sim
             sim.sweep_mode, sim.pair_list = K.SWEEP_AUTO, K.LIST_AUTO
-            sim.choose_kernel(lanes=L, extra_capacity_tiers=max(0, TOP_TIER - sim.capacity_tier))
+            keep = L == lanes[-1] and sim.capacity_tier == 0
+            sim.choose_kernel(lanes=L, extra_capacity_tiers=0 if keep else TOP_TIER - sim.capacity_tier)
             env.reset()
             A = sim.max_actuators
             for t in range(steps):
                 env.step(np.full((len(sim.bodies), A), 1.3 if t % 2 else 0.7))
             out.setdefault(str(L), {})[task] = sim.states64().tolist()
+            if sim._launcher._split.launched_shared:
+                out["shared"].setdefault(str(L), []).append(task)
     return out
 
 
@@ -138,7 +142,8 @@ LANES_STATES = ("import json, sys; from tests.tsim.test_lanes import lanes_state
 @pytest.mark.vulkan
 def test_the_lanes_kernel_on_lavapipe_gives_the_cpus_f64_results_on_every_task(vulkan):  # noqa: F811
     """All 32 tasks, two random 5x5 robots each, 2 env steps with contacts, with 4 and with 32 lanes
-    per world (fewer and more lanes than a world's points): positions and velocities within 1e-9
+    per world (fewer and more lanes than a world's points), the substeps' arrays in global memory
+    (4 lanes) and, where they fit, in shared memory (32): positions and velocities within 1e-9
     of the CPU's f64 (evogym's bits; measured 5.5e-12, the SPIR-V launch's own figure: not bits,
     lavapipe may fuse multiply-adds). A lane that read a point before another lane wrote it, a
     missing barrier or a gather in another order than the scatter's would be ~1e-16 to 1 off."""
@@ -147,6 +152,9 @@ def test_the_lanes_kernel_on_lavapipe_gives_the_cpus_f64_results_on_every_task(v
     r = run(code, "vulkan", SGR_PRECISION="f64")
     assert r.returncode == 0, r.stderr[-2000:]
     got = json.loads(r.stdout.strip().splitlines()[-1])
+    shared = got.pop("shared")
+    # the 25 tasks of tier 0 ran their substeps in shared memory at the last L, none otherwise
+    assert list(shared) == [str(LANES[-1])] and len(shared[str(LANES[-1])]) >= 20, shared
     ref = cpu_f64(tasks, 2, 2)
     assert sorted(got, key=int) == [str(L) for L in LANES]
     bad = {}

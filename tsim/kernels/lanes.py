@@ -11,6 +11,12 @@ the order in which the scatter adds into that point, so each point's sum is the 
 same bits. The rigid voxels' pass moves corners that voxels share, in voxel order: it runs on
 lane 0 alone, between barriers.
 
+A scratch entry is updated as `x[i] = x[i] + v`, never `x[i] += v`: Taichi compiles an augmented
+assignment to an array as an atomic add, which on the lanes kernel's shared or global arrays is a
+compare-and-swap loop on SPIR-V (Taichi's SPIR-V code generator cannot make one for an f32 shared
+array: "at_buffer failed"; with f64 ones lavapipe crashed) and an atomic on CUDA. Each entry here has
+one writer, so the value is the same.
+
 The CPU's kernels do not call this module (Taichi's CPU backend has no block barrier): their
 code, and so f64's bits on the CPU, are what they were. The per-element code is a copy of the
 CPU's; a change to one must be made to both (tests/tsim/test_lanes.py compares them on every task).
@@ -161,11 +167,11 @@ def rk4_lanes(n_pts, n_edges, lane, lanes: ti.template(), s: ti.template(), inc:
                     s.adx[i] = kx
                     s.adv[i] = kv
                 elif ti.static(stage < 3):
-                    s.adx[i] += 2 * kx
-                    s.adv[i] += 2 * kv
+                    s.adx[i] = s.adx[i] + 2 * kx
+                    s.adv[i] = s.adv[i] + 2 * kv
                 else:
-                    s.adx[i] += kx
-                    s.adv[i] += kv
+                    s.adx[i] = s.adx[i] + kx
+                    s.adv[i] = s.adv[i] + kv
                 if ti.static(stage < 3):
                     h = 0.5 if ti.static(stage < 2) else 1.0
                     if ti.static(pairs()):
@@ -179,12 +185,12 @@ def rk4_lanes(n_pts, n_edges, lane, lanes: ti.template(), s: ti.template(), inc:
         for d in ti.static(range(2)):
             i = 2 * p + d
             if ti.static(pairs()):
-                s.plo[i] += s.adx[i] / 6
-                s.vlo[i] += s.adv[i] / 6
+                s.plo[i] = s.plo[i] + s.adx[i] / 6
+                s.vlo[i] = s.vlo[i] + s.adv[i] / 6
                 renormalize(s.vel, s.vlo, i, s.one)
             else:
-                s.pos[i] += s.adx[i] / 6
-                s.vel[i] += s.adv[i] / 6
+                s.pos[i] = s.pos[i] + s.adx[i] / 6
+                s.vel[i] = s.vel[i] + s.adv[i] / 6
 
 
 @ti.func
@@ -271,15 +277,15 @@ def constraints_lanes(b, n_pts, n_edges, lane, lanes: ti.template(), counts: ti.
                     ox += dx * m
                     oy += dy * m
                 if ti.static(pairs()):
-                    s.plo[2 * a] -= ox * 0.5
-                    s.plo[2 * a + 1] -= oy * 0.5
-                    s.plo[2 * q] += ox * 0.5
-                    s.plo[2 * q + 1] += oy * 0.5
+                    s.plo[2 * a] = s.plo[2 * a] - ox * 0.5
+                    s.plo[2 * a + 1] = s.plo[2 * a + 1] - oy * 0.5
+                    s.plo[2 * q] = s.plo[2 * q] + ox * 0.5
+                    s.plo[2 * q + 1] = s.plo[2 * q + 1] + oy * 0.5
                 else:
-                    s.pos[2 * a] -= ox * 0.5
-                    s.pos[2 * a + 1] -= oy * 0.5
-                    s.pos[2 * q] += ox * 0.5
-                    s.pos[2 * q + 1] += oy * 0.5
+                    s.pos[2 * a] = s.pos[2 * a] - ox * 0.5
+                    s.pos[2 * a + 1] = s.pos[2 * a + 1] - oy * 0.5
+                    s.pos[2 * q] = s.pos[2 * q] + ox * 0.5
+                    s.pos[2 * q + 1] = s.pos[2 * q + 1] + oy * 0.5
     sync()
 
 
