@@ -10,13 +10,15 @@ scatter's order, so the sums are the same sums; the rigid voxels' pass stays on 
 end at `ti.simt.block.sync()`. Taichi's CPU backend has no block barrier, so the CPU never
 compiles this: its kernels and its f64 bits are what they were.
 
-The lanes' shared arrays are the SPIR-V launch's global scratch (`spirv.global_scratch`, one
-world's slice of two global ndarrays; a third holds each world's incidence lists), not
-`ti.simt.block.SharedArray`: the scratch must outlive a launch, because on Mesa's lavapipe an env
-step is split into launches (`spirv.Launcher`: the driver's loop budget) and the lanes kernel
-takes the same phases (BEGIN, SUBSTEPS, CONTACTS, MOVE, END) and the same launcher. On a GPU's
-driver a step is BEGIN, one launch of every substep, END; lanes read consecutive points and edges
-of their world (coalesced) where today's threads each walk their own world.
+The world's arrays live in the SPIR-V launch's global scratch (`spirv.global_scratch`, one
+world's slice of two global ndarrays; a third holds each world's incidence lists, built once on
+the host), because they must outlive a launch: on Mesa's lavapipe an env step is split into
+launches (`spirv.Launcher`: the driver's loop budget), and the lanes kernel takes the same phases
+(BEGIN, SUBSTEPS, CONTACTS, MOVE, END) and the same launcher. On a GPU's driver a step is BEGIN,
+one launch of every substep, END. A launch of substeps copies the arrays its lanes share
+(`SHARED_REAL`, `SHARED_INT`) into `ti.simt.block.SharedArray`s where they fit (`fits_shared`:
+capacity tier 0), works there, and copies them back; larger worlds work in the global scratch,
+where lanes read consecutive points and edges of their world.
 """
 
 from typing import NamedTuple
