@@ -18,7 +18,10 @@ launches (`spirv.Launcher`: the driver's loop budget), and the lanes kernel take
 one launch of every substep, END. A launch of substeps copies the arrays its lanes share
 (`SHARED_REAL`, `SHARED_INT`) into `ti.simt.block.SharedArray`s where they fit (`fits_shared`:
 capacity tier 0), works there, and copies them back; larger worlds work in the global scratch,
-where lanes read consecutive points and edges of their world.
+where lanes read consecutive points and edges of their world. Not checked: whether a GPU's Vulkan
+driver makes global-memory writes visible to the other lanes at Taichi's SPIR-V barrier (it may
+order workgroup memory only; lavapipe runs a block's lanes in turn, and CUDA's `__syncthreads`
+orders both).
 """
 
 from typing import NamedTuple
