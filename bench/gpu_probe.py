@@ -8,16 +8,19 @@ what it measured so far and says so), results written as they come:
 - throughput (one part per body shape, 5x5 and 10x10): 1,024 bodies (`tsim.sample_robots`) tiled
   to B = 8k, 32k, 64k, 128k; physics robot-steps/s (`BatchSim.step`) at each GPU block size
   (`BatchSim.choose_kernel(gpu_block=...)`: 32, 64, 128 worlds per thread block) and lanes per
-  world (1: the lanes kernel of #48 item 1 does not exist yet; other values are listed as
-  skipped until `choose_kernel` takes `lanes`), and the env's (`BatchEnv.step`: observations,
-  rewards, termination on the host) at the default block; the batch build per robot beside them.
+  world (`choose_kernel(lanes=L)`: 1 today's kernel; L > 1 the lanes kernel, tsim/lanes.py, a
+  world on one block of L threads, so measured once per batch size whatever the block size;
+  skipped on a CPU, whose Taichi backend has no block barrier), and the env's (`BatchEnv.step`:
+  observations, rewards, termination on the host) at the default block; the batch build per
+  robot beside them.
   On CUDA, Taichi writes each compiled module's PTX (`ti.init(print_kernel_asm=True)`).
 - kernels (CUDA): the step kernels' PTX loaded through libcuda (ctypes): registers, local
   (stack) bytes per thread, shared and constant bytes, ptxas' own info log (spill stores), and
   blocks, warps and occupancy per SM at each block size (cuOccupancyMaxActiveBlocksPerMultiprocessor);
   `ptxas -v` beside them where a CUDA toolkit is installed. On a CPU: "n/a (cpu)".
 - parity: the GPU against this machine's CPU backend on the paper's four tasks
-  (device/arch_returns.py; the whole 32 are device/gpu_check.sh's last step).
+  (device/arch_returns.py; the whole 32 are device/gpu_check.sh's last step), and the lanes
+  kernel at the largest --lanes against the CPU too (not on a CPU).
 Into --out: probe.json (everything), summary.txt (the tables), part_*.json, part_*.log and, on
 CUDA, ptx/ (the step kernels' PTX, gzipped).
 """
@@ -42,6 +45,7 @@ LIMITS = {"throughput_5x5": 80, "throughput_10x10": 110, "kernels": 45, "parity"
 BUDGET = 300  # the whole probe: a part gets its limit or what is left, whichever is less
 SIZES = [8192, 32768, 65536, 131072]
 BLOCKS = [32, 64, 128]
+LANES = [1, 32]  # lanes per world: 1 today's kernel, 32 the lanes kernel (a warp per world)
 SHAPES = ["5x5", "10x10"]
 PARITY_TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 BODIES = 1024  # distinct bodies, tiled to each B
@@ -121,6 +125,14 @@ def _measure_size(args, rec: dict, path: Path, bodies, B: int, blocks: list, cpu
                 row["skipped"] = "no lanes kernel in this tree (#48 item 1)"
                 rec["rows"].append(row)
                 continue
+            if lanes != 1 and cpu:
+                row["skipped"] = "the lanes kernel runs on a GPU or Vulkan only (no block barrier on a CPU)"
+                rec["rows"].append(row)
+                continue
+            if lanes != 1 and block != blocks[0]:
+                continue  # one world per block of `lanes` threads: the block size does not apply
+            if lanes != 1:
+                row["block"] = f"{lanes} thr"
             if time.perf_counter() > deadline:
                 row["skipped"] = "out of time"
                 rec["rows"].append(row)
@@ -203,7 +215,7 @@ def _keep_step_ptx(folder: Path) -> None:
 
     for f in sorted(folder.glob("*.ptx")):
         text = f.read_text(errors="replace")
-        if "step_kernel" in text:
+        if "step_kernel" in text or "lanes_kernel" in text:
             with gzip.open(f.with_suffix(".ptx.gz"), "wt") as g:
                 g.write(text)
         f.unlink()
@@ -299,7 +311,8 @@ def _kernel_attributes(call, args, out: Path, rec: dict) -> None:
             rec["errors"].append(f"{f.parent.name}/{f.name}: not loaded, out of time")
             continue
         text = gzip.open(f, "rt").read()
-        entries = [e for e in re.findall(r"\.entry\s+([\w.$]+)\s*\(", text) if "step_kernel" in e]
+        entries = [e for e in re.findall(r"\.entry\s+([\w.$]+)\s*\(", text)
+                   if "step_kernel" in e or "lanes_kernel" in e]
         log = ctypes.create_string_buffer(1 << 16)
         opts = (c_int * 3)(3, 4, 12)  # CU_JIT_INFO_LOG_BUFFER, ..._SIZE_BYTES, CU_JIT_LOG_VERBOSE
         vals = (ctypes.c_void_p * 3)(ctypes.cast(log, ctypes.c_void_p), ctypes.c_void_p(1 << 16),
@@ -326,7 +339,7 @@ def _kernel_attributes(call, args, out: Path, rec: dict) -> None:
                  "compiled_for_block": compiled_for.get(f"{f.parent.name}/{f.name}"),
                  "ptxas_info": [ln for ln in info.splitlines() if e in ln or "spill" in ln
                                 or "registers" in ln][:8]}
-            for block in args.blocks:
+            for block in sorted(set(args.blocks) | {x for x in args.lanes if x > 1}):
                 n = c_int()
                 if block <= k["max_threads_per_block"]:
                     call("cuOccupancyMaxActiveBlocksPerMultiprocessor", ctypes.byref(n), func, block,
@@ -368,10 +381,14 @@ def part_parity(args, out: Path) -> dict:
     base = [sys.executable, str(ROOT / "device" / "arch_returns.py"), "--robots", str(args.parity_robots),
             "--steps", str(args.parity_steps), "--tasks", *args.parity_tasks]
     arch = os.environ.get("SGR_ARCH", "cpu")
+    runs = [("arch", arch, []), ("cpu", "cpu", [])]
+    lanes = max(args.lanes)
+    if arch != "cpu" and lanes > 1:
+        runs.append(("lanes", arch, ["--lanes", str(lanes)]))
     procs = {}
-    for name, a in (("arch", arch), ("cpu", "cpu")):
+    for name, a, extra in runs:
         env = {**os.environ, "SGR_ARCH": a}
-        procs[name] = subprocess.Popen([*base, "--out", str(out / f"parity_{name}.json")], env=env,
+        procs[name] = subprocess.Popen([*base, *extra, "--out", str(out / f"parity_{name}.json")], env=env,
                                        stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
     rec: dict = {"part": "parity", "tasks": args.parity_tasks, "robots": args.parity_robots,
                  "steps": args.parity_steps}
@@ -394,6 +411,14 @@ def part_parity(args, out: Path) -> dict:
                                     and a["tasks"][t]["final_x"] == b["tasks"][t]["final_x"]
                                     for t in a["tasks"] if t in b["tasks"])
         rec["tol"] = tol
+        if "lanes" in procs:  # the lanes kernel against the CPU as well
+            try:
+                c = json.loads((out / "parity_lanes.json").read_text())
+            except (OSError, ValueError) as e:
+                rec["lanes_lines"], rec["lanes_failures"] = [], [f"no lanes parity record: {e}"]
+            else:
+                rec["lanes"] = lanes
+                rec["lanes_lines"], rec["lanes_failures"] = ar.compare(a, c, tol)
     _write(out / "part_parity.json", rec)
     return rec
 
@@ -457,6 +482,10 @@ def summary(probe: dict) -> str:
     if "bits_identical" in q:
         lines.append(f"  bits: {'identical' if q['bits_identical'] else 'not identical'}")
     lines += [f"  FAILED: {f}" for f in q.get("failures", [])]
+    if "lanes_lines" in q:
+        lines.append(f"  the lanes kernel ({q.get('lanes')} lanes) against cpu:")
+        lines += [f"    {ln}" for ln in q["lanes_lines"]]
+        lines += [f"    FAILED: {f}" for f in q.get("lanes_failures", [])]
     return "\n".join(lines) + "\n"
 
 
@@ -469,7 +498,8 @@ def main() -> int:
                     help="the CPU rehearsal: B = 64, 128, short timings, one parity task")
     ap.add_argument("--sizes", type=int, nargs="+", help=f"batch sizes (default {SIZES})")
     ap.add_argument("--blocks", type=int, nargs="+", default=BLOCKS, help="GPU worlds per thread block")
-    ap.add_argument("--lanes", type=int, nargs="+", default=[1], help="lanes per world (1 today)")
+    ap.add_argument("--lanes", type=int, nargs="+", default=LANES,
+                    help=f"lanes per world (default {LANES}; 1: today's kernel, > 1: the lanes kernel)")
     ap.add_argument("--shapes", nargs="+", default=SHAPES, choices=SHAPES)
     ap.add_argument("--parts", nargs="+", default=["throughput", "kernels", "parity"], choices=list(PARTS))
     ap.add_argument("--limit", action="append", default=[], metavar="PART=S",

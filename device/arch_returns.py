@@ -3,6 +3,7 @@ Taichi cannot switch), for comparing a GPU with the same machine's CPU (device/g
 
     SGR_ARCH=cpu  python device/arch_returns.py --out cpu.json
     SGR_ARCH=cuda python device/arch_returns.py --out gpu.json
+    SGR_ARCH=cuda python device/arch_returns.py --lanes 32 --out lanes.json   # the lanes kernel
     python device/arch_returns.py --compare cpu.json gpu.json     # exit 1 when a task differs
 
 The CPU is validated against evogym's recorded data in CI; this checks that the GPU computes the
@@ -28,9 +29,9 @@ sys.path.insert(0, str(ROOT))
 MEDIAN_TOL = 1e-9  # the CPU's median |return - evogym| is <= 7e-11 on every task
 
 
-def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None) -> dict:
+def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None, lanes: int = 1) -> dict:
     """{task: {"returns": [...], "final_x": [...]}} on this process's arch (every task, or
-    `tasks`)."""
+    `tasks`); `lanes` > 1: on the lanes kernel (tsim/lanes.py, GPU and Vulkan only)."""
     from tasks.bench import sinusoid
     from tasks.env import BatchEnv
     from tasks.specs import TASKS
@@ -38,12 +39,14 @@ def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None) -
     from tsim.sampling import sample_robots
 
     arch = runtime.init()
-    out: dict = {"arch": arch, "robots": robots, "steps": steps, "seed": seed, "tasks": {}}
+    out: dict = {"arch": arch, "robots": robots, "steps": steps, "seed": seed, "lanes": lanes, "tasks": {}}
     for task in tasks or TASKS:
         rng = np.random.default_rng(seed)
         bodies = list(sample_robots(robots, (5, 5), rng))
         t0 = time.perf_counter()
         env = BatchEnv(task, bodies, episode_steps=steps)
+        if lanes > 1:
+            env.sim.choose_kernel(lanes=lanes)
         A = env.sim.max_actuators
         total = np.zeros(robots)
         for t in range(steps):
@@ -80,6 +83,8 @@ def main() -> int:
     p.add_argument("--steps", type=int, default=200)
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--tasks", nargs="+", help="these tasks only (default: all 32)")
+    p.add_argument("--lanes", type=int, default=1, help="lanes per world: > 1 runs the lanes kernel "
+                   "(tsim/lanes.py; GPU and Vulkan only)")
     p.add_argument("--out", help="write the record (JSON) here")
     p.add_argument("--compare", nargs=2, metavar="JSON", help="compare two records instead")
     p.add_argument("--tol", type=float, default=MEDIAN_TOL,
@@ -96,7 +101,7 @@ def main() -> int:
         print("FAILED: " + "; ".join(bad) if bad else f"{b['arch']} matches {a['arch']} on every task "
               f"(median |return difference| <= {args.tol:g})")
         return 1 if bad else 0
-    rec = record(args.robots, args.steps, args.seed, args.tasks)
+    rec = record(args.robots, args.steps, args.seed, args.tasks, args.lanes)
     text = json.dumps(rec)
     if args.out:
         Path(args.out).write_text(text)

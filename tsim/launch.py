@@ -132,13 +132,17 @@ class SplitLaunch:
         self._split.step((*args, *self._tail))
 
 
-# how a step is launched, by `tsim.backend.Arch.launch`: (serial, block, split launcher, worlds) ->
-# a callable taking `step_kernel`'s arguments less the block size. A backend that launches
-# differently (e.g. the GPU lanes kernel) adds its entry here and names it in its `Arch`
+# how a step is launched, by `tsim.backend.Arch.launch`: (serial, block, split launcher, worlds,
+# lanes per world) -> a callable taking `step_kernel`'s arguments less the block size. A backend
+# that launches differently adds its entry here and names it in its `Arch`. "lanes" is the lanes
+# kernel (tsim/lanes.py: a world on `lanes` threads of a block; GPU and Vulkan only), which no
+# backend takes by default yet: `BatchSim.choose_kernel(lanes=L)` forces it
 LAUNCHERS = {
-    "host": lambda serial, block, split, n: KernelLaunch(serial, 1, cache=True),
-    "device": lambda serial, block, split, n: KernelLaunch(serial, block, cache=False),
-    "spirv": lambda serial, block, split, n: SplitLaunch(split, block, _batch_tier(n)),
+    "host": lambda serial, block, split, n, lanes: KernelLaunch(serial, 1, cache=True),
+    "device": lambda serial, block, split, n, lanes: KernelLaunch(serial, block, cache=False),
+    "spirv": lambda serial, block, split, n, lanes: SplitLaunch(split, block, _batch_tier(n)),
+    "lanes": lambda serial, block, split, n, lanes: SplitLaunch(_lanes_launcher(n, lanes), block,
+                                                               _batch_tier(n)),
 }
 
 
@@ -148,7 +152,13 @@ def _batch_tier(n_worlds: int) -> int:
     return spirv.batch_tier(n_worlds)
 
 
-def launcher(path: str, *, serial: bool, block: int, split, n_worlds: int):
+def _lanes_launcher(n_worlds: int, lanes: int):
+    from tsim.lanes import LanesLauncher
+
+    return LanesLauncher(n_worlds, lanes)
+
+
+def launcher(path: str, *, serial: bool, block: int, split, n_worlds: int, lanes: int = 1):
     """The step launcher of launch path `path` (`tsim.backend.Backend.launch_path`, or the one
-    `BatchSim.choose_kernel` forces)."""
-    return LAUNCHERS[path](serial, block, split, n_worlds)
+    `BatchSim.choose_kernel` forces); `lanes`: the lanes kernel's lanes per world."""
+    return LAUNCHERS[path](serial, block, split, n_worlds, lanes)

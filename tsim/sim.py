@@ -128,6 +128,7 @@ class BatchSim:
         self.state_version = 0
         self.free_objects = world.free_objects
         self._gpu_block = K.GPU_BLOCK  # worlds per thread block on a GPU (`choose_kernel`)
+        self._lanes = 1  # threads per world: 1, today's kernels; more, the lanes kernel (`choose_kernel`)
         self._build()
         self.reset()
 
@@ -475,8 +476,9 @@ class BatchSim:
 
     def _make_launcher(self):
         """The backend's launcher of a step for this batch and its `choose_kernel` choices."""
-        return launch.launcher("spirv" if self._spirv else self.backend.kernel_path, serial=self._serial,
-                               block=self._gpu_block, split=self._spirv_launcher, n_worlds=self.n_worlds)
+        path = "lanes" if self._lanes > 1 else "spirv" if self._spirv else self.backend.kernel_path
+        return launch.launcher(path, serial=self._serial, block=self._gpu_block, split=self._spirv_launcher,
+                               n_worlds=self.n_worlds, lanes=self._lanes)
 
     @property
     def _launch(self) -> CachedLaunch | None:
@@ -496,7 +498,7 @@ class BatchSim:
 
     def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0,
                       spirv_launch: bool | None = None, substeps_per_launch: int | None = None,
-                      gpu_block: int | None = None) -> None:
+                      gpu_block: int | None = None, lanes: int | None = None) -> None:
         """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
         compare them; every variant gives the same bits): `serial` runs on the calling thread
         (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
@@ -504,7 +506,18 @@ class BatchSim:
         the SPIR-V backends' launch (tsim/spirv.py) on any backend, and `substeps_per_launch`
         splits its env steps into launches of that many substeps. `gpu_block` sets the worlds per
         thread block on a GPU (default `GPU_BLOCK`, 64; a multiple of 32 up to 1,024; each block
-        size is its own compiled kernel; bench/gpu_probe.py compares them): the CPU keeps its 1."""
+        size is its own compiled kernel; bench/gpu_probe.py compares them): the CPU keeps its 1.
+        `lanes` > 1 runs each world on that many threads of one thread block (tsim/lanes.py, a
+        power of two up to 1,024; GPU and Vulkan only: Taichi's CPU backend has no block barrier),
+        1 the backend's own kernel again."""
+        if lanes is not None:
+            from tsim.lanes import check_lanes
+
+            check_lanes(lanes)
+            if lanes > 1 and self.backend.on_host:
+                raise ValueError("the lanes kernel runs on a GPU or Vulkan only (Taichi's CPU backend "
+                                 "has no block barrier)")
+            self._lanes = lanes
         if gpu_block is not None:
             if not (isinstance(gpu_block, int) and 32 <= gpu_block <= 1024 and gpu_block % 32 == 0):
                 raise ValueError(f"gpu_block must be a multiple of 32 from 32 to 1024, got {gpu_block!r}")
