@@ -1,8 +1,8 @@
 """A substep's second half (integration, fixed points, constraints, snapshot) spread over a world's
 L lanes: the lanes kernel's stages (tsim/lanes.py; GPU and Vulkan only, issue #48 item 1).
 
-The same arithmetic as `integrate.rk4`, `springs.spring_forces`, `constraints.constraints` and
-`step.move`, element by element, with the elements dealt to lanes: point p and edge e to lane
+`integrate.rk4`, `springs.spring_forces`, `constraints.constraints` and `step.move`, element by
+element, with the elements dealt to lanes: point p and edge e to lane
 p % L and e % L (`own`). Each phase ends at a barrier (`sync`), after which every lane reads
 what the others wrote. Where the CPU's code scatters per-edge vectors to the edges' ends
 (`springs.add_to_ends`), a point here gathers them over its incidence list (`incidence`): the
@@ -17,17 +17,18 @@ compare-and-swap loop on SPIR-V (Taichi's SPIR-V code generator cannot make one 
 array: "at_buffer failed"; with f64 ones lavapipe crashed) and an atomic on CUDA. Each entry here has
 one writer, so the value is the same.
 
-The CPU's kernels do not call this module (Taichi's CPU backend has no block barrier): their
-code, and so f64's bits on the CPU, are what they were. The per-element code is a copy of the
-CPU's; a change to one must be made to both (tests/tsim/test_lanes.py compares them on every task).
+The per-element code is the CPU's own (`springs.edge_force`, `integrate.stage_start`,
+`point_stage`, `stage_end`, `hold_point`, `constraints.edge_correction`, `rigid_voxels`,
+`integrate.snapshot`): the serial kernels call it in loops over a world's elements, this module over a
+lane's. Only the sums that the CPU scatters are gathered here. The CPU's kernels do not call this
+module (Taichi's CPU backend has no block barrier); tests/tsim/test_lanes.py compares the two on
+every task.
 """
 
-from tsim import constants as C
-from tsim import portable
-from tsim.kernels.constraints import _HI, _HI_R, _LO, _LO_R
-from tsim.kernels.integrate import stage_y
-from tsim.kernels.layout import N_FIXED, N_RIGID, V_PTS, pairs
-from tsim.kernels.pairs import renormalize
+from tsim.kernels.constraints import edge_correction, rigid_voxels
+from tsim.kernels.integrate import hold_point, point_stage, snapshot, stage_end, stage_start
+from tsim.kernels.layout import N_FIXED, pairs
+from tsim.kernels.springs import edge_force
 from tsim.runtime import PROFILE_SKIP, ti
 
 
@@ -80,45 +81,7 @@ def spring_forces_lanes(n_pts, n_edges, lane, lanes: ti.template(), s: ti.templa
     """`springs.spring_forces`: each lane its edges' forces, a barrier, then each lane its
     points' sums (`gather`) into s.frc."""
     for k in range(own(n_edges, lane, lanes)):
-        e = lane + k * lanes
-        a = s.ea[e]
-        q = s.eb[e]
-        if ti.static(pairs()):
-            dx = 0.0
-            dy = 0.0
-            dist = 0.0
-            stretch = 0.0
-            if ti.static(first):
-                dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
-                dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
-                dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = ((dist - s.egoal[e]) - s.leq[e]) * C.REST_CONVERGENCE
-                s.e0[4 * e] = dx
-                s.e0[4 * e + 1] = dy
-                s.e0[4 * e + 2] = dist
-                s.e0[4 * e + 3] = stretch
-            else:
-                dx0 = s.e0[4 * e]
-                dy0 = s.e0[4 * e + 1]
-                ddx = s.xlo[2 * a] - s.xlo[2 * q]
-                ddy = s.xlo[2 * a + 1] - s.xlo[2 * q + 1]
-                dx = dx0 + ddx
-                dy = dy0 + ddy
-                dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = ((ddx * (dx0 + dx) + ddy * (dy0 + dy)) / (dist + s.e0[4 * e + 2])
-                           + s.e0[4 * e + 3])
-            mag = stretch * s.ek[e] / dist
-            s.ccx[e] = dx * mag
-            s.ccy[e] = dy * mag
-        else:
-            dx = s.xs[2 * a] - s.xs[2 * q]
-            dy = s.xs[2 * a + 1] - s.xs[2 * q + 1]
-            dist = ti.sqrt(dx * dx + dy * dy)
-            if ti.static(first):
-                s.leq[e] = dist + (s.egoal[e] - dist) * C.REST_CONVERGENCE
-            mag = (dist - s.leq[e]) * s.ek[e] / dist
-            s.ccx[e] = dx * mag
-            s.ccy[e] = dy * mag
+        edge_force(lane + k * lanes, s, first)
     sync()
     for k in range(own(n_pts, lane, lanes)):
         p = lane + k * lanes
@@ -135,62 +98,16 @@ def rk4_lanes(n_pts, n_edges, lane, lanes: ti.template(), s: ti.template(), inc:
     for k in range(own(n_pts, lane, lanes)):
         p = lane + k * lanes
         for d in ti.static(range(2)):
-            i = 2 * p + d
-            s.xs[i] = s.pos[i]
-            s.vs[i] = s.vel[i]
-            if ti.static(pairs()):
-                s.xlo[i] = 0.0
+            stage_start(2 * p + d, s)
     for stage in ti.static(range(4)):
         sync()
         spring_forces_lanes(n_pts, n_edges, lane, lanes, s, inc, stage == 0)
         for k in range(own(n_pts, lane, lanes)):
-            p = lane + k * lanes
-            vx = s.vs[2 * p]
-            vy = s.vs[2 * p + 1]
-            fx = s.frc[2 * p] + vx * (-C.VISCOUS_DRAG)
-            fy = s.frc[2 * p + 1] + vy * (-C.VISCOUS_DRAG)
-            fy += C.POINT_MASS * (-C.GRAVITY)
-            fx += s.fcol[2 * p]
-            fy += s.fcol[2 * p + 1]
-            y = stage_y(s, p)
-            if y < 0:
-                normal = y * (-C.GROUND_K)
-                fy += normal
-                fx += ((-10.0 * C.FRICTION_DYN) * normal
-                       * portable.tanh(vx * normal * C.FRICTION_DYN))
-            acc = ti.Vector([fx / C.POINT_MASS, fy / C.POINT_MASS])
-            for d in ti.static(range(2)):
-                i = 2 * p + d
-                kx = s.vs[i] * C.DT
-                kv = acc[d] * C.DT
-                if ti.static(stage == 0):
-                    s.adx[i] = kx
-                    s.adv[i] = kv
-                elif ti.static(stage < 3):
-                    s.adx[i] = s.adx[i] + 2 * kx
-                    s.adv[i] = s.adv[i] + 2 * kv
-                else:
-                    s.adx[i] = s.adx[i] + kx
-                    s.adv[i] = s.adv[i] + kv
-                if ti.static(stage < 3):
-                    h = 0.5 if ti.static(stage < 2) else 1.0
-                    if ti.static(pairs()):
-                        s.xlo[i] = kx * h
-                        s.vs[i] = s.vel[i] + (s.vlo[i] + kv * h)
-                    else:
-                        s.xs[i] = s.pos[i] + kx * h
-                        s.vs[i] = s.vel[i] + kv * h
+            point_stage(lane + k * lanes, s, stage, True)
     for k in range(own(n_pts, lane, lanes)):
         p = lane + k * lanes
         for d in ti.static(range(2)):
-            i = 2 * p + d
-            if ti.static(pairs()):
-                s.plo[i] = s.plo[i] + s.adx[i] / 6
-                s.vlo[i] = s.vlo[i] + s.adv[i] / 6
-                renormalize(s.vel, s.vlo, i, s.one)
-            else:
-                s.pos[i] = s.pos[i] + s.adx[i] / 6
-                s.vel[i] = s.vel[i] + s.adv[i] / 6
+            stage_end(2 * p + d, s)
 
 
 @ti.func
@@ -199,13 +116,7 @@ def hold_fixed_lanes(b, lane, lanes: ti.template(), counts: ti.template(), lists
     """`integrate.hold_fixed`, the fixed points dealt to lanes (a point listed twice is written
     twice with the same values)."""
     for k in range(own(counts[b, N_FIXED], lane, lanes)):
-        p = lists[b, lane + k * lanes, 2]
-        for d in ti.static(range(2)):
-            s.pos[2 * p + d] = s.pl[2 * p + d]
-            s.vel[2 * p + d] = 0.0
-            if ti.static(pairs()):
-                s.plo[2 * p + d] = s.pllo[2 * p + d]
-                s.vlo[2 * p + d] = 0.0
+        hold_point(lists[b, lane + k * lanes, 2], s)
 
 
 @ti.func
@@ -216,29 +127,7 @@ def constraints_lanes(b, n_pts, n_edges, lane, lanes: ti.template(), counts: ti.
     points, then the rigid voxels' pass on lane 0. Starts and ends at a barrier."""
     sync()
     for k in range(own(n_edges, lane, lanes)):
-        e = lane + k * lanes
-        a = s.ea[e]
-        q = s.eb[e]
-        dx = s.pos[2 * a] - s.pos[2 * q]
-        dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
-        if ti.static(pairs()):
-            dx += s.plo[2 * a] - s.plo[2 * q]
-            dy += s.plo[2 * a + 1] - s.plo[2 * q + 1]
-        dist = ti.sqrt(dx * dx + dy * dy)
-        rest = s.erest[e]
-        stress = dist / rest
-        cx = 0.0
-        cy = 0.0
-        if stress > _HI:
-            m = (dist - rest * _HI) / (dist * 2)
-            cx += dx * m
-            cy += dy * m
-        if stress < _LO:
-            m = (dist - rest * _LO) / (dist * 2)
-            cx += dx * m
-            cy += dy * m
-        s.ccx[e] = cx * 0.8
-        s.ccy[e] = cy * 0.8
+        edge_correction(lane + k * lanes, s)
     sync()
     for k in range(own(n_pts, lane, lanes)):
         p = lane + k * lanes
@@ -254,38 +143,7 @@ def constraints_lanes(b, n_pts, n_edges, lane, lanes: ti.template(), counts: ti.
     hold_fixed_lanes(b, lane, lanes, counts, lists, s)
     sync()
     if lane == 0:
-        for i in range(counts[b, N_RIGID]):
-            v = lists[b, i, 1]
-            for k in ti.static(range(4)):
-                a = vox_i[b, v, V_PTS + k]
-                q = vox_i[b, v, V_PTS + (k + 1) % 4]
-                dx = s.pos[2 * a] - s.pos[2 * q]
-                dy = s.pos[2 * a + 1] - s.pos[2 * q + 1]
-                if ti.static(pairs()):
-                    dx += s.plo[2 * a] - s.plo[2 * q]
-                    dy += s.plo[2 * a + 1] - s.plo[2 * q + 1]
-                dist = ti.sqrt(dx * dx + dy * dy)
-                stress = dist / C.MAIN_REST
-                ox = 0.0
-                oy = 0.0
-                if stress >= _HI_R:
-                    m = (dist - C.MAIN_REST * _HI_R) / (dist * 2)
-                    ox += dx * m
-                    oy += dy * m
-                if stress <= _LO_R:
-                    m = (dist - C.MAIN_REST * _LO_R) / (dist * 2)
-                    ox += dx * m
-                    oy += dy * m
-                if ti.static(pairs()):
-                    s.plo[2 * a] = s.plo[2 * a] - ox * 0.5
-                    s.plo[2 * a + 1] = s.plo[2 * a + 1] - oy * 0.5
-                    s.plo[2 * q] = s.plo[2 * q] + ox * 0.5
-                    s.plo[2 * q + 1] = s.plo[2 * q + 1] + oy * 0.5
-                else:
-                    s.pos[2 * a] = s.pos[2 * a] - ox * 0.5
-                    s.pos[2 * a + 1] = s.pos[2 * a + 1] - oy * 0.5
-                    s.pos[2 * q] = s.pos[2 * q] + ox * 0.5
-                    s.pos[2 * q + 1] = s.pos[2 * q + 1] + oy * 0.5
+        rigid_voxels(b, counts, vox_i, lists, s)
     sync()
 
 
@@ -303,12 +161,5 @@ def move_lanes(b, n_pts, n_edges, lane, lanes: ti.template(), counts: ti.templat
     for k in range(own(n_pts, lane, lanes)):
         p = lane + k * lanes
         for d in ti.static(range(2)):
-            i = 2 * p + d
-            if ti.static(pairs()):
-                renormalize(s.pos, s.plo, i, s.one)
-                s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
-                s.pllo[i] = s.plo[i]
-            else:
-                s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
-            s.pl[i] = s.pos[i]
+            snapshot(2 * p + d, s)
     sync()

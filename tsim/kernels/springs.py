@@ -53,42 +53,49 @@ def spring_forces(n_pts, n_edges, s: ti.template(), first: ti.template()):
     for i in range(2 * n_pts):
         s.frc[i] = 0.0
     for e in range(n_edges):
-        a = s.ea[e]
-        q = s.eb[e]
-        if ti.static(pairs()):
-            dx = 0.0
-            dy = 0.0
-            dist = 0.0
-            stretch = 0.0
-            if ti.static(first):
-                dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
-                dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
-                dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = ((dist - s.egoal[e]) - s.leq[e]) * C.REST_CONVERGENCE
-                s.e0[4 * e] = dx
-                s.e0[4 * e + 1] = dy
-                s.e0[4 * e + 2] = dist
-                s.e0[4 * e + 3] = stretch
-            else:
-                dx0 = s.e0[4 * e]
-                dy0 = s.e0[4 * e + 1]
-                ddx = s.xlo[2 * a] - s.xlo[2 * q]
-                ddy = s.xlo[2 * a + 1] - s.xlo[2 * q + 1]
-                dx = dx0 + ddx
-                dy = dy0 + ddy
-                dist = ti.sqrt(dx * dx + dy * dy)
-                stretch = ((ddx * (dx0 + dx) + ddy * (dy0 + dy)) / (dist + s.e0[4 * e + 2])
-                           + s.e0[4 * e + 3])
-            mag = stretch * s.ek[e] / dist
-            s.ccx[e] = dx * mag
-            s.ccy[e] = dy * mag
-        else:
-            dx = s.xs[2 * a] - s.xs[2 * q]
-            dy = s.xs[2 * a + 1] - s.xs[2 * q + 1]
-            dist = ti.sqrt(dx * dx + dy * dy)
-            if ti.static(first):
-                s.leq[e] = dist + (s.egoal[e] - dist) * C.REST_CONVERGENCE
-            mag = (dist - s.leq[e]) * s.ek[e] / dist
-            s.ccx[e] = dx * mag
-            s.ccy[e] = dy * mag
+        edge_force(e, s, first)
     add_to_ends(n_edges, s.frc, s.ea, s.eb, s.ccx, s.ccy, False)
+
+
+@ti.func
+def edge_force(e, s: ti.template(), first: ti.template()):
+    """Spring e's force vector on its first end, into s.ccx[e], s.ccy[e] (`spring_forces`, which
+    says how; the lanes kernel calls it for each lane's edges)."""
+    a = s.ea[e]
+    q = s.eb[e]
+    if ti.static(pairs()):
+        dx = 0.0
+        dy = 0.0
+        dist = 0.0
+        stretch = 0.0
+        if ti.static(first):
+            dx = (s.pos[2 * a] - s.pos[2 * q]) + (s.plo[2 * a] - s.plo[2 * q])
+            dy = (s.pos[2 * a + 1] - s.pos[2 * q + 1]) + (s.plo[2 * a + 1] - s.plo[2 * q + 1])
+            dist = ti.sqrt(dx * dx + dy * dy)
+            stretch = ((dist - s.egoal[e]) - s.leq[e]) * C.REST_CONVERGENCE
+            s.e0[4 * e] = dx
+            s.e0[4 * e + 1] = dy
+            s.e0[4 * e + 2] = dist
+            s.e0[4 * e + 3] = stretch
+        else:
+            dx0 = s.e0[4 * e]
+            dy0 = s.e0[4 * e + 1]
+            ddx = s.xlo[2 * a] - s.xlo[2 * q]
+            ddy = s.xlo[2 * a + 1] - s.xlo[2 * q + 1]
+            dx = dx0 + ddx
+            dy = dy0 + ddy
+            dist = ti.sqrt(dx * dx + dy * dy)
+            stretch = ((ddx * (dx0 + dx) + ddy * (dy0 + dy)) / (dist + s.e0[4 * e + 2])
+                       + s.e0[4 * e + 3])
+        mag = stretch * s.ek[e] / dist
+        s.ccx[e] = dx * mag
+        s.ccy[e] = dy * mag
+    else:
+        dx = s.xs[2 * a] - s.xs[2 * q]
+        dy = s.xs[2 * a + 1] - s.xs[2 * q + 1]
+        dist = ti.sqrt(dx * dx + dy * dy)
+        if ti.static(first):
+            s.leq[e] = dist + (s.egoal[e] - dist) * C.REST_CONVERGENCE
+        mag = (dist - s.leq[e]) * s.ek[e] / dist
+        s.ccx[e] = dx * mag
+        s.ccy[e] = dy * mag

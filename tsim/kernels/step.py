@@ -7,11 +7,10 @@ pipeline contacts (`contacts`: broad then narrow phase) -> integration (`integra
 points -> constraints (`constraints`) -> the new snapshot.
 """
 
-from tsim import constants as C
 from tsim.kernels.broadphase import LIST_PER_VOXEL
 from tsim.kernels.constraints import constraints
 from tsim.kernels.contacts import contacts
-from tsim.kernels.integrate import hold_fixed, rk4
+from tsim.kernels.integrate import hold_fixed, rk4, snapshot
 from tsim.kernels.layout import (
     E_GOAL,
     E_K,
@@ -42,7 +41,6 @@ from tsim.kernels.layout import (
     pairs,
     state_columns,
 )
-from tsim.kernels.pairs import renormalize
 from tsim.kernels.scratch import Scratch, Terrain
 from tsim.runtime import PROFILE_SKIP, ti
 
@@ -121,13 +119,7 @@ def move(b, n_pts, n_edges, counts: ti.template(), vox_i: ti.template(), lists: 
     if ti.static("constraints" not in PROFILE_SKIP):
         constraints(b, n_edges, counts, vox_i, lists, s)
     for i in range(2 * n_pts):
-        if ti.static(pairs()):
-            renormalize(s.pos, s.plo, i, s.one)
-            s.vt[i] = ((s.pos[i] - s.pl[i]) + (s.plo[i] - s.pllo[i])) / C.DT
-            s.pllo[i] = s.plo[i]
-        else:
-            s.vt[i] = (s.pos[i] - s.pl[i]) / C.DT
-        s.pl[i] = s.pos[i]
+        snapshot(i, s)
 
 
 @ti.func
