@@ -33,44 +33,16 @@ bit for bit from the committed 5x5 records.
 from __future__ import annotations
 
 import argparse
-import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from studies.study_runs import SGR, evolve, keep  # noqa: E402 (after sgr's folder is on the path)
+
 SHAPES = {"Walker-v0": (10, 10), "Thrower-v0": (6, 9), "Climber-v2": (10, 5)}
-RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
-SGR = [sys.executable, "-m", "evolve.cli"]
-
-
-def finished(run: Path) -> bool:
-    """A run folder whose last checkpoint is its last generation and whose champion is written."""
-    from evolve.records.rundir import RunDir
-
-    if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
-        return False
-    rd = RunDir(run)
-    return rd.last_checkpoint_generation() == int(rd.config()["generations"])
-
-
-def evolve(run: Path, args: list[str], workers: int) -> None:
-    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished."""
-    if finished(run):
-        return
-    cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
-    cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
-    print("+", " ".join(cmd[2:]), flush=True)
-    subprocess.run(cmd, check=True, cwd=ROOT)
-
-
-def keep(run: Path, records: Path) -> None:
-    """Copy a finished run's records into the committed folder."""
-    dest = records / run.name
-    dest.mkdir(parents=True, exist_ok=True)
-    for name in RECORDS:
-        if (run / name).is_file():
-            shutil.copy2(run / name, dest / name)
 
 
 def study(task: str, seed: int, out: Path, records: Path, workers: int, decode_only: bool = False) -> None:

@@ -26,30 +26,18 @@ first set.
 from __future__ import annotations
 
 import argparse
-import shutil
-import subprocess
 import sys
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from studies.study_runs import evolve, finished, keep  # noqa: E402 (after sgr's folder is on the path)
+
 DECODERS = ("substrate", "cppn", "fourier", "growth")
 SETS = {"big": {"Climber-v2": (10, 5), "Walker-v0": (10, 10)},
         "paper": {t: (5, 5) for t in ("Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0")}}
-RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
-SGR = [sys.executable, "-m", "evolve.cli"]
 GENERATIONS = 100
-
-
-def finished(run: Path) -> bool:
-    """A run folder whose last checkpoint is its last generation and whose champion is written."""
-    from evolve.records.rundir import RunDir
-
-    if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
-        return False
-    rd = RunDir(run)
-    return rd.last_checkpoint_generation() == int(rd.config()["generations"])
 
 
 def runs(sets: list[str], tasks: list[str] | None, seeds: list[int], decoders: list[str]):
@@ -65,25 +53,6 @@ def runs(sets: list[str], tasks: list[str] | None, seeds: list[int], decoders: l
                     if decoder != "substrate":  # the default: a run of today's code is the same run
                         args += ["--body-decoder", decoder]
                     yield f"{decoder}-{task}-{rows}x{cols}-s{seed}", args
-
-
-def evolve(run: Path, args: list[str], workers: int) -> None:
-    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished."""
-    if finished(run):
-        return
-    cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
-    cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
-    print("+", " ".join(cmd[2:]), flush=True)
-    subprocess.run(cmd, check=True, cwd=ROOT)
-
-
-def keep(run: Path, records: Path) -> None:
-    """Copy a finished run's records into the committed folder."""
-    dest = records / run.name
-    dest.mkdir(parents=True, exist_ok=True)
-    for name in RECORDS:
-        if (run / name).is_file():
-            shutil.copy2(run / name, dest / name)
 
 
 def _records(records: Path, decoder: str, task: str, shape: tuple[int, int], seeds: list[int]) -> list[Path]:

@@ -1,0 +1,47 @@
+"""What every study script does with its runs: run one to its end or resume it, tell whether it is
+finished, and copy a finished run's records into the committed results folder.
+
+A study is idempotent this way: a finished run is skipped, an unfinished one resumed
+(`sgr evolve --resume`), so after a kill it goes on where it stood.
+"""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+# a run's records: what a results folder keeps of it (its checkpoints and pictures stay behind)
+RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
+SGR = [sys.executable, "-m", "evolve.cli"]
+
+
+def finished(run: Path) -> bool:
+    """A run folder whose last checkpoint is its last generation and whose champion is written."""
+    from evolve.records.rundir import RunDir
+
+    if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
+        return False
+    rd = RunDir(run)
+    return rd.last_checkpoint_generation() == int(rd.config()["generations"])
+
+
+def evolve(run: Path, args: list[str], workers: int) -> None:
+    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished."""
+    if finished(run):
+        return
+    cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
+    cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
+    print("+", " ".join(cmd[2:]), flush=True)
+    subprocess.run(cmd, check=True, cwd=ROOT)
+
+
+def keep(run: Path, records: Path, names: tuple[str, ...] = RECORDS) -> None:
+    """Copy a finished run's records (`names`, those it has) into the committed folder."""
+    dest = records / run.name
+    dest.mkdir(parents=True, exist_ok=True)
+    for name in names:
+        if (run / name).is_file():
+            shutil.copy2(run / name, dest / name)
