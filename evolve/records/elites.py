@@ -63,7 +63,8 @@ def _first_bad_key(data: dict) -> str | None:
     for j, e in enumerate(data["elites"]):
         if not isinstance(e, dict):
             return f"elites[{j}]"
-        if not (_ints(e.get("cell")) and len(e["cell"]) == len(res)):
+        if not (_ints(e.get("cell")) and len(e["cell"]) == len(res)
+                and all(0 <= c < r for c, r in zip(e["cell"], res, strict=True))):
             return f"elites[{j}].cell"
         m = e.get("measures")
         if not (isinstance(m, dict) and all(_number(v) for v in m.values())):

@@ -36,6 +36,7 @@ def test_an_intact_archive_gives_its_elite(tmp_path):
     ({"elites": [{**GOOD_ELITE, "champion": {"body": [[3]]}}]}, "key 'elites[0].champion'"),
     ({"elites": [{**GOOD_ELITE, "measures": []}]}, "key 'elites[0].measures'"),
     ({"ranges": [[0, 1]]}, "key 'ranges'"),
+    ({"elites": [{**GOOD_ELITE, "cell": [3, 0]}]}, "key 'elites[0].cell'"),
 ])
 def test_a_damaged_archive_is_one_line_naming_its_key(tmp_path, capsys, change, named):
     """`sgr render RUN --cell 0,0` on an elites.json with one bad key: exit 2, one line naming it."""
