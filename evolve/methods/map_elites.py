@@ -53,6 +53,7 @@ from tsim.errors import SgrError
 INSTALL_QD = "pip install 'sgr[qd]' (or: pip install ribs)"
 QD_KEYS = ("descriptors", "ranges", "resolution", "batch", "initial", "rescore", "score_offset")
 DEFAULT_DESCRIPTORS = ("actuator", "rigid")
+MAX_CELLS = 1_000_000  # the archive's cells at most (pyribs allocates every cell up front)
 MAX_TRIES = 20  # genomes made per child asked for, at most, before a generation goes on with fewer valid
 STATE_FORMAT = "sgr-map-elites-1"
 
@@ -120,6 +121,9 @@ class QdSettings:
         if not (isinstance(res, list) and len(res) == len(names) and all(is_int(r) and r >= 1 for r in res)):
             raise SgrError(f"{name}.resolution' must be an int >= 1 or a list of one per descriptor, "
                            f"got {res!r}")
+        if math.prod(res) > MAX_CELLS:
+            raise SgrError(f"{name}.resolution' makes {math.prod(res):,} cells, more than the {MAX_CELLS:,} "
+                           f"an archive may have, got {res!r}")
         counts = {}
         for key, fallback in (("batch", pop_size), ("initial", None), ("rescore", None)):
             v = raw.get(key, fallback)

@@ -30,7 +30,50 @@ def read_elites(run_dir: str | Path) -> dict:
         raise SgrError(f"{f}: not valid JSON ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("elites"), list):
         raise SgrError(f"{f}: not an archive of elites (format {FORMAT})")
+    bad = _first_bad_key(data)
+    if bad is not None:
+        raise SgrError(f"{f}: key {bad!r} is missing or not what an archive of elites holds")
     return data
+
+
+def _number(x: object) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool)
+
+
+def _ints(x: object) -> bool:
+    return isinstance(x, list) and all(isinstance(i, int) and not isinstance(i, bool) for i in x)
+
+
+def _first_bad_key(data: dict) -> str | None:
+    """The first key of elites.json (module docstring) whose value is not of its kind, None when
+    all are: what the report, the archive's picture and `--cell` read, so a damaged file is one line."""
+    res = data.get("resolution")
+    if not (_ints(res) and res):
+        return "resolution"
+    names = data.get("descriptors")
+    if not (isinstance(names, list) and len(names) == len(res) and all(isinstance(n, str) for n in names)):
+        return "descriptors"
+    ranges = data.get("ranges")
+    if not (isinstance(ranges, list) and len(ranges) == len(res)
+            and all(isinstance(r, list) and len(r) == 2 and all(map(_number, r)) for r in ranges)):
+        return "ranges"
+    for key in ("generation", "coverage", "qd_score"):
+        if not _number(data.get(key)):
+            return key
+    for j, e in enumerate(data["elites"]):
+        if not isinstance(e, dict):
+            return f"elites[{j}]"
+        if not (_ints(e.get("cell")) and len(e["cell"]) == len(res)
+                and all(0 <= c < r for c, r in zip(e["cell"], res, strict=True))):
+            return f"elites[{j}].cell"
+        m = e.get("measures")
+        if not (isinstance(m, dict) and all(_number(v) for v in m.values())):
+            return f"elites[{j}].measures"
+        champ = e.get("champion")
+        if not (isinstance(champ, dict) and _number(champ.get("fitness"))
+                and isinstance(champ.get("body"), list)):
+            return f"elites[{j}].champion"
+    return None
 
 
 def parse_cell(text: str) -> tuple[int, ...]:
@@ -48,8 +91,8 @@ def elite_record(run_dir: str | Path, cell) -> dict:
     cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in cell)
     data = read_elites(run_dir)
     for e in data["elites"]:
-        if isinstance(e, dict) and tuple(e.get("cell", ())) == cell and isinstance(e.get("champion"), dict):
+        if tuple(e["cell"]) == cell:
             return e["champion"]
-    filled = ", ".join(",".join(map(str, e["cell"])) for e in data["elites"][:8] if isinstance(e, dict))
+    filled = ", ".join(",".join(map(str, e["cell"])) for e in data["elites"][:8])
     raise SgrError(f"{Path(run_dir) / ELITES_FILE}: no elite in cell {','.join(map(str, cell))} "
                    f"(of {len(data['elites'])} filled: {filled}{', ...' if len(data['elites']) > 8 else ''})")

@@ -164,3 +164,14 @@ def test_a_registered_descriptor_can_be_named_in_qd(monkeypatch):
     assert qd.ranges[0] == (0.0, 25.0) and qd.resolution == (5, 10)
     body = np.array([[1, 3, 0], [2, 4, 4], [0, 0, 0]])
     assert qd.measure(body).tolist() == pytest.approx([5.0, 3 / 5], abs=1e-12)
+
+
+@pytest.mark.parametrize("resolution", [100_000, [2_000, 1_000]])
+def test_an_archive_too_big_to_allocate_is_one_line_naming_qd_resolution(tmp_path, capsys, resolution):
+    """pyribs allocates every cell up front: 10^10 cells were a MemoryError traceback, not a line."""
+    cfg = tmp_path / "bad.yaml"
+    cfg.write_text(yaml.safe_dump({**BASE, "qd": {"resolution": resolution}}))
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "run")]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "key 'qd.resolution' makes" in err, err
+    assert not (tmp_path / "run").exists()

@@ -1,0 +1,46 @@
+"""A damaged elites.json (a map-elites run's archive, evolve/records/elites.py) is one line naming
+its bad key wherever it is read (`sgr render --cell`, `sgr report`), not a traceback: reading a run
+folder's data never fails on what the data holds."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+
+from evolve.cli import main
+from evolve.records.elites import FORMAT, elite_record
+
+GOOD_ELITE = {"cell": [0, 0], "measures": {"actuator": 0.4, "rigid": 0.2},
+              "champion": {"fitness": 1.0, "body": [[3, 3], [3, 3]]}}
+GOOD = {"format": FORMAT, "generation": 2, "descriptors": ["actuator", "rigid"], "ranges": [[0, 1], [0, 1]],
+        "resolution": [3, 3], "coverage": 1 / 9, "qd_score": 1.0, "elites": [GOOD_ELITE]}
+
+
+def run_with(tmp_path: Path, data: dict) -> Path:
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "elites.json").write_text(json.dumps(data))
+    return run
+
+
+def test_an_intact_archive_gives_its_elite(tmp_path):
+    """The control: the same file undamaged is read (so the damaged cases fail for their damage)."""
+    assert elite_record(run_with(tmp_path, GOOD), (0, 0)) == GOOD_ELITE["champion"]
+
+
+@pytest.mark.parametrize("change, named", [
+    ({"resolution": None}, "key 'resolution'"),
+    ({"elites": [{"cell": 5}]}, "key 'elites[0].cell'"),
+    ({"elites": [{**GOOD_ELITE, "champion": {"body": [[3]]}}]}, "key 'elites[0].champion'"),
+    ({"elites": [{**GOOD_ELITE, "measures": []}]}, "key 'elites[0].measures'"),
+    ({"ranges": [[0, 1]]}, "key 'ranges'"),
+    ({"elites": [{**GOOD_ELITE, "cell": [3, 0]}]}, "key 'elites[0].cell'"),
+])
+def test_a_damaged_archive_is_one_line_naming_its_key(tmp_path, capsys, change, named):
+    """`sgr render RUN --cell 0,0` on an elites.json with one bad key: exit 2, one line naming it."""
+    run = run_with(tmp_path, {**GOOD, **change})
+    assert main(["render", str(run), "--cell", "0,0", "--exact"]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and named in err, err
