@@ -116,6 +116,9 @@ def run(args: argparse.Namespace) -> int:
         else:
             config, name = evolve_config(args, shape), None
         named_in = config if args.start_from else None  # read back from a run folder: data
+        if args.body_decoder:
+            rest = {k: v for k, v in overrides.items() if k != "body_decoder"}
+            _check_body_decoder(load_config(config, rest, named_in).method)
         cfg = load_config(config, overrides, named_in)
         # the first line names the backend; one that cannot start fails here, before the run exists
         print(start_backend(cfg.precision).line(), flush=True)
@@ -186,3 +189,14 @@ def run_experiment(exp) -> int:
         print(f"sgr: error: {exp.write_failed(exc)}", file=sys.stderr)
         return 1
     return 0
+
+
+def _check_body_decoder(method: str) -> None:
+    """`--body-decoder` names the flag, not the config key, when the method draws no body from its
+    genome (direct NEAT's genome is the body; nested's outer loop is direct's)."""
+    from evolve.methods import METHODS
+
+    if "body_decoder" not in METHODS[method].config_keys:
+        having = ", ".join(n for n, p in METHODS.items() if "body_decoder" in p.config_keys)
+        raise SgrError(f"--body-decoder is for the methods whose genome draws the body ({having}); "
+                       f"method {method!r} has no body decoder")

@@ -3,17 +3,15 @@
 A body is an (H, W) grid of evogym material codes (0 empty, 1 rigid, 2 soft, 3 horizontal and
 4 vertical actuator). Every measure is read inside the body's bounding box (the rows and columns
 holding a voxel), so a body drawn off-centre in its grid measures as the same body centred. Reports
-show them beside a champion's picture; quality diversity uses them as descriptors.
+show them beside a champion's picture; quality diversity uses them as descriptors. A population's
+body diversity is `evolve.search.body_distance.mean_pairwise_body_distance`.
 """
 
 from __future__ import annotations
 
 import zlib
-from collections.abc import Sequence
 
 import numpy as np
-
-from evolve.search.body_distance import mean_pairwise_body_distance
 
 MATERIALS = {1: "rigid", 2: "soft", 3: "h_actuator", 4: "v_actuator"}
 # every key `measures` returns, in the order reports show them
@@ -90,13 +88,6 @@ def measures(body: np.ndarray) -> dict[str, float]:
     out["irregularity"] = irregularity(box)
     out["boundaries"] = boundaries(box)
     return {name: out[name] for name in NAMES}
-
-
-def population_diversity(bodies: Sequence[np.ndarray]) -> float:
-    """A population's body diversity: the mean pairwise eq. 2 distance per cell (0: all the same,
-    1: every cell empty in one body and filled in the other); NaN for fewer than two bodies or
-    bodies of different shapes."""
-    return mean_pairwise_body_distance(bodies)
 
 
 def describe(m: dict[str, float]) -> str:

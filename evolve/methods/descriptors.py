@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from evolve.methods import body_measures
-from tsim.errors import SgrError
 
 Shape = tuple[int, int]
 
@@ -43,14 +42,6 @@ def register(name: str, fn: Callable[[np.ndarray], float], range_of: Callable[[S
     d = Descriptor(name, fn, range_of, cells_of, doc)
     DESCRIPTORS[name] = d
     return d
-
-
-def descriptor(name: str) -> Descriptor:
-    """The descriptor registered as `name`; SgrError listing the known ones."""
-    try:
-        return DESCRIPTORS[name]
-    except KeyError:
-        raise SgrError(f"unknown descriptor {name!r}; known descriptors: {', '.join(DESCRIPTORS)}") from None
 
 
 def _measure(key: str) -> Callable[[np.ndarray], float]:

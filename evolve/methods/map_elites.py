@@ -128,7 +128,7 @@ class QdSettings:
         for key, fallback in (("batch", pop_size), ("initial", None), ("rescore", None)):
             v = raw.get(key, fallback)
             if v is None:
-                v = counts["batch"] if key == "initial" else counts["batch"] // 4
+                v = counts["batch"] if key == "initial" else max(1, counts["batch"] // 4)
             least = 0 if key == "rescore" else 1
             if not is_int(v) or v < least:
                 raise SgrError(f"{name}.{key}' must be an int >= {least}, got {v!r}")
@@ -322,14 +322,18 @@ class MapElitesSearch:
         return out, invalid
 
     def _to_rescore(self) -> list[int]:
-        """The cells whose elites get another evaluation this generation: with `accumulate`, those
-        with fewer than `settle` scores (0: no limit), fewest first (ties: the lower cell index);
-        with `reevaluate` alone, every elite (fitness = its latest score); at most `rescore`."""
+        """The cells whose elites get another evaluation this generation, at most `rescore`: with
+        `accumulate`, those with fewer than `settle` scores (0: no limit), fewest first; with
+        `reevaluate` alone (fitness = its latest score), those scored longest ago first, so that
+        every elite comes round. Ties: the lower cell index."""
         if not self.reevaluate:
             return []
         cells = [c for c in sorted(self.elites)
                  if not (self.accumulate and self.settle and len(self.elites[c].tags) >= self.settle)]
-        cells.sort(key=lambda c: len(self.elites[c].tags))  # stable: cell order within a count
+        if self.accumulate:
+            cells.sort(key=lambda c: len(self.elites[c].tags))  # stable: cell order within a count
+        else:  # a tag is "<generation>/<genome key>" (`step`): its latest score's generation
+            cells.sort(key=lambda c: int(self.elites[c].tags[-1].split("/", 1)[0]))
         return cells[:self.qd.rescore]
 
     def insert(self, offered: list[Elite], keep: list[Elite] | None = None) -> None:

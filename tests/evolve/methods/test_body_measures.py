@@ -10,7 +10,6 @@ from evolve.methods.body_measures import (
     describe,
     irregularity,
     measures,
-    population_diversity,
     symmetry_lr,
     symmetry_tb,
 )
@@ -69,15 +68,6 @@ def test_empty_body_is_refused():
     """An empty grid has no body to measure."""
     with pytest.raises(ValueError, match="empty body"):
         measures(np.zeros((5, 5), dtype=int))
-
-
-def test_population_diversity_by_hand():
-    """Two 1x2 bodies: (1, 0) and (2, 2): cell 0 differs in material (0.5), cell 1 empty against
-    filled (1) -> 1.5 over 2 cells; a population of copies has diversity 0."""
-    a, b = np.array([[1, 0]]), np.array([[2, 2]])
-    assert population_diversity([a, b]) == pytest.approx(0.75)
-    assert population_diversity([a, a, a]) == 0.0
-    assert np.isnan(population_diversity([a]))
 
 
 def test_describe_gives_rows_x_columns_symmetries_and_the_actuator_share():

@@ -247,6 +247,19 @@ def test_an_unknown_decoder_on_the_command_line_is_one_line_and_exit_2(tmp_path,
         body_decoder("spiral")
 
 
+def test_body_decoder_with_a_method_that_draws_no_body_names_the_flag_in_one_line(tmp_path, capsys):
+    """Direct NEAT's genome is the body: the line names the flag and the methods that take it, not
+    an unknown key of the packaged config; nothing is run."""
+    from evolve.cli import main
+
+    assert main(["evolve", "--method", "direct", "--task", "Walker-v0", "--body-decoder", "cppn",
+                 "--out", str(tmp_path / "r")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--body-decoder is for the methods whose genome draws the body" in err
+    assert "sgr" in err and "method 'direct' has no body decoder" in err
+    assert not (tmp_path / "r").exists()
+
+
 def test_an_older_runs_config_without_the_keys_reads_as_the_papers_decoder(neat_config):
     raw = config_from_dict({"method": "sgr", "task": "Walker-v0"}).to_yaml()
     del raw["body_decoder"], raw["body_decoder_settings"]

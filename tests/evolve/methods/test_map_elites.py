@@ -112,6 +112,27 @@ def test_the_defaults_fill_every_qd_key():
     assert (p.batch, p.initial, p.rescore, p.score_offset) == (128, 128, 32, 0.0)
     w = search_of({"descriptors": ["width"]}).qd
     assert w.resolution == (5,) and w.ranges == ((0.5, 5.5),)
+    assert search_of({"batch": 3}).qd.rescore == 1  # a small batch still re-scores: honest by default
+
+
+def test_without_accumulate_the_elites_scored_longest_ago_are_rescored_first():
+    """With `reevaluate` alone an elite's fitness is its latest score, so re-scoring must come round
+    to every elite: the cells picked are those whose latest tag (`<generation>/<key>`) is oldest,
+    not the lowest cells every time."""
+    needs_ribs()
+    robust = {"episodes": 1, "action_noise": "uniform", "action_scale": 0.001, "reevaluate": True,
+              "accumulate": False}
+    cfg = config_from_dict({**BASE, "robust": robust, "qd": {"descriptors": ["actuator", "rigid"],
+                                                             "resolution": [2, 2], "rescore": 2}})
+    ini = neat_ini_text(cfg.neat_config, cfg.pop_size, MapElitesProblem.neat_overrides(cfg))
+    nc = neat_config_from_text(ini, cfg.neat_config)
+    s = MapElitesSearch(MapElitesProblem(cfg, nc), nc, seed=0)
+    s.insert([elite(1, 1.0, (0.1, 0.1)), elite(2, 1.0, (0.9, 0.1)), elite(3, 1.0, (0.1, 0.9)),
+              elite(4, 1.0, (0.9, 0.9))])
+    by_key = {e.genome.key: c for c, e in s.elites.items()}
+    for key, last in ((1, "5/1"), (2, "2/2"), (3, "7/3"), (4, "3/4")):
+        s.elites[by_key[key]].tags = [last]
+    assert s._to_rescore() == [by_key[2], by_key[4]]
 
 
 def test_without_pyribs_the_method_says_how_to_install_it_in_one_line(monkeypatch):
