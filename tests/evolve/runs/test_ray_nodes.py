@@ -229,17 +229,13 @@ def test_c_workers_ray_a_node_removed_mid_generation_is_simulated_elsewhere_unch
     cluster.wait_for_nodes()
 
 
-def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_the_sweep_resumes(
-        cluster, tmp_path):
-    """SIGTERM to a `--backend ray` sweep (on the cluster, one run on each worker node) once a run
-    has ended a generation: each run's task passes the stop on, so a run ends the generation under
-    way and writes its checkpoint there (none is due: checkpoint_every 1000; a killed task would
-    leave generation 0's), the sweep exits 143 with the resume command, and the resumed sweep equals
-    an uninterrupted local one. (The other run may not have begun its generations yet, its
-    simulator still compiling, or even its program starting: it then ends with nothing lost.)"""
-    spec = tmp_path / "sweep.yaml"  # two alike runs, generations of about a second, no checkpoint due
+def _ray_sweep_past_a_generation(cluster, tmp_path: Path, episode_steps: int):
+    """A `--backend ray` sweep of two alike 6-generation runs (episodes of `episode_steps`, no
+    checkpoint due) started on the cluster and waited for until a run has ended a generation: its
+    spec, folder, process, the runs' RunDirs and their row counts then."""
+    spec = tmp_path / "sweep.yaml"
     spec.write_text(yaml.safe_dump({**SWEEP, "methods": ["sgr"], "seeds": 2, "overrides": {
-        **SWEEP["overrides"], "generations": 6, "episode_steps": 1000, "checkpoint_every": 1000}}))
+        **SWEEP["overrides"], "generations": 6, "episode_steps": episode_steps, "checkpoint_every": 1000}}))
     out = tmp_path / "sweep"
     proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "sweep", "--config", str(spec), "--out",
                              str(out), "--backend", "ray", "--address", cluster.address, "--quiet"],
@@ -250,6 +246,19 @@ def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_
         assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
         time.sleep(0.01)
     before = [len(r.rows()) if (r.path / "generations.csv").is_file() else 0 for r in runs]
+    return spec, out, proc, runs, before
+
+
+def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_the_sweep_resumes(
+        cluster, tmp_path):
+    """SIGTERM to a `--backend ray` sweep (on the cluster, one run on each worker node) once a run
+    has ended a generation: each run's task passes the stop on, so a run ends the generation under
+    way and writes its checkpoint there (none is due: checkpoint_every 1000; a killed task would
+    leave generation 0's), the sweep exits 143 with the resume command, and the resumed sweep equals
+    an uninterrupted local one. (The other run may not have begun its generations yet, its
+    simulator still compiling, or even its program starting: it then ends with nothing lost.)"""
+    # two alike runs, generations of about a second, no checkpoint due
+    spec, out, proc, runs, before = _ray_sweep_past_a_generation(cluster, tmp_path, episode_steps=1000)
     proc.send_signal(signal.SIGTERM)
     stdout, err = proc.communicate(timeout=180)
     assert proc.returncode == 143, stdout + err
@@ -278,19 +287,8 @@ def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_
     """SIGTERM, then SIGTERM again 0.3 s later, early in a generation of seconds: the sweep cancels
     its tasks with force, so the runs' processes die with their workers without ending the
     generation (no row, no checkpoint for it: the last is generation 0's), and the sweep exits 143."""
-    spec = tmp_path / "sweep.yaml"  # generations of seconds (long episodes)
-    spec.write_text(yaml.safe_dump({**SWEEP, "methods": ["sgr"], "seeds": 2, "overrides": {
-        **SWEEP["overrides"], "generations": 6, "episode_steps": 4000, "checkpoint_every": 1000}}))
-    out = tmp_path / "sweep"
-    proc = subprocess.Popen([sys.executable, "-m", "evolve.cli", "sweep", "--config", str(spec), "--out",
-                             str(out), "--backend", "ray", "--address", cluster.address, "--quiet"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    runs = [RunDir(out / "runs" / f"sgr-Walker-v0-s{seed}") for seed in (0, 1)]
-    deadline = time.monotonic() + 180
-    while not any((r.path / "generations.csv").is_file() and len(r.rows()) >= 1 for r in runs):
-        assert time.monotonic() < deadline and proc.poll() is None, proc.communicate()
-        time.sleep(0.01)
-    before = [len(r.rows()) if (r.path / "generations.csv").is_file() else 0 for r in runs]
+    # generations of seconds (long episodes)
+    spec, out, proc, runs, before = _ray_sweep_past_a_generation(cluster, tmp_path, episode_steps=4000)
     proc.send_signal(signal.SIGTERM)
     time.sleep(0.3)
     proc.send_signal(signal.SIGTERM)
