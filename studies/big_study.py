@@ -40,7 +40,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from studies.study_runs import SGR, evolve, keep  # noqa: E402 (after sgr's folder is on the path)
+from studies.study_runs import SGR, champion_grid, evolve, keep  # noqa: E402 (after sgr's folder is on the path)
 
 SHAPES = {"Walker-v0": (10, 10), "Thrower-v0": (6, 9), "Climber-v2": (10, 5)}
 
@@ -125,34 +125,11 @@ def table(records: Path, seeds: list[int], tasks: list[str]) -> str:
 def pictures(records: Path, out: Path, seeds: list[int], tasks: list[str]) -> Path:
     """One picture of every champion body of the study: a row per task and seed, a column per arm
     (`ARMS`), each labelled with its fitness; an arm not run yet is left blank."""
-    import json
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from evolve.report.gallery import body_image
-
-    rows = [(t, s) for t in tasks for s in seeds]
-    fig, axes = plt.subplots(len(rows), len(ARMS), figsize=(1.9 * len(ARMS), 1.9 * len(rows)),
-                             squeeze=False)
-    for ax in axes.flat:
-        ax.axis("off")
     short = ("SGR big", "direct big", "5x5 -> big", "5x5 at 50", "5x5 decoded", "5x5 (100 gens)")
-    for r, (task, seed) in enumerate(rows):
-        size = "x".join(map(str, SHAPES[task]))
-        for c, (_, pat) in enumerate(ARMS):
-            f = records / pat.format(task=task, size=size, seed=seed) / "champion.json"
-            if not f.is_file():
-                continue
-            rec = json.loads(f.read_text())
-            axes[r][c].imshow(body_image(rec["body"], cell=8))
-            axes[r][c].set_title(f"{task} s{seed}\n{short[c]}: {rec['fitness']:.2f}", fontsize=6)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    grid = [[(records / pat.format(task=task, size="x".join(map(str, SHAPES[task])), seed=seed),
+              f"{task} s{seed}\n{short[c]}") for c, (_, pat) in enumerate(ARMS)]
+            for task in tasks for seed in seeds]
+    return champion_grid(grid, out)
 
 
 def main() -> None:

@@ -32,7 +32,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from studies.study_runs import evolve, finished, keep  # noqa: E402 (after sgr's folder is on the path)
+from studies.study_runs import champion_grid, evolve, finished, keep  # noqa: E402 (after sgr's folder is on the path)
 
 DECODERS = ("substrate", "cppn", "fourier", "growth")
 SETS = {"big": {"Climber-v2": (10, 5), "Walker-v0": (10, 10)},
@@ -109,33 +109,10 @@ def body_table(records: Path, s: str, seeds: list[int], decoders: list[str]) -> 
 def pictures(records: Path, out: Path, sets: list[str], seeds: list[int], decoders: list[str]) -> Path:
     """One picture of every champion body of the study: a row per set, task and seed, a column per
     decoder, each labelled with its fitness; a run not finished yet is left blank."""
-    import json
-
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from evolve.report.gallery import body_image
-
-    rows = [(s, t, seed) for s in sets for t in SETS[s] for seed in seeds]
-    fig, axes = plt.subplots(len(rows), len(decoders), figsize=(1.9 * len(decoders), 1.9 * len(rows)),
-                             squeeze=False)
-    for ax in axes.flat:
-        ax.axis("off")
-    for r, (s, task, seed) in enumerate(rows):
-        shape = SETS[s][task]
-        for c, d in enumerate(decoders):
-            f = _records(records, d, task, shape, [seed])[0] / "champion.json"
-            if f.is_file():
-                rec = json.loads(f.read_text())
-                axes[r][c].imshow(body_image(rec["body"], cell=8))
-                axes[r][c].set_title(f"{task} {shape[0]}x{shape[1]} s{seed}\n{d}: {rec['fitness']:.2f}",
-                                     fontsize=6)
-    fig.tight_layout()
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-    return out
+    grid = [[(_records(records, d, task, SETS[s][task], [seed])[0],
+              f"{task} {SETS[s][task][0]}x{SETS[s][task][1]} s{seed}\n{d}") for d in decoders]
+            for s in sets for task in SETS[s] for seed in seeds]
+    return champion_grid(grid, out)
 
 
 def main() -> None:

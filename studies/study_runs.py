@@ -45,3 +45,33 @@ def keep(run: Path, records: Path, names: tuple[str, ...] = RECORDS) -> None:
     for name in names:
         if (run / name).is_file():
             shutil.copy2(run / name, dest / name)
+
+
+def champion_grid(grid: list[list[tuple[Path, str]]], out: Path) -> Path:
+    """One picture of many champion bodies: `grid` holds a row of (run folder, label) per picture
+    row; each cell shows that run's champion body titled "label: fitness", blank where the run has
+    no champion yet."""
+    import json
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from evolve.report.gallery import body_image
+
+    n_cols = max(len(row) for row in grid)
+    fig, axes = plt.subplots(len(grid), n_cols, figsize=(1.9 * n_cols, 1.9 * len(grid)), squeeze=False)
+    for ax in axes.flat:
+        ax.axis("off")
+    for r, row in enumerate(grid):
+        for c, (run, label) in enumerate(row):
+            f = run / "champion.json"
+            if f.is_file():
+                rec = json.loads(f.read_text())
+                axes[r][c].imshow(body_image(rec["body"], cell=8))
+                axes[r][c].set_title(f"{label}: {rec['fitness']:.2f}", fontsize=6)
+    fig.tight_layout()
+    fig.savefig(out, dpi=110)
+    plt.close(fig)
+    return out
