@@ -11,6 +11,8 @@
 #    10x10, registers, local bytes and occupancy of the step kernel, a 4-task parity table; under
 #    PROBE_LIMIT (330 s) per precision in PROBE_PRECISIONS (default f64), each part under its own
 #    limit; its files in $OUT/probe_<precision>/;
+# 2c. bench/device_state_bench.py at B = STATE_B (8192): the state kept on the device between env
+#    steps against numpy through every launch (STATE=0 skips it; ~1 min);
 # 3. the GPU against evogym's recorded data that travelled (`sgr validate` of each folder under
 #    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
 #    evogym| exceeds 1e-9 on the GPU;
@@ -65,6 +67,13 @@ if [ "${PROBE:-1}" != 0 ]; then
       || echo "gpu_check: gpu_probe ($prec) failed or ran out of its ${PROBE_LIMIT:-330} s" \
         | tee -a "$OUT/summary.txt"
   done
+fi
+# 2c. the state kept on the device between env steps against the state through numpy at every
+# launch (bench/device_state_bench.py, issue 48 item 2), alternating; STATE=0 skips it
+if [ "${STATE:-1}" != 0 ]; then
+  SGR_ARCH=$GPU timeout "${STATE_LIMIT:-120}" "$PY" bench/device_state_bench.py --robots "${STATE_B:-8192}" \
+    --steps 20 --rounds 2 --record "$OUT/device_state.json" | tee "$OUT/device_state.txt" \
+    || echo "gpu_check: device_state_bench failed or ran out of its ${STATE_LIMIT:-120} s" | tee -a "$OUT/summary.txt"
 fi
 # 3. recorded evogym data that travelled
 for d in ${DATA:-tests/data/returns tests/data/traces tests/data/evogym32}; do

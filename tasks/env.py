@@ -21,6 +21,7 @@ from tasks.spec import Measure
 from tasks.specs import task_spec, task_world
 from tsim import constants as C
 from tsim.body import Body
+from tsim.mirror import constant
 from tsim.sim import BatchSim
 
 UNSTABLE_PENALTY = -3.0
@@ -89,7 +90,8 @@ class BatchEnv:
         spec's rewards read them, the observation's blocks around the points, the last
         measurement."""
         B, N = self._mask.shape
-        self._npts = self.n_points.astype(np.int32)
+        # the robots' point counts, which every kernel here reads: on a device, kept there
+        self._npts = constant(self.n_points.astype(np.int32), self.sim.backend.on_host)
         # on a CPU on the calling thread: the kernels are one memory-bound pass over the state, and
         # on the 2-vCPU VM a second thread added CPU time (0.31-0.37 against 0.22-0.29 us per
         # robot-step at B = 8,192) without saving wall time. Elsewhere numpy arguments travel to a
@@ -125,7 +127,8 @@ class BatchEnv:
 
     def _robot(self) -> tuple[np.ndarray, np.ndarray]:
         N = self.sim.max_robot_points
-        return self.sim.state[:, :N, 0:2], self.sim.state[:, :N, 2:4]
+        state = self.sim.read_state()
+        return state[:, :N, 0:2], state[:, :N, 2:4]
 
     def _object_index(self, k: int) -> tuple[np.ndarray, np.ndarray]:
         """Row and point indices (B, n) of free object k's points in `sim.state`."""
@@ -142,7 +145,7 @@ class BatchEnv:
             rows, pts = self._obj_index[name]
         except KeyError:
             raise KeyError(f"no free object {name!r} in world {self.sim.world.name}") from None
-        s = self.sim.state[rows, pts].transpose(0, 2, 1)
+        s = self.sim.read_state()[rows, pts].transpose(0, 2, 1)
         # (B, 2, n) contiguous, seen as (B, n, 2): numpy's sums over the points depend on the
         # layout, and this one gives the COMs evogym's rewards were validated with, bit for bit
         out = (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
@@ -155,7 +158,7 @@ class BatchEnv:
         one's (all-fixed terrain) initial points in every world."""
         if name in self._obj_index:
             rows, pts = self._obj_index[name]
-            return self.sim.state[rows, pts, 0:2].transpose(0, 2, 1)
+            return self.sim.read_state()[rows, pts, 0:2].transpose(0, 2, 1)
         p0 = self.sim.world.object(name).pos0
         return np.broadcast_to(p0, (self.n_worlds, *p0.shape))
 
@@ -202,7 +205,7 @@ class BatchEnv:
         com, vcom = np.empty((B, 2)), np.empty((B, 2))
         pts = self._points_out()
         sim = self.sim
-        EK.robot_coms(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
+        EK.robot_coms(sim.kernel_state(), self._npts, sim.state_shape[1], sim.max_robot_points,
                       self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
                       pts.reshape(-1), self._serial)
         return com, vcom, pts if self.spec.reads_points else None
@@ -215,7 +218,7 @@ class BatchEnv:
         obs = self._obs_buf  # the env's own (the caller gets copies): its memory stays mapped
         pts = self._points_out()
         sim = self.sim
-        EK.observe(sim.state.reshape(-1), self._npts, sim.state.shape[1], sim.max_robot_points,
+        EK.observe(sim.kernel_state(), self._npts, sim.state_shape[1], sim.max_robot_points,
                    self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
                    pts.reshape(-1), self._head, self.max_obs_dim, obs.reshape(-1), self._ti_real,
                    self._serial)
@@ -242,8 +245,7 @@ class BatchEnv:
                     self._serial)
 
     def _scene(self, com: np.ndarray, vcom: np.ndarray, measure: Measure | None = None) -> O.Scene:
-        pos, vel = self._robot()
-        return O.Scene(pos=pos, vel=vel, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
+        return O.Scene(robot=self._robot, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
                        object_pos0=self._object_pos0, state=self.task_state,
                        object_now=self._object_now, measure=measure,
@@ -254,7 +256,7 @@ class BatchEnv:
         `tasks.kernels.com_voxel_units` and `tasks.kernels.terrain_sight`."""
         sim = self.sim
         com_vox = np.empty((self.n_worlds, 2))
-        EK.com_voxel_units(sim.state.reshape(-1), self._npts, sim.state.shape[1], C.CELL, self._ti_real,
+        EK.com_voxel_units(sim.kernel_state(), self._npts, sim.state_shape[1], C.CELL, self._ti_real,
                            com_vox, self._serial)
         if self._terrain_vox.shape[1] == 0:
             return O.terrain_sight(com_vox, self._terrain, dist, below=below)
@@ -393,7 +395,7 @@ class BatchEnv:
         """(B, 2) position and velocity COMs of the robots in one pass over the state; equal to
         `O.com` bit for bit (the same sums in point order; padding rows hold zeros unless a free
         object's points follow the robot's)."""
-        rows = self.sim.state[:, :self.sim.max_robot_points, 0:4]
+        rows = self.sim.read_state()[:, :self.sim.max_robot_points, 0:4]
         if self.sim.free_objects:
             rows = rows * self._mask[:, :, None]
         s = rows.sum(axis=1) / self.n_points[:, None]

@@ -7,6 +7,7 @@ helper returns one row per world.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -20,10 +21,12 @@ from tsim import constants as C
 @dataclass
 class Scene:
     """What observation blocks see: the robots' points (B, N, 2) with their mask, COMs (B, 2),
-    positions at reset, the static terrain's points (2, M), and free objects by name."""
+    positions at reset, the static terrain's points (2, M), and free objects by name.
 
-    pos: np.ndarray
-    vel: np.ndarray
+    The points are read when a block first asks for `pos` or `vel` (`robot`): on a device the
+    state then comes to the host only for tasks whose blocks read it."""
+
+    robot: Callable[[], tuple[np.ndarray, np.ndarray]]  # () -> the robots' (B, N, 2) pos, vel
     mask: np.ndarray
     n_points: np.ndarray
     com: np.ndarray
@@ -42,6 +45,19 @@ class Scene:
     # `terrain_sight` of `com_voxel_units` (the same bits; `BatchEnv`'s kernel path)
     static_sight: Callable[[int, bool], np.ndarray] | None = None
 
+    @functools.cached_property
+    def _points(self) -> tuple[np.ndarray, np.ndarray]:
+        return self.robot()
+
+    @property
+    def pos(self) -> np.ndarray:
+        """(B, N, 2) the robots' point positions."""
+        return self._points[0]
+
+    @property
+    def vel(self) -> np.ndarray:
+        """(B, N, 2) the robots' point velocities."""
+        return self._points[1]
 
 
 def com(pos: np.ndarray, mask: np.ndarray) -> np.ndarray:

@@ -16,10 +16,11 @@ import numpy as np
 from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
-from tsim import launch, runtime, spirv
+from tsim import launch, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected, is_connected_batch
 from tsim.bodybatch import BodyBatch, build_bodies
 from tsim.launch import CachedLaunch
+from tsim.mirror import constant, mirror
 from tsim.rounding import rest, to_pair
 from tsim.world import World
 
@@ -293,7 +294,9 @@ class BatchSim:
             self._round_placement(range(B))
         self.ter_i = ter_i
         self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
-        self._state = np.zeros((B, P, K.state_columns()), dtype=real)
+        # the state: on a device kept there between steps, copied to the host when it reads
+        # (`tsim.mirror`); on the CPU the numpy array the kernels write in place
+        self._state_m = mirror(np.zeros((B, P, K.state_columns()), dtype=real), self.backend.on_host)
         self.actions = np.ones((B, A), dtype=real)
         # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
         self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]
@@ -323,9 +326,7 @@ class BatchSim:
         # edge_f, vox_i, lists and ter_* are read-only after construction
         static = (self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists,
                   self.ter_f, self.ter_i, self.ter_grid)
-        self._static = (tuple(np.ascontiguousarray(a) for a in static) if self.backend.cached_launch
-                        else tuple(_taichi_array(a) for a in static))
-        self._state_flat = self._state.reshape(-1)  # a view: the kernel writes the state in place
+        self._static = tuple(constant(a, self.backend.cached_launch) for a in static)
         self._edge_f_stale = False  # the copy above is current (`_round_placement`)
 
     def _round_world(self, w: int) -> tuple[np.ndarray, np.ndarray]:
@@ -384,12 +385,15 @@ class BatchSim:
                 raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         if mask is None:
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
-        self.state[sel] = 0.0
-        self.state[sel, :, 0:2] = self._pos0[sel]
-        self.state[sel, :, 4:6] = self._pos0[sel]
+        self.state_version += 1
+        # every world's rows are rewritten by a full reset: a device's values need not come back
+        state = self._state_m.host(write=True, keep=mask is not None)
+        state[sel] = 0.0
+        state[sel, :, 0:2] = self._pos0[sel]
+        state[sel, :, 4:6] = self._pos0[sel]
         if self._pos0_lo is not None:  # f32: the placement's low parts (`_round_world`)
-            self.state[sel, :, K.S_POS_LO:K.S_POS_LO + 2] = self._pos0_lo[sel]
-            self.state[sel, :, K.S_LO_OF:K.S_LO_OF + 2] = self._pos0_lo_of[sel]
+            state[sel, :, K.S_POS_LO:K.S_POS_LO + 2] = self._pos0_lo[sel]
+            state[sel, :, K.S_LO_OF:K.S_LO_OF + 2] = self._pos0_lo_of[sel]
         self.counts[sel] = self._counts0[sel]  # in place: a cached launch holds its address
         self.actions[sel] = 1.0
         self.time[sel] = 0
@@ -467,8 +471,8 @@ class BatchSim:
         for _ in range(n):
             running = self.counts[:, K.STATUS] == K.RUNNING
             edge_i, edge_f, vox_i, lists, ter_f, ter_i, ter_grid = self._static
-            args = (self.counts, self._state_flat, edge_i, edge_f, vox_i, lists,
-                    self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self._state.shape[1],
+            args = (self.counts, self._state_m.device(), edge_i, edge_f, vox_i, lists,
+                    self.actions, ter_f, ter_i, ter_grid, C.SUBSTEPS, self._state_m.shape[1],
                     self.edge_i.shape[1], *K.capacity(self.capacity_tier), self.sweep_mode,
                     self.pair_list)
             self._launcher(args)
@@ -549,16 +553,38 @@ class BatchSim:
         """(B, P, columns) every world's points in the real type: position 0:2, velocity 2:4, last
         position 4:6, true velocity 6:8 (and f32's low parts, `tsim.kernels.layout`), written in
         place by `step` and `reset`. Each read moves `state_version` on, as the reader may write
-        it: `BatchEnv` then measures the state anew rather than reuse its last measurement (so
-        write through `state` each time, not through a reference kept across steps)."""
+        it: `BatchEnv` then measures the state anew rather than reuse its last measurement. So
+        write through `state` each time, not through a reference kept across steps: on a device
+        the next step copies in what was written through the last read, and a reference kept
+        from before a step does not see that step (`tsim.mirror`). To read only, `read_state`."""
         self.state_version += 1
-        return self._state
+        return self._state_m.host(write=True)
 
     @state.setter
     def state(self, value: np.ndarray) -> None:
-        """A new state array (rarely: the kernel's flat view keeps the old one's memory)."""
+        """Copy `value` ((B, P, columns)) into the state: the next step starts from it."""
+        value = np.asarray(value)
+        if value.shape != self._state_m.shape:
+            raise ValueError(f"a state must have shape {self._state_m.shape}, got {value.shape}")
         self.state_version += 1
-        self._state = value
+        self._state_m.assign(value)
+
+    @property
+    def state_shape(self) -> tuple[int, int, int]:
+        """`state`'s shape (B, P, columns), without reading it."""
+        return self._state_m.shape
+
+    def read_state(self) -> np.ndarray:
+        """`state` for reading only (read-only view): on a device the next step need not copy it
+        in again, and `state_version` stays (the state is as the last measurement saw it)."""
+        view = self._state_m.host().view()
+        view.flags.writeable = False
+        return view
+
+    def kernel_state(self):
+        """The flat state as kernels take it, for kernels that only read it (`tasks.kernels`):
+        the device's own array on a device, which then need not come to the host."""
+        return self._state_m.device(write=False)
 
     @property
     def status(self) -> np.ndarray:
@@ -597,26 +623,26 @@ class BatchSim:
 
     def robot_pos(self, w: int) -> np.ndarray:
         """(2, n) robot point positions of world w, evogym point order, world units."""
-        return self._state[w, :self.n_robot_points[w], 0:2].T.copy()
+        return self.read_state()[w, :self.n_robot_points[w], 0:2].T.copy()
 
     def robot_vel(self, w: int) -> np.ndarray:
         """(2, n) robot point velocities of world w, evogym point order, world units per unit of
         simulated time (dt = 1e-4 per substep)."""
-        return self._state[w, :self.n_robot_points[w], 2:4].T.copy()
+        return self.read_state()[w, :self.n_robot_points[w], 2:4].T.copy()
 
     def object_pos(self, w: int, name: str) -> np.ndarray:
         """(2, n) point positions of free object `name` in world w, world units; KeyError when the
         world has no free object of that name (fixed objects are terrain, not simulated)."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        return self._state[w, off:off + obj.body.n_points, 0:2].T.copy()
+        return self.read_state()[w, off:off + obj.body.n_points, 0:2].T.copy()
 
     def object_vel(self, w: int, name: str) -> np.ndarray:
         """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
         as `object_pos`."""
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
-        return self._state[w, off:off + obj.body.n_points, 2:4].T.copy()
+        return self.read_state()[w, off:off + obj.body.n_points, 2:4].T.copy()
 
     def _free_object(self, name: str):
         for k, o in enumerate(self.free_objects):
@@ -629,9 +655,9 @@ class BatchSim:
         mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in float64, then in
         float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7 (Jumper-v0's COM was
         8e-7 off evogym that way, 2e-7 from the pairs; evogym's chaos floor there is 3e-7)."""
-        mask = np.arange(self._state.shape[1])[None, :] < self.n_robot_points[:, None]
+        mask = np.arange(self._state_m.shape[1])[None, :] < self.n_robot_points[:, None]
         if self.dtype == np.float64:
-            s = (self._state[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
+            s = (self.read_state()[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
             return s / self.n_robot_points[:, None]
         s = (self.states64()[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
         return (s / self.n_robot_points[:, None]).astype(self.dtype)
@@ -642,7 +668,7 @@ class BatchSim:
         ~1e-15, where float32 alone rounds at ~1e-8. A low part counts only while its position is
         the one it was written for (a position changed from Python, e.g. by `place_object`, has
         none until the next step). For comparing f32 with f64 or evogym."""
-        st = self._state
+        st = self.read_state()
         out = st[:, :, 0:4].astype(np.float64)
         if st.shape[2] > K.NS:
             own = st[:, :, K.S_LO_OF:K.S_LO_OF + 2] == st[:, :, 0:2]
@@ -685,15 +711,6 @@ def _list_by_world(lists: np.ndarray, col: int, keep: np.ndarray, world: np.ndar
     _, slot = _rows(n)
     lists[w, slot, col] = i
     return n
-
-
-def _taichi_array(a: np.ndarray):
-    """A Taichi-owned copy of a numpy int32 or real (float64 or float32) array."""
-    ti = runtime.ti
-    t = ti.ndarray(ti.i32 if a.dtype == np.int32 else ti.f32 if a.dtype == np.float32 else ti.f64,
-                   a.shape)
-    t.from_numpy(np.ascontiguousarray(a))
-    return t
 
 
 def _sweep_pays(pos: np.ndarray, corners: np.ndarray) -> bool:

@@ -151,7 +151,7 @@ class EvoSim:
         del self._history[time + 1:]
 
     def _snapshot(self) -> np.ndarray:
-        return self._bs.state[0, :self._n_sim, 0:4].copy()
+        return self._bs.read_state()[0, :self._n_sim, 0:4].copy()
 
     def set_action(self, robot_name: str, action: np.ndarray) -> None:
         """Actuator targets of robot `robot_name` in `get_actuator_indices` order, as given (evogym
@@ -198,7 +198,7 @@ class EvoSim:
         robot has surface voxels. (evogym tests it at every substep: a robot that crosses the
         threshold and comes back within one step is not caught; see docs/EVOGYM_COMPAT.md.)"""
         for name, corners, near, n_surf in self._extra_rule:
-            pts = self._bs.state[0, self._slices[name][corners], 0:2]  # (n_surf, 4, 2)
+            pts = self._bs.read_state()[0, self._slices[name][corners], 0:2]  # (n_surf, 4, 2)
             lo, hi = pts.min(axis=1), pts.max(axis=1)
             touch = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
             if int(np.sum(touch & ~near)) > n_surf:

@@ -50,9 +50,8 @@ def test_a_new_task_is_one_spec_and_one_registry_line(monkeypatch):
 
 
 def _scene_of(env: BatchEnv) -> O.Scene:
-    pos, vel = env._robot()
     com, vcom = env._robot_coms()
-    return O.Scene(pos=pos, vel=vel, mask=env._mask, n_points=env.n_points, com=com, vcom=vcom,
+    return O.Scene(robot=env._robot, mask=env._mask, n_points=env.n_points, com=com, vcom=vcom,
                    pos0=env._pos0, terrain=env._terrain, object_points=env._object_points)
 
 

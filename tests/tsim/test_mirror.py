@@ -1,0 +1,118 @@
+"""The state kept on the device between steps (tsim/mirror.py), checked on the CPU: a `DeviceMirror`
+works over the CPU's Taichi ndarrays as over a GPU's, so forcing it here tests its copying rules
+(that every read sees the last step, every write reaches the next, and nothing else crosses) with
+the CPU's bits as the oracle. Vulkan runs it for real in tests/tsim/test_vulkan.py."""
+
+import numpy as np
+import pytest
+
+import tsim.sim as sim_mod
+from tasks.env import BatchEnv
+from tsim import mirror as mirror_mod
+from tsim.sampling import sample_robot
+
+
+class Counted(mirror_mod.DeviceMirror):
+    """A DeviceMirror that counts its copies in (host -> device) and out."""
+
+    def __init__(self, host):
+        super().__init__(host)
+        self.copies = {"in": 0, "out": 0}
+        dev = self._device
+        to_numpy, from_numpy = dev.to_numpy, dev.from_numpy
+
+        def out():
+            self.copies["out"] += 1
+            return to_numpy()
+
+        def into(a):
+            self.copies["in"] += 1
+            return from_numpy(a)
+
+        dev.to_numpy, dev.from_numpy = out, into
+
+
+@pytest.fixture
+def on_device(monkeypatch):
+    """BatchSims made in the test keep their state in a `Counted` mirror."""
+    monkeypatch.setattr(sim_mod, "mirror", lambda host, on_host: Counted(host))
+
+
+def _envs(task: str, n: int, device: bool, monkeypatch) -> BatchEnv:
+    rng = np.random.default_rng(3)
+    bodies = [sample_robot((5, 5), rng) for _ in range(n)]
+    if device:
+        with monkeypatch.context() as m:
+            m.setattr(sim_mod, "mirror", lambda host, on_host: Counted(host))
+            return BatchEnv(task, bodies, episode_steps=40, fused=True)
+    return BatchEnv(task, bodies, episode_steps=40, fused=True)
+
+
+def _actions(env: BatchEnv, t: int) -> np.ndarray:
+    a = 1.0 + 0.5 * np.sin(0.4 * t + np.arange(env.sim.max_actuators))[None, :]
+    return np.repeat(a, env.n_worlds, axis=0)
+
+
+@pytest.mark.parametrize("task", ["Walker-v0", "Carrier-v0", "Climber-v2"])
+def test_a_device_state_gives_the_hosts_bits_through_reads_writes_and_resets(task, monkeypatch):
+    """The same run with the state on the 'device' and on the host: observations, rewards and
+    states equal to the bit, through outside reads, an outside write (a nudge), a partial reset and
+    a state assigned whole (on the host, the same values written in place)."""
+    host, dev = _envs(task, 5, False, monkeypatch), _envs(task, 5, True, monkeypatch)
+    assert isinstance(dev.sim._state_m, Counted) and not isinstance(host.sim._state_m, Counted)
+    for t in range(24):
+        outs = [e.step(_actions(e, t)) for e in (host, dev)]
+        for a, b in zip(outs[0][:4], outs[1][:4], strict=True):
+            assert a.tobytes() == b.tobytes(), t
+        if t == 5:
+            assert host.sim.read_state().tobytes() == dev.sim.read_state().tobytes()
+        if t == 9:  # an outside write through `state`: the next step starts from it
+            for e in (host, dev):
+                e.sim.state[:, :, 2] += 0.01
+        if t == 13:
+            mask = np.array([True, False, True, False, False])
+            for e in (host, dev):
+                e.sim.reset(mask)
+                e.observe()
+        if t == 17:  # a whole state assigned: copied in, the next step starts from it as from
+            # the same values written in place
+            nudged = host.sim.read_state().copy()
+            nudged[:, :, 3] += 0.02
+            host.sim.state[...] = nudged
+            dev.sim.state = nudged
+            host.observe()
+            dev.observe()
+    assert host.sim.read_state().tobytes() == dev.sim.read_state().tobytes()
+    assert np.array_equal(host.sim.counts, dev.sim.counts)
+
+
+def test_stepping_an_env_moves_no_state_between_device_and_host(monkeypatch):
+    """Walker-v0's observations and rewards come from kernels over the device's state, so steps
+    copy nothing; a read copies the state out once, a write then copies it in once, and a full
+    reset needs nothing back."""
+    env = _envs("Walker-v0", 4, True, monkeypatch)
+    m = env.sim._state_m
+    env.step(_actions(env, 0))  # the first step copies in the reset's state
+    start = dict(m.copies)
+    for t in range(1, 11):
+        env.step(_actions(env, t))
+    assert m.copies == start
+    env.sim.read_state()
+    env.sim.read_state()
+    assert m.copies == {"in": start["in"], "out": start["out"] + 1}
+    env.step(_actions(env, 11))
+    assert m.copies == {"in": start["in"], "out": start["out"] + 1}  # a read is not a write
+    env.sim.state[0, 0, 2] += 0.0
+    env.step(_actions(env, 12))
+    assert m.copies == {"in": start["in"] + 1, "out": start["out"] + 2}
+    env.sim.reset()
+    env.step(_actions(env, 0))
+    assert m.copies == {"in": start["in"] + 2, "out": start["out"] + 2}
+
+
+def test_read_state_is_read_only_and_a_wrong_shape_is_refused(on_device):
+    env = _envs("Walker-v0", 2, False, None)
+    with pytest.raises(ValueError, match="read-only"):
+        env.sim.read_state()[0, 0, 0] = 1.0
+    with pytest.raises(ValueError, match="a state must have shape"):
+        env.sim.state = np.zeros((1, 2, 3))
