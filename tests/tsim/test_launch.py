@@ -41,7 +41,8 @@ def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
     cached, plain = _pair()
     for t in range(5):
         _step_both(cached, plain, t)
-    # a new state array (the kernel must write into it, not into the old one), and actions in
+    # a state assigned whole (copied into the simulator's own array, which the kernel keeps
+    # writing: tests/tsim/test_mirror.py checks the next step starts from it), and actions in
     # column-major order (not cached: Taichi's call copies them to row-major order each time)
     for sim in (cached, plain):
         sim.state = sim.state.copy()
