@@ -13,6 +13,9 @@
 #    limit; its files in $OUT/probe_<precision>/;
 # 2c. bench/device_state_bench.py at B = STATE_B (8192): the state kept on the device between env
 #    steps against numpy through every launch (STATE=0 skips it; ~1 min);
+# 2d. with GENERATION_POPS="1024 4096": bench/generation_breakdown.py, an honest SGR generation's
+#    time by part at each population (off by default; in a call of its own it is simply
+#    `SGR_ARCH=cuda python bench/generation_breakdown.py --pop 1024 --generations 1 --json F`);
 # 3. the GPU against evogym's recorded data that travelled (`sgr validate` of each folder under
 #    tests/data that holds it), beside the CPU's figures; fails when a task's median |return -
 #    evogym| exceeds 1e-9 on the GPU;
@@ -75,6 +78,15 @@ if [ "${STATE:-1}" != 0 ]; then
     --steps 20 --rounds 2 --record "$OUT/device_state.json" | tee "$OUT/device_state.txt" \
     || echo "gpu_check: device_state_bench failed or ran out of its ${STATE_LIMIT:-120} s" | tee -a "$OUT/summary.txt"
 fi
+# 2d. where an honest SGR generation's time goes on the GPU (bench/generation_breakdown.py, issue 48
+# item 4), at each population in GENERATION_POPS (e.g. "1024 4096"; empty, the default, skips it:
+# a generation at pop 1,024 is ~1 min on a GPU besides compiling, so give it its own call)
+for pop in ${GENERATION_POPS:-}; do
+  SGR_ARCH=$GPU timeout "${GENERATION_LIMIT:-400}" "$PY" bench/generation_breakdown.py --pop "$pop" \
+    --generations 1 --json "$OUT/generation_$pop.json" | tee "$OUT/generation_$pop.txt" \
+    || echo "gpu_check: generation_breakdown at pop $pop failed or ran out of its ${GENERATION_LIMIT:-400} s" \
+      | tee -a "$OUT/summary.txt"
+done
 # 3. recorded evogym data that travelled
 for d in ${DATA:-tests/data/returns tests/data/traces tests/data/evogym32}; do
   [ -d "$d" ] || continue
