@@ -77,7 +77,8 @@ class BatchEnv:
         # free objects' points of the state now, by name: read once per state within `step` (the
         # reward's measure and several observation blocks ask for them); emptied whenever the
         # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
-        self._points_now: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+        # (and their COMs, under ("coms", name))
+        self._points_now: dict[str | tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.task_state: dict[str, np.ndarray] = {}
         self._rngs: dict[int, random.Random] = {}
         self.fused = self.n_worlds >= FUSED_MIN if fused is None else bool(fused)
@@ -98,6 +99,11 @@ class BatchEnv:
         # device and back (Vulkan: only those a kernel reads)
         self._cpu = self._serial = self.sim.backend.on_host
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
+        # each free object's first row in every world, for `tasks.kernels.object_coms` (objects of
+        # at most 128 points, the pairwise sum's one block; larger ones keep numpy)
+        self._obj_rows = {o.name: (constant(self.sim.object_offsets(k).astype(np.int32), self._cpu),
+                                   o.body.n_points)
+                          for k, o in enumerate(self.sim.free_objects) if o.body.n_points <= 128}
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
@@ -153,6 +159,26 @@ class BatchEnv:
         self._points_now[name] = out
         return out
 
+    def _object_coms(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(B, 2) position and velocity COMs of free object `name` (`O.com` of `_object_points`):
+        on the kernel path by `tasks.kernels.object_coms`, the same bits without gathering the
+        object's points (on a device the state stays there)."""
+        key = ("coms", name)
+        hit = self._points_now.get(key)
+        if hit is not None:
+            return hit
+        if self.fused and name in self._obj_rows:
+            off, n = self._obj_rows[name]
+            out = (np.empty((self.n_worlds, 2)), np.empty((self.n_worlds, 2)))
+            EK.object_coms(self.sim.kernel_state(), off, n, self.sim.state_shape[1], out[0], out[1],
+                           self._serial)
+        else:
+            pos, vel = self._object_points(name)
+            ones = np.ones(pos.shape[:2], dtype=bool)
+            out = (O.com(pos, ones), O.com(vel, ones))
+        self._points_now[key] = out
+        return out
+
     def _object_now(self, name: str) -> np.ndarray:
         """(B, 2, n) current points of world object `name`: a simulated one's state, a static
         one's (all-fixed terrain) initial points in every world."""
@@ -170,10 +196,7 @@ class BatchEnv:
     def _measure(self, com: np.ndarray, points: np.ndarray | None = None) -> Measure:
         """The measure of the state now: `points` from the kernel path (None when the spec's
         rewards do not read them), else a copy of the state's."""
-        objects = {}
-        for name in self.spec.tracked:
-            pos = self._object_points(name)[0]
-            objects[name] = O.com(pos, np.ones(pos.shape[:2], dtype=bool))
+        objects = {name: self._object_coms(name)[0] for name in self.spec.tracked}
         if not self.fused:
             points = self._robot()[0].copy()
         return Measure(com, objects, points=points, mask=self._mask, pos0=self._pos0,
@@ -247,7 +270,7 @@ class BatchEnv:
     def _scene(self, com: np.ndarray, vcom: np.ndarray, measure: Measure | None = None) -> O.Scene:
         return O.Scene(robot=self._robot, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
-                       object_pos0=self._object_pos0, state=self.task_state,
+                       object_pos0=self._object_pos0, object_coms=self._object_coms, state=self.task_state,
                        object_now=self._object_now, measure=measure,
                        static_sight=self._static_sight if self.fused else None)
 

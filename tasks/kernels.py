@@ -189,3 +189,45 @@ def com_voxel_units(state: REAL_1, npts: I32_1, P: ti.i32, cell: ti.f64, real: t
             sy += state[so + p * ns + 1] / c
         out[b, 0] = ti.cast(sx / ti.cast(n, real), ti.f64)
         out[b, 1] = ti.cast(sy / ti.cast(n, real), ti.f64)
+
+
+@ti.func
+def _pairwise(state: ti.template(), at, ns, n):
+    """numpy's pairwise sum (`add.reduce` along a contiguous axis of n <= 128 values, numpy's
+    PW_BLOCKSIZE): under 8 values one after another; else 8 accumulators over the whole blocks of
+    8, combined ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7)), then the rest one after another.
+    The values are state[at + i ns]. numpy starts the short sum from -0.0, which changes no sum of
+    at least one value, so this starts from the first."""
+    res = state[at]
+    if n < 8:
+        for i in range(1, n):
+            res += state[at + i * ns]
+    else:
+        r = ti.Vector([state[at + j * ns] for j in ti.static(range(8))])
+        whole = n - n % 8
+        for k in range(1, whole // 8):
+            for j in ti.static(range(8)):
+                r[j] += state[at + (8 * k + j) * ns]
+        res = ((r[0] + r[1]) + (r[2] + r[3])) + ((r[4] + r[5]) + (r[6] + r[7]))
+        for i in range(whole, n):
+            res += state[at + i * ns]
+    return res
+
+
+@ti.kernel
+def object_coms(state: REAL_1, off: I32_1, n: ti.i32, P: ti.i32, com: F64_2, vcom: F64_2,
+                serial: ti.template()):
+    """(B, 2) position and velocity COMs of a free object of n <= 128 points, its rows off[b] ..
+    off[b] + n - 1 of world b's P state rows, as `tasks.observations.com` computes them from
+    `BatchEnv._object_points`' arrays: each coordinate's n values summed along a contiguous axis
+    (numpy's pairwise sum, `_pairwise`) after +0.0 (add.reduce's initial value), in the state's
+    type, then divided by n in float64 (numpy's real / int64)."""
+    ns = ti.static(state_columns())
+    ti.loop_config(serialize=serial)
+    for b in range(off.shape[0]):
+        at = (b * P + off[b]) * ns
+        z = state[at] - state[at]  # +0.0 in the state's type (its rows are finite)
+        nf = ti.cast(n, ti.f64)
+        for c in ti.static(range(2)):
+            com[b, c] = ti.cast(z + _pairwise(state, at + c, ns, n), ti.f64) / nf
+            vcom[b, c] = ti.cast(z + _pairwise(state, at + 2 + c, ns, n), ti.f64) / nf

@@ -35,6 +35,9 @@ class Scene:
     terrain: np.ndarray
     object_points: Callable[[str], tuple[np.ndarray, np.ndarray]]  # name -> (B, n, 2) pos, vel
     object_pos0: Callable[[str], np.ndarray] | None = None  # name -> (B, n, 2) positions at reset
+    # name -> (B, 2) position and velocity COMs of a free object, if the env computes them
+    # otherwise than `com` of `object_points` (the same bits; `BatchEnv`'s kernel path)
+    object_coms: Callable[[str], tuple[np.ndarray, np.ndarray]] | None = None
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
     # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
     object_now: Callable[[str], np.ndarray] | None = None
@@ -131,6 +134,8 @@ POINTS = Block("robot points relative to its COM (x of every point, then y)", -1
 
 
 def _object_com(s: Scene, name: str, which: int) -> np.ndarray:
+    if s.object_coms is not None:
+        return s.object_coms(name)[which]
     pts = s.object_points(name)[which]
     return com(pts, np.ones(pts.shape[:2], dtype=bool))
 

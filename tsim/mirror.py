@@ -12,11 +12,16 @@ On the CPU the kernels take the numpy array itself (`HostArray`): nothing is cop
 launch (`tsim.launch`) keeps its address.
 
 The rule for callers: ask for the host array with `host(write=True)` if you may write it (the
-next launch then copies it in), with `host()` to read only. A reference kept from an earlier call
-sees neither the kernels' later steps nor, written, reaches them (`BatchSim.state` says so too).
+next launch then copies it in), with `host()` to read only. A reference kept across a launch (any
+`device()` call, reading or writing) sees neither the kernels' later writes nor, written after it,
+reaches them (`BatchSim.state` says so too). On the CPU such a reference happens to work, so
+`SGR_DEVICE_MIRROR=1` makes the CPU use a `DeviceMirror` too (over the CPU's Taichi ndarrays): a
+test run under it catches code that relies on one.
 """
 
 from __future__ import annotations
+
+import os
 
 import numpy as np
 
@@ -87,8 +92,11 @@ class DeviceMirror:
 
 
 def mirror(host: np.ndarray, on_host: bool) -> HostArray | DeviceMirror:
-    """The array's `HostArray` when the kernels run on the host's cores, else its `DeviceMirror`."""
-    return HostArray(host) if on_host else DeviceMirror(host)
+    """The array's `HostArray` when the kernels run on the host's cores (unless
+    SGR_DEVICE_MIRROR=1, a testing aid: see above), else its `DeviceMirror`."""
+    if on_host and os.environ.get("SGR_DEVICE_MIRROR") != "1":
+        return HostArray(host)
+    return DeviceMirror(host)
 
 
 def constant(a: np.ndarray, on_host: bool):

@@ -124,8 +124,8 @@ class BatchSim:
         self.world = world
         self.origin = (int(origin[0]), int(origin[1]))
         self.bodies = _as_bodies(bodies, passive_ok)  # a sequence of `Body`s (made when read)
-        # grows whenever the state may have changed: each `step`, and each read of `state`
-        # (which `reset` and every outside writer go through)
+        # grows whenever the state may have changed: each `step` and `reset`, each read of
+        # `state` (which every outside writer goes through) and each assignment to it
         self.state_version = 0
         self.free_objects = world.free_objects
         self._gpu_block = K.GPU_BLOCK  # worlds per thread block on a GPU (`choose_kernel`)
@@ -554,9 +554,10 @@ class BatchSim:
         position 4:6, true velocity 6:8 (and f32's low parts, `tsim.kernels.layout`), written in
         place by `step` and `reset`. Each read moves `state_version` on, as the reader may write
         it: `BatchEnv` then measures the state anew rather than reuse its last measurement. So
-        write through `state` each time, not through a reference kept across steps: on a device
-        the next step copies in what was written through the last read, and a reference kept
-        from before a step does not see that step (`tsim.mirror`). To read only, `read_state`."""
+        write through `state` each time, not through a reference kept across any launch (a
+        `step`, or `BatchEnv`'s measuring and observing kernels): on a device a launch copies in
+        what was written through the last read and no later write, and a reference kept from
+        before a step does not see that step (`tsim.mirror`). To read only, `read_state`."""
         self.state_version += 1
         return self._state_m.host(write=True)
 

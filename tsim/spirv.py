@@ -256,7 +256,8 @@ class Launcher:
 
     def step(self, args: tuple) -> None:
         """One env step: args are `kernels.step.step_kernel`'s arguments, then the batch tier
-        (args[N_SUB_ARG] substeps; counts and state, numpy arrays, are written in place)."""
+        (args[N_SUB_ARG] substeps; counts, a numpy array, and state, a numpy array or a device's
+        Taichi ndarray (`tsim.mirror`), are written in place)."""
         n_sub = args[N_SUB_ARG]
         gf, gi = self._scratch_for(args)
         chunk = n_sub if self.chunk is None else min(self.chunk, n_sub)

@@ -41,11 +41,14 @@ def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
     cached, plain = _pair()
     for t in range(5):
         _step_both(cached, plain, t)
-    # a state assigned whole (copied into the simulator's own array, which the kernel keeps
-    # writing: tests/tsim/test_mirror.py checks the next step starts from it), and actions in
+    # a state assigned whole to one (copied into the simulator's own array, which the cached
+    # launch keeps writing), the same values written in place into the other; and actions in
     # column-major order (not cached: Taichi's call copies them to row-major order each time)
+    nudged = cached.read_state().copy()
+    nudged[:, :, 2] += 0.05
+    cached.state = nudged
+    plain.state[...] = nudged
     for sim in (cached, plain):
-        sim.state = sim.state.copy()
         sim.actions = np.asfortranarray(sim.actions)
     for t in range(5, 10):
         _step_both(cached, plain, t)

@@ -71,17 +71,15 @@ def test_a_device_state_gives_the_hosts_bits_through_reads_writes_and_resets(tas
                 e.sim.state[:, :, 2] += 0.01
         if t == 13:
             mask = np.array([True, False, True, False, False])
-            for e in (host, dev):
-                e.sim.reset(mask)
-                e.observe()
+            obs = [e.sim.reset(mask) or e.observe() for e in (host, dev)]
+            assert obs[0].tobytes() == obs[1].tobytes()
         if t == 17:  # a whole state assigned: copied in, the next step starts from it as from
             # the same values written in place
             nudged = host.sim.read_state().copy()
             nudged[:, :, 3] += 0.02
             host.sim.state[...] = nudged
             dev.sim.state = nudged
-            host.observe()
-            dev.observe()
+            assert host.observe().tobytes() == dev.observe().tobytes()
     assert host.sim.read_state().tobytes() == dev.sim.read_state().tobytes()
     assert np.array_equal(host.sim.counts, dev.sim.counts)
 
@@ -116,3 +114,16 @@ def test_read_state_is_read_only_and_a_wrong_shape_is_refused(on_device):
         env.sim.read_state()[0, 0, 0] = 1.0
     with pytest.raises(ValueError, match="a state must have shape"):
         env.sim.state = np.zeros((1, 2, 3))
+
+
+def test_sgr_device_mirror_makes_the_cpu_use_a_device_mirror(monkeypatch):
+    """SGR_DEVICE_MIRROR=1 (a testing aid) gives the CPU a DeviceMirror, so that a test run under
+    it catches code relying on a kept state reference; without it the CPU passes numpy itself."""
+    from tasks.specs import task_world
+    from tsim.sim import BatchSim
+
+    body = sample_robot((5, 5), np.random.default_rng(0))
+    monkeypatch.setenv("SGR_DEVICE_MIRROR", "1")
+    assert isinstance(BatchSim(task_world("Walker-v0"), [body], (1, 1))._state_m, mirror_mod.DeviceMirror)
+    monkeypatch.delenv("SGR_DEVICE_MIRROR")
+    assert isinstance(BatchSim(task_world("Walker-v0"), [body], (1, 1))._state_m, mirror_mod.HostArray)
