@@ -104,6 +104,14 @@ class BatchEnv:
         self._obj_rows = {o.name: (constant(self.sim.object_offsets(k).astype(np.int32), self._cpu),
                                    o.body.n_points)
                           for k, o in enumerate(self.sim.free_objects) if o.body.n_points <= 128}
+        # for `tasks.kernels.orientation`: each world's first row of the robots' (B, N, 2) arrays,
+        # and of each such object in the state (with its point count, per world)
+        P = self.sim.state_shape[1]
+        self._dense_rows = constant((np.arange(B) * N).astype(np.int32), self._cpu)
+        self._obj_state_rows = {
+            o.name: (constant((np.arange(B) * P + self.sim.object_offsets(k)).astype(np.int32), self._cpu),
+                     o.body.n_points, constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
+            for k, o in enumerate(self.sim.free_objects) if o.name in self._obj_rows}
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
@@ -179,6 +187,32 @@ class BatchEnv:
         self._points_now[key] = out
         return out
 
+    def _robot_orientation(self, points: np.ndarray, pos0: np.ndarray, mask: np.ndarray) -> np.ndarray:
+        """`O.orientation(points, pos0, mask)` of the robots' (B, N, 2) points by
+        `tasks.kernels.orientation` (the same bits; mask is the env's own)."""
+        B, N = mask.shape
+        rows = self._dense_rows
+        return EK.orientation(np.ascontiguousarray(points).reshape(-1), rows, 2,
+                              np.ascontiguousarray(pos0).reshape(-1), rows, 2, self._npts, N, self._serial)
+
+    def _object_orientation(self, name: str) -> np.ndarray:
+        """(B,) orientation of free object `name` against its points at reset (`O.orientation`):
+        by `tasks.kernels.orientation` over the state's rows where the object fits its sums."""
+        if name not in self._obj_rows:
+            pos = self._object_points(name)[0]
+            return O.orientation(pos, self._object_pos0(name), np.ones(pos.shape[:2], dtype=bool))
+        key = ("orientation", name)
+        hit = self._points_now.get(key)
+        if hit is not None:
+            return hit
+        sim = self.sim
+        B, P, ns = sim.state_shape
+        rows, n, count = self._obj_state_rows[name]
+        out = EK.orientation(sim.kernel_state(), rows, ns, sim.initial_positions.reshape(-1), rows, 2, count,
+                             n, self._serial)
+        self._points_now[key] = out
+        return out
+
     def _object_now(self, name: str) -> np.ndarray:
         """(B, 2, n) current points of world object `name`: a simulated one's state, a static
         one's (all-fixed terrain) initial points in every world."""
@@ -200,7 +234,8 @@ class BatchEnv:
         if not self.fused:
             points = self._robot()[0].copy()
         return Measure(com, objects, points=points, mask=self._mask, pos0=self._pos0,
-                       state=self.task_state)
+                       state=self.task_state,
+                       orientation_of=self._robot_orientation if self.fused else O.orientation)
 
     def _set_actions(self, actions) -> None:
         """`BatchSim.set_actions`; on the kernel path on a CPU a (B, max_actuators) array of finite
@@ -270,7 +305,9 @@ class BatchEnv:
     def _scene(self, com: np.ndarray, vcom: np.ndarray, measure: Measure | None = None) -> O.Scene:
         return O.Scene(robot=self._robot, mask=self._mask, n_points=self.n_points, com=com, vcom=vcom,
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
-                       object_pos0=self._object_pos0, object_coms=self._object_coms, state=self.task_state,
+                       object_pos0=self._object_pos0, object_coms=self._object_coms,
+                       object_orientation=self._object_orientation if self.fused else None,
+                       state=self.task_state,
                        object_now=self._object_now, measure=measure,
                        static_sight=self._static_sight if self.fused else None)
 

@@ -231,3 +231,135 @@ def object_coms(state: REAL_1, off: I32_1, n: ti.i32, P: ti.i32, com: F64_2, vco
         for c in ti.static(range(2)):
             com[b, c] = ti.cast(z + _pairwise(state, at + c, ns, n), ti.f64) / nf
             vcom[b, c] = ti.cast(z + _pairwise(state, at + 2 + c, ns, n), ti.f64) / nf
+
+
+# ---------------------------------------------------------------------- orientation
+# `tasks.orientation.orientation` in two kernels around numpy's arccos (whose bits depend on the
+# machine's numpy build, so it stays numpy's): `orientation_terms` writes each point's clamped
+# cosine, its reference magnitude and its cross product, `orientation_sums` adds them up. Points
+# are rows of a flat real array: world b's point i at (base[b] + i) * stride, its reference's at
+# (ref_base[b] + i) * ref_stride; count[b] points. Everything after the positions is float64, as
+# numpy computes it (its COMs are float64 even from float32 positions).
+
+
+@ti.func
+def _eigen_com(src: ti.template(), base, stride, n, c: ti.template()):
+    """Coordinate c's mean of n points as `tasks.orientation._eigen_com` adds them: the first,
+    then groups of four ((p1 + p2) + (p3 + p4)) while a whole group fits below the last multiple
+    of four of n - 1, then the rest one by one; divided by n."""
+    s = ti.cast(src[base * stride + c], ti.f64)
+    groups = ((n - 1) & ~3) // 4
+    for k in range(groups):
+        at = (base + 1 + 4 * k) * stride + c
+        p1 = ti.cast(src[at], ti.f64)
+        p2 = ti.cast(src[at + stride], ti.f64)
+        p3 = ti.cast(src[at + 2 * stride], ti.f64)
+        p4 = ti.cast(src[at + 3 * stride], ti.f64)
+        s += (p1 + p2) + (p3 + p4)
+    for j in range(3):
+        i = 1 + 4 * groups + j
+        if i < n:
+            s += ti.cast(src[(base + i) * stride + c], ti.f64)
+    return s / ti.cast(n, ti.f64)
+
+
+@ti.kernel
+def orientation_terms(src: REAL_1, base: I32_1, stride: ti.i32, ref: REAL_1, ref_base: I32_1,
+                      ref_stride: ti.i32, count: I32_1, clamp: ti.f64, tiny: ti.f64, cos: F64_2,
+                      mag_old: F64_2, cross: F64_2, serial: ti.template()):
+    """Per point of each world (its first count[b]): the clamped cosine between its centred
+    direction now and at reset, its centred distance at reset and the cross product of the two
+    unit directions, into cos, mag_old, cross (B, W); `tasks.orientation.orientation`'s steps.
+    Its constants 0.99999 and 1e-7 come as float64 arguments (clamp, tiny): in an f32 process a
+    literal here would be float32's."""
+    ti.loop_config(serialize=serial)
+    for b in range(count.shape[0]):
+        n = count[b]
+        cx = _eigen_com(src, base[b], stride, n, 0)
+        cy = _eigen_com(src, base[b], stride, n, 1)
+        ox = _eigen_com(ref, ref_base[b], ref_stride, n, 0)
+        oy = _eigen_com(ref, ref_base[b], ref_stride, n, 1)
+        for i in range(n):
+            x = ti.cast(src[(base[b] + i) * stride], ti.f64) - cx
+            y = ti.cast(src[(base[b] + i) * stride + 1], ti.f64) - cy
+            x0 = ti.cast(ref[(ref_base[b] + i) * ref_stride], ti.f64) - ox
+            y0 = ti.cast(ref[(ref_base[b] + i) * ref_stride + 1], ti.f64) - oy
+            mn = ti.sqrt(x * x + y * y)
+            mo = ti.sqrt(x0 * x0 + y0 * y0)
+            ux, uy, vx, vy = x, y, x0, y0
+            if mn > 0:
+                ux = x / mn
+                uy = y / mn
+            if mo > 0:
+                vx = x0 / mo
+                vy = y0 / mo
+            cs = ux * vx + uy * vy
+            if mn * mo < tiny:
+                cs = clamp
+            if cs > 1.0:
+                cs = clamp
+            if cs < -1.0:
+                cs = -clamp
+            cos[b, i] = cs
+            mag_old[b, i] = mo
+            cross[b, i] = ux * vy - uy * vx
+
+
+@ti.func
+def _eigen_sum(a: ti.template(), b, n):
+    """Row b's first n values of a (B, W) added in the order of Eigen's SSE2 reduction, as
+    `tasks.orientation._eigen_sum` (values past n read as 0)."""
+    z = ti.cast(0.0, ti.f64)
+    p0x, p0y = a[b, 0], a[b, 1]
+    p1x = a[b, 2] if n > 2 else z
+    p1y = a[b, 3] if n > 3 else z
+    end4 = (n // 4) * 4
+    for k in range(1, end4 // 4):
+        i = 4 * k
+        p0x += a[b, i]
+        p0y += a[b, i + 1]
+        p1x += a[b, i + 2]
+        p1y += a[b, i + 3]
+    p0x = p0x + p1x
+    p0y = p0y + p1y
+    if n - end4 >= 2:
+        p0x += a[b, end4]
+        p0y += a[b, end4 + 1]
+    res = p0x + p0y
+    if n % 2 == 1:
+        res += a[b, n - 1]
+    return res
+
+
+@ti.kernel
+def orientation_sums(angle: F64_2, mag_old: F64_2, cross: F64_2, count: I32_1, two_pi: ti.f64,
+                     out: F64_1, serial: ti.template()):
+    """Each world's orientation from `orientation_terms`' arrays, angle holding arccos of its
+    cosines: the reference-weighted mean angle, 2 pi minus it where the summed cross products are
+    positive (`tasks.orientation.orientation`'s last lines; angle is overwritten)."""
+    ti.loop_config(serialize=serial)
+    for b in range(count.shape[0]):
+        n = count[b]
+        for i in range(n):
+            angle[b, i] = angle[b, i] * mag_old[b, i]
+        avg = _eigen_sum(angle, b, n) / _eigen_sum(mag_old, b, n)
+        out[b] = two_pi - avg if _eigen_sum(cross, b, n) > 0 else avg
+
+
+def orientation(src, base, stride: int, ref, ref_base, ref_stride: int, count, width: int,
+                serial: bool):
+    """(B,) `tasks.orientation.orientation` of the points described above (the robot's or a free
+    object's), the same bits: two kernels and numpy's arccos of a (B, width) array between them
+    (width: the largest count)."""
+    import numpy as np
+
+    from tasks.orientation import PI_EVOGYM
+
+    n = count.shape[0]
+    cos, mag_old, cross = (np.zeros((n, width)) for _ in range(3))
+    orientation_terms(src, base, stride, ref, ref_base, ref_stride, count, 0.99999, 1e-7, cos, mag_old, cross,
+                      serial)
+    angle = np.arccos(cos, out=cos)
+    out = np.empty(n)
+    orientation_sums(angle, mag_old, cross, count, 2 * PI_EVOGYM, out, serial)
+    return out

@@ -38,6 +38,8 @@ class Scene:
     # name -> (B, 2) position and velocity COMs of a free object, if the env computes them
     # otherwise than `com` of `object_points` (the same bits; `BatchEnv`'s kernel path)
     object_coms: Callable[[str], tuple[np.ndarray, np.ndarray]] | None = None
+    # name -> (B,) a free object's orientation, likewise (`orientation` of its points otherwise)
+    object_orientation: Callable[[str], np.ndarray] | None = None
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
     # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
     object_now: Callable[[str], np.ndarray] | None = None
@@ -153,6 +155,8 @@ def object_vcom(name: str) -> Block:
 def object_orientation(name: str) -> Block:
     """evogym's orientation of free object `name` against its points at reset."""
     def fn(s: Scene) -> np.ndarray:
+        if s.object_orientation is not None:
+            return s.object_orientation(name)[:, None]
         pos = s.object_points(name)[0]
         return orientation(pos, s.object_pos0(name), np.ones(pos.shape[:2], dtype=bool))[:, None]
     return Block(f"{name} orientation", 1, fn)

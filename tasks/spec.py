@@ -34,11 +34,14 @@ class Measure:
     mask: np.ndarray | None = None  # (B, N) which of them are real
     pos0: np.ndarray | None = None  # (B, N, 2) the robot's points at reset (orientation reference)
     state: dict[str, np.ndarray] = field(default_factory=dict)
+    # how `orientation` is computed from (points, pos0, mask): `tasks.orientation.orientation`, or
+    # the env's kernels that give its bits (`BatchEnv`'s kernel path)
+    orientation_of: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] = orientation
 
     @cached_property
     def orientation(self) -> np.ndarray:
         """(B,) evogym's orientation of the robot (`object_orientation_at_time`)."""
-        return orientation(self.points, self.pos0, self.mask)
+        return self.orientation_of(self.points, self.pos0, self.mask)
 
 
 @dataclass(frozen=True)

@@ -121,7 +121,8 @@ def _subprocess(arch: str, precision: str, tasks: str, steps: int) -> subprocess
 def test_kernel_path_equals_numpy_path_in_f32():
     """In an f32 process (float32 state, observations and rewards; COMs in float64 from float32
     sums, as numpy's float32 / int64) the kernels still give numpy's bits."""
-    r = _subprocess("cpu", "f32", "Walker-v0,Carrier-v0,UpStepper-v0,BidirectionalWalker-v0,Catcher-v0", 60)
+    tasks = "Walker-v0,Carrier-v0,UpStepper-v0,BidirectionalWalker-v0,Catcher-v0,Flipper-v0"
+    r = _subprocess("cpu", "f32", tasks, 60)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "ok f32" in r.stdout
 
@@ -163,3 +164,31 @@ def test_kernel_com_voxel_units_and_sight_equal_numpys():
         out = np.empty((len(cv), 2 * dist + 1))
         EK.terrain_sight(cv, tv[0], tv[1], dist, below, 5.0, 0.1, out, False)
         assert same_bits(out, O.terrain_sight(cv, terrain, dist, below=below))
+
+
+def test_orientation_kernels_give_numpys_bits_bent_turned_and_at_rest():
+    """`tasks.kernels.orientation` against `tasks.orientation.orientation` on random bodies of
+    4 to 40 points (padded, each world its own count), turned and bent, and undeformed (where
+    cosines round above 1 and are clamped), from float64 and float32 points: the same bits."""
+    from tasks import kernels as EK
+    from tasks.orientation import orientation
+    from tsim import runtime
+
+    runtime.init()
+    rng = np.random.default_rng(0)
+    for dt in (np.float64, np.float32):
+        for trial in range(12):
+            B, N = 40, int(rng.integers(4, 41))
+            n = rng.integers(4, N + 1, size=B)
+            mask = np.arange(N)[None, :] < n[:, None]
+            pos0 = (rng.normal(size=(B, N, 2)) * mask[:, :, None]).astype(dt)
+            turn = rng.uniform(0, 2 * np.pi, size=B)
+            c, s = np.cos(turn)[:, None], np.sin(turn)[:, None]
+            x, y = pos0[:, :, 0].astype(np.float64), pos0[:, :, 1].astype(np.float64)
+            pos = np.stack([c * x - s * y, s * x + c * y], axis=2) + rng.normal(size=(B, 1, 2))
+            pos = pos + 1e-3 * rng.normal(size=pos.shape)
+            pos = pos0.copy() if trial % 4 == 0 else (pos * mask[:, :, None]).astype(dt)
+            rows = (np.arange(B) * N).astype(np.int32)
+            got = EK.orientation(pos.reshape(-1), rows, 2, pos0.reshape(-1), rows, 2, n.astype(np.int32), N,
+                                 True)
+            assert same_bits(got, orientation(pos, pos0, mask)), (dt, trial)
