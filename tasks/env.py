@@ -108,6 +108,7 @@ class BatchEnv:
         # and of each such object in the state (with its point count, per world)
         P = self.sim.state_shape[1]
         self._dense_rows = constant((np.arange(B) * N).astype(np.int32), self._cpu)
+        self._state_rows = constant((np.arange(B) * P).astype(np.int32), self._cpu)
         self._obj_state_rows = {
             o.name: (constant((np.arange(B) * P + self.sim.object_offsets(k)).astype(np.int32), self._cpu),
                      o.body.n_points, constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
@@ -194,6 +195,14 @@ class BatchEnv:
         rows = self._dense_rows
         return EK.orientation(np.ascontiguousarray(points).reshape(-1), rows, 2,
                               np.ascontiguousarray(pos0).reshape(-1), rows, 2, self._npts, N, self._serial)
+
+    def _robot_orientation_now(self) -> np.ndarray:
+        """(B,) the robots' orientation now (`O.orientation` of `_robot()`'s points), by
+        `tasks.kernels.orientation` over the state's rows."""
+        sim = self.sim
+        ref = self._pos0.reshape(-1)
+        return EK.orientation(sim.kernel_state(), self._state_rows, sim.state_shape[2], ref,
+                              self._dense_rows, 2, self._npts, self._mask.shape[1], self._serial)
 
     def _object_orientation(self, name: str) -> np.ndarray:
         """(B,) orientation of free object `name` against its points at reset (`O.orientation`):
@@ -307,6 +316,7 @@ class BatchEnv:
                        pos0=self._pos0, terrain=self._terrain, object_points=self._object_points,
                        object_pos0=self._object_pos0, object_coms=self._object_coms,
                        object_orientation=self._object_orientation if self.fused else None,
+                       robot_orientation=self._robot_orientation_now if self.fused else None,
                        state=self.task_state,
                        object_now=self._object_now, measure=measure,
                        static_sight=self._static_sight if self.fused else None)

@@ -38,8 +38,10 @@ class Scene:
     # name -> (B, 2) position and velocity COMs of a free object, if the env computes them
     # otherwise than `com` of `object_points` (the same bits; `BatchEnv`'s kernel path)
     object_coms: Callable[[str], tuple[np.ndarray, np.ndarray]] | None = None
-    # name -> (B,) a free object's orientation, likewise (`orientation` of its points otherwise)
+    # name -> (B,) a free object's orientation, likewise (`orientation` of its points otherwise),
+    # and () -> (B,) the robot's
     object_orientation: Callable[[str], np.ndarray] | None = None
+    robot_orientation: Callable[[], np.ndarray] | None = None
     state: dict[str, np.ndarray] | None = None  # the task's per-world state (TaskSpec.state)
     # name -> (B, 2, n) current points of any world object, fixed or simulated (sight over objects)
     object_now: Callable[[str], np.ndarray] | None = None
@@ -127,6 +129,8 @@ def _orientation(s: Scene) -> np.ndarray:
     m = s.measure
     if m is not None and m.points is not None:
         return m.orientation[:, None]  # the same points, pos0 and mask: the same bits
+    if s.robot_orientation is not None:
+        return s.robot_orientation()[:, None]
     return orientation(s.pos, s.pos0, s.mask)[:, None]
 
 
