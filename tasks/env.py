@@ -77,7 +77,8 @@ class BatchEnv:
         # free objects' points of the state now, by name: read once per state within `step` (the
         # reward's measure and several observation blocks ask for them); emptied whenever the
         # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
-        # (and their COMs, under ("coms", name))
+        # (and what kernels measured of this state, under (what, name): "coms", "orientation",
+        # "com_vox")
         self._points_now: dict[str | tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
         self.task_state: dict[str, np.ndarray] = {}
         self._rngs: dict[int, random.Random] = {}
@@ -109,6 +110,7 @@ class BatchEnv:
         P = self.sim.state_shape[1]
         self._dense_rows = constant((np.arange(B) * N).astype(np.int32), self._cpu)
         self._state_rows = constant((np.arange(B) * P).astype(np.int32), self._cpu)
+        self._sight_plans: dict[tuple[str, ...], tuple] = {}  # `_object_sight`'s, by objects seen
         self._obj_state_rows = {
             o.name: (constant((np.arange(B) * P + self.sim.object_offsets(k)).astype(np.int32), self._cpu),
                      o.body.n_points, constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
@@ -319,21 +321,63 @@ class BatchEnv:
                        robot_orientation=self._robot_orientation_now if self.fused else None,
                        state=self.task_state,
                        object_now=self._object_now, measure=measure,
-                       static_sight=self._static_sight if self.fused else None)
+                       static_sight=self._static_sight if self.fused else None,
+                       object_sight=self._object_sight if self.fused else None)
 
     def _static_sight(self, dist: int, below: bool) -> np.ndarray:
         """`O.terrain_sight` of `O.com_voxel_units` over the static terrain, by
         `tasks.kernels.com_voxel_units` and `tasks.kernels.terrain_sight`."""
-        sim = self.sim
-        com_vox = np.empty((self.n_worlds, 2))
-        EK.com_voxel_units(sim.kernel_state(), self._npts, sim.state_shape[1], C.CELL, self._ti_real,
-                           com_vox, self._serial)
+        com_vox = self._com_vox()
         if self._terrain_vox.shape[1] == 0:
             return O.terrain_sight(com_vox, self._terrain, dist, below=below)
         out = np.empty((self.n_worlds, 2 * dist + 1))
         EK.terrain_sight(com_vox, self._terrain_vox[0], self._terrain_vox[1], dist, below, 5.0, C.CELL,
                          out, self._serial)
         return out
+
+    def _com_vox(self) -> np.ndarray:
+        """(B, 2) `O.com_voxel_units` of the robots now, by `tasks.kernels.com_voxel_units`
+        (once per state)."""
+        key = ("com_vox", "")
+        hit = self._points_now.get(key)
+        if hit is not None:
+            return hit[0]
+        sim = self.sim
+        com_vox = np.empty((self.n_worlds, 2))
+        EK.com_voxel_units(sim.kernel_state(), self._npts, sim.state_shape[1], C.CELL, self._ti_real,
+                           com_vox, self._serial)
+        self._points_now[key] = (com_vox, com_vox)
+        return com_vox
+
+    def _object_sight(self, dist: int, below: bool, objects: tuple[str, ...]) -> np.ndarray | None:
+        """`O.terrain_sight` over the named objects' current points (`O._sight_points`), by
+        `tasks.kernels.object_sight`: the simulated ones' from the state, the fixed ones' (the same
+        in every world) divided by the cell once, in the type numpy's concatenation has. None
+        (numpy's way, then) when none of them is simulated."""
+        if not any(name in self._obj_index for name in objects):
+            return None
+        plan = self._sight_plans.get(objects)
+        if plan is None:
+            plan = self._sight_plans[objects] = self._sight_plan(objects)
+        rows, tx, ty, n_static, real = plan
+        sim = self.sim
+        out = np.empty((self.n_worlds, 2 * dist + 1))
+        EK.object_sight(sim.kernel_state(), rows, sim.state_shape[1], tx, ty, n_static, self._com_vox(), dist,
+                        below, 5.0, C.CELL, real, out, self._serial)
+        return out
+
+    def _sight_plan(self, objects: tuple[str, ...]) -> tuple:
+        """What `_object_sight` passes for `objects`: the simulated ones' state rows (B, M), the
+        fixed ones' points in voxel units (x row, y row; one padding point when there are none),
+        their count, and the Taichi type the points are divided in."""
+        moving = [n for n in objects if n in self._obj_index]
+        fixed = [self.sim.world.object(n).pos0 for n in objects if n not in self._obj_index]
+        real = np.result_type(self.dtype, *(p.dtype for p in fixed))
+        rows = np.concatenate([self._obj_index[n][1] for n in moving], axis=1)
+        pts = (np.concatenate(fixed, axis=1).astype(real) / C.CELL if fixed else np.zeros((2, 1), real))
+        return (constant(rows.astype(np.int32), self._cpu), constant(pts[0], self._cpu),
+                constant(pts[1], self._cpu), len(pts[0]) if fixed else 0,
+                EK.ti.f32 if real == np.float32 else EK.ti.f64)
 
     # ------------------------------------------------------------------ task state
     def seed(self, seeds: Sequence[int] | int | None = None) -> None:

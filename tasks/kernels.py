@@ -21,6 +21,7 @@ from tsim.runtime import ti
 REAL_1 = ti.types.ndarray(ndim=1)
 REAL_2 = ti.types.ndarray(ndim=2)
 I32_1 = ti.types.ndarray(dtype=ti.i32, ndim=1)
+I32_2 = ti.types.ndarray(dtype=ti.i32, ndim=2)
 F64_1 = ti.types.ndarray(dtype=ti.f64, ndim=1)
 F64_2 = ti.types.ndarray(dtype=ti.f64, ndim=2)
 
@@ -137,6 +138,31 @@ def clip_actions(a: F64_2, n_act: I32_1, lo: ti.f64, hi: ti.f64, real: ti.templa
             out[b, j] = ti.cast(ti.min(ti.max(a[b, j], lo), hi), real)
 
 
+@ti.func
+def _see(x, y, cx, cy, d: ti.template(), below: ti.template(), e: ti.template(), seen: ti.template()):
+    """One point (x, y, voxel units, float64) seen from the COM (cx, cy): the highest point below
+    (`below`) or the lowest above in each of the 2 d + 1 windows around cx it falls in."""
+    if x > cx - (d + 0.5) and x < cx + (d + 0.5) and ((y < cy) if ti.static(below) else (y > cy)):
+        for k in ti.static(range(2 * d + 1)):
+            if x > cx + ti.static(k - d - 0.5) and x < cx + ti.static(k - d + 0.5):
+                e[k] = ti.max(e[k], y) if ti.static(below) else ti.min(e[k], y)
+                seen[k] = 1
+
+
+@ti.func
+def _sight_row(b, cy, d: ti.template(), below: ti.template(), rng, cell, e: ti.template(),
+               seen: ti.template(), out: ti.template()):
+    """World b's 2 d + 1 distances from what `_see` kept: to the point seen, else `rng` voxels;
+    clipped to [0, rng], in world units."""
+    for k in ti.static(range(2 * d + 1)):
+        if ti.static(below):
+            ek = e[k] if seen[k] else cy - rng
+            out[b, k] = ti.min(ti.max(cy - ek, 0.0), rng) * cell
+        else:
+            ek = e[k] if seen[k] else cy + rng
+            out[b, k] = ti.min(ti.max(ek - cy, 0.0), rng) * cell
+
+
 @ti.kernel
 def terrain_sight(cv: F64_2, tx: REAL_1, ty: REAL_1, d: ti.template(), below: ti.template(), rng: ti.f64,
                   cell: ti.f64, out: F64_2, serial: ti.template()):
@@ -149,25 +175,38 @@ def terrain_sight(cv: F64_2, tx: REAL_1, ty: REAL_1, d: ti.template(), below: ti
     for b in range(cv.shape[0]):
         cx = cv[b, 0]
         cy = cv[b, 1]
-        lo = cx - (d + 0.5)
-        hi = cx + (d + 0.5)
         e = ti.Vector([-inf if ti.static(below) else inf] * (2 * d + 1), dt=ti.f64)
         seen = ti.Vector([0] * (2 * d + 1), dt=ti.i32)
         for m in range(tx.shape[0]):
-            x = ti.cast(tx[m], ti.f64)
-            y = ti.cast(ty[m], ti.f64)
-            if x > lo and x < hi and ((y < cy) if ti.static(below) else (y > cy)):
-                for k in ti.static(range(2 * d + 1)):
-                    if x > cx + ti.static(k - d - 0.5) and x < cx + ti.static(k - d + 0.5):
-                        e[k] = ti.max(e[k], y) if ti.static(below) else ti.min(e[k], y)
-                        seen[k] = 1
-        for k in ti.static(range(2 * d + 1)):
-            if ti.static(below):
-                ek = e[k] if seen[k] else cy - rng
-                out[b, k] = ti.min(ti.max(cy - ek, 0.0), rng) * cell
-            else:
-                ek = e[k] if seen[k] else cy + rng
-                out[b, k] = ti.min(ti.max(ek - cy, 0.0), rng) * cell
+            _see(ti.cast(tx[m], ti.f64), ti.cast(ty[m], ti.f64), cx, cy, d, below, e, seen)
+        _sight_row(b, cy, d, below, rng, cell, e, seen, out)
+
+
+@ti.kernel
+def object_sight(state: REAL_1, rows: I32_2, P: ti.i32, tx: REAL_1, ty: REAL_1, n_static: ti.i32, cv: F64_2,
+                 d: ti.template(), below: ti.template(), rng: ti.f64, cell: ti.f64, real: ti.template(),
+                 out: F64_2, serial: ti.template()):
+    """`terrain_sight` over objects that may move: world b's points are its state rows rows[b, :]
+    (P rows a world), each position divided by the cell in type `real` (numpy's type for the
+    concatenated points: the state's, or float64 where a fixed object's float64 points join them,
+    `tasks.observations._sight_points`), and the first n_static of tx, ty (fixed objects' points,
+    divided by numpy in that type); then compared in float64."""
+    ns = ti.static(state_columns())
+    inf = ti.cast(ti.math.inf, ti.f64)
+    ti.loop_config(serialize=serial)
+    for b in range(cv.shape[0]):
+        cx = cv[b, 0]
+        cy = cv[b, 1]
+        c = ti.cast(cell, real)
+        e = ti.Vector([-inf if ti.static(below) else inf] * (2 * d + 1), dt=ti.f64)
+        seen = ti.Vector([0] * (2 * d + 1), dt=ti.i32)
+        for m in range(rows.shape[1]):
+            at = (b * P + rows[b, m]) * ns
+            x = ti.cast(ti.cast(state[at], real) / c, ti.f64)
+            _see(x, ti.cast(ti.cast(state[at + 1], real) / c, ti.f64), cx, cy, d, below, e, seen)
+        for m in range(n_static):
+            _see(ti.cast(tx[m], ti.f64), ti.cast(ty[m], ti.f64), cx, cy, d, below, e, seen)
+        _sight_row(b, cy, d, below, rng, cell, e, seen, out)
 
 
 @ti.kernel

@@ -51,6 +51,9 @@ class Scene:
     # (dist, below) -> the sight over the static terrain, if the env computes it otherwise than
     # `terrain_sight` of `com_voxel_units` (the same bits; `BatchEnv`'s kernel path)
     static_sight: Callable[[int, bool], np.ndarray] | None = None
+    # (dist, below, objects) -> the sight over those objects likewise, or None where the env has no
+    # other way for them
+    object_sight: Callable[[int, bool, tuple[str, ...]], np.ndarray | None] | None = None
 
     @functools.cached_property
     def _points(self) -> tuple[np.ndarray, np.ndarray]:
@@ -177,6 +180,10 @@ def _sight_points(s: Scene, objects: tuple[str, ...] | None) -> np.ndarray:
 def _sight(s: Scene, dist: int, objects: tuple[str, ...] | None, below: bool) -> np.ndarray:
     if objects is None and s.static_sight is not None:
         return s.static_sight(dist, below)
+    if objects is not None and s.object_sight is not None:
+        out = s.object_sight(dist, below, objects)
+        if out is not None:
+            return out
     return terrain_sight(com_voxel_units(s.pos, s.n_points), _sight_points(s, objects), dist, below=below)
 
 
