@@ -102,9 +102,9 @@ class BatchEnv:
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
         # each free object's first row in every world, for `tasks.kernels.object_coms` (objects of
         # at most 128 points, the pairwise sum's one block; larger ones keep numpy)
-        self._obj_rows = {o.name: (constant(self.sim.object_offsets(k).astype(np.int32), self._cpu),
-                                   o.body.n_points)
-                          for k, o in enumerate(self.sim.free_objects) if o.body.n_points <= 128}
+        first = {o.name: self._obj_index[o.name][1][:, 0] for o in self.sim.free_objects}
+        self._obj_rows = {o.name: (constant(first[o.name].astype(np.int32), self._cpu), o.body.n_points)
+                          for o in self.sim.free_objects if o.body.n_points <= 128}
         # for `tasks.kernels.orientation`: each world's first row of the robots' (B, N, 2) arrays,
         # and of each such object in the state (with its point count, per world)
         P = self.sim.state_shape[1]
@@ -112,9 +112,9 @@ class BatchEnv:
         self._state_rows = constant((np.arange(B) * P).astype(np.int32), self._cpu)
         self._sight_plans: dict[tuple[str, ...], tuple] = {}  # `_object_sight`'s, by objects seen
         self._obj_state_rows = {
-            o.name: (constant((np.arange(B) * P + self.sim.object_offsets(k)).astype(np.int32), self._cpu),
+            o.name: (constant((np.arange(B) * P + first[o.name]).astype(np.int32), self._cpu),
                      o.body.n_points, constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
-            for k, o in enumerate(self.sim.free_objects) if o.name in self._obj_rows}
+            for o in self.sim.free_objects if o.name in self._obj_rows}
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them

@@ -402,3 +402,65 @@ def orientation(src, base, stride: int, ref, ref_base, ref_stride: int, count, w
     out = np.empty(n)
     orientation_sums(angle, mag_old, cross, count, 2 * PI_EVOGYM, out, serial)
     return out
+
+
+# ---------------------------------------------------------------------- convex hull area
+@ti.func
+def _before(pts: ti.template(), at, i, j):
+    """Whether point i comes before point j in (x, y) order (numpy's lexsort of (y, x))."""
+    xi, xj = pts[(at + i) * 2], pts[(at + j) * 2]
+    return xi < xj or (xi == xj and pts[(at + i) * 2 + 1] < pts[(at + j) * 2 + 1])
+
+
+@ti.func
+def _half_hull(pts: ti.template(), at, b, n, N, order: ti.template(), H: ti.template(),
+               c: ti.template(), reverse: ti.template()):
+    """`tasks.suite.shape._chain` for world b: the monotone chain over its x-sorted points (from
+    the right with `reverse`), popping while the turn is not left; then 0.0 plus the pairwise sum
+    (numpy's order) of the N - 1 cross products of consecutive vertices, zero past the chain."""
+    L = 0
+    for k in range(n):
+        p = order[b, n - 1 - k] if ti.static(reverse) else order[b, k]
+        qx = ti.cast(pts[(at + p) * 2], ti.f64)
+        qy = ti.cast(pts[(at + p) * 2 + 1], ti.f64)
+        while L >= 2:
+            ax, ay = H[b, 2 * (L - 2)], H[b, 2 * (L - 2) + 1]
+            bx, by = H[b, 2 * (L - 1)], H[b, 2 * (L - 1) + 1]
+            if (bx - ax) * (qy - ay) - (by - ay) * (qx - ax) <= 0:
+                L -= 1
+            else:
+                break
+        H[b, 2 * L] = qx
+        H[b, 2 * L + 1] = qy
+        L += 1
+    for k in range(N - 1):
+        v = ti.cast(0.0, ti.f64)
+        if k < L - 1:
+            v = H[b, 2 * k] * H[b, 2 * k + 3] - H[b, 2 * k + 2] * H[b, 2 * k + 1]
+        c[b * (N - 1) + k] = v
+    return ti.cast(0.0, ti.f64) + _pairwise(c, b * (N - 1), 1, N - 1)
+
+
+@ti.kernel
+def hull_areas(pts: REAL_1, N: ti.i32, count: I32_1, order: I32_2, H: F64_2, c: F64_1, out: F64_1,
+               serial: ti.template()):
+    """`tasks.suite.shape.hull_area` of each world's first count[b] points (pts: flat (B, N, 2)),
+    the same bits for 2 <= N <= 129 (the pairwise sum's one block): the points' order by (x, y)
+    (an insertion sort, stable as lexsort), the lower and upper chains, 0.5 times their sums.
+    order (B, N), H (B, 2 N + 2) and c (B (N - 1)) are scratch."""
+    ti.loop_config(serialize=serial)
+    for b in range(count.shape[0]):
+        n = count[b]
+        at = b * N
+        for i in range(n):
+            order[b, i] = i
+        for i in range(1, n):
+            key = order[b, i]
+            j = i
+            while j > 0 and _before(pts, at, key, order[b, j - 1]):
+                order[b, j] = order[b, j - 1]
+                j -= 1
+            order[b, j] = key
+        lower = _half_hull(pts, at, b, n, N, order, H, c, False)
+        upper = _half_hull(pts, at, b, n, N, order, H, c, True)
+        out[b] = 0.5 * (lower + upper)

@@ -87,6 +87,11 @@ def precision() -> str:
     return _PRECISION or requested_precision()
 
 
+def started() -> bool:
+    """Whether Taichi has started in this process (`init`)."""
+    return _ARCH is not None
+
+
 def requested_arch(arch: str | None = None) -> str:
     """`arch`, else $SGR_ARCH, else cpu; raises ValueError for a name that is not an arch."""
     if arch is None and os.environ.get("SGR_ARCH"):

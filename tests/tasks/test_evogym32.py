@@ -25,7 +25,7 @@ from tasks.env import BatchEnv
 from tasks.specs import TASKS
 from tasks.suite.bidirectional_walker import draw_goals
 from tasks.suite.catcher import placement
-from tasks.suite.shape import hull_area
+from tasks.suite.shape import hull_area, hull_area_numpy
 from tasks.validate import evogym32_returns, evogym32_traces, state_steps
 
 NEW_TASKS = [
@@ -199,12 +199,37 @@ def test_task_state_is_reset_per_world(folder):
 
 
 def test_hull_area_batched():
+    """A unit square with an inner and an edge point, a triangle with a point inside and one on an
+    edge (padding beyond each mask): areas 1 and 2, by the numpy oracle and by the kernel."""
+    from tsim import runtime
+
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5], [0.5, 0], [0, 0]], float)[None]
     mask = np.array([[True] * 6 + [False]])
     tri = np.array([[0, 0], [2, 0], [0, 2], [0.5, 0.5], [1, 1], [9, 9], [9, 9]], float)[None]
     mask2 = np.array([[True] * 5 + [False] * 2])
-    a = hull_area(np.concatenate([sq, tri]), np.concatenate([mask, mask2]))
-    assert a == pytest.approx([1.0, 2.0], abs=1e-15)
+    pts, masks = np.concatenate([sq, tri]), np.concatenate([mask, mask2])
+    assert hull_area_numpy(pts, masks) == pytest.approx([1.0, 2.0], abs=1e-15)
+    runtime.init()
+    assert hull_area(pts, masks) == pytest.approx([1.0, 2.0], abs=1e-15)
+
+
+def test_hull_area_kernel_gives_the_numpy_bits():
+    """`tasks.kernels.hull_areas` against the numpy monotone chain on random point sets of 2 to
+    129 points and on lattice points (ties in x and y, collinear runs, repeated points), from
+    float64 and float32 points: the same bits."""
+    from tsim import runtime
+
+    runtime.init()
+    rng = np.random.default_rng(0)
+    for dt in (np.float64, np.float32):
+        for trial in range(24):
+            B, N = 32, int(rng.integers(2, 130))
+            n = rng.integers(1, N + 1, size=B)
+            mask = np.arange(N)[None, :] < n[:, None]
+            pts = rng.integers(0, 4, size=(B, N, 2)) * 0.1 if trial % 3 == 0 else rng.normal(size=(B, N, 2))
+            pts = (pts * mask[:, :, None]).astype(dt)
+            got, want = hull_area(pts, mask), hull_area_numpy(pts, mask)
+            assert got.tobytes() == want.tobytes(), (dt, trial)
 
 
 @pytest.mark.parametrize("task", NEW_TASKS)
