@@ -11,8 +11,14 @@ numpy's bits (`BatchEnv(..., fused=False)` keeps the numpy path as the test orac
   float64 (numpy's float32 / int64 is float64);
 - a relative position is `pos - com` in float64, stored in the observation's type;
 - the floor and ceiling sight over the static terrain: the COM in voxel units in the state's type
-  (numpy's mean of the quotients), then numpy's comparisons in float64 (max and min are exact).
-The (B,)-sized rewards and terminations, the orientation and the object blocks stay in numpy.
+  (numpy's mean of the quotients), then numpy's comparisons in float64 (max and min are exact);
+  over objects, which move, the same from the state's rows (`object_sight`);
+- a free object's COM: numpy's pairwise sum of its points (`object_coms`);
+- evogym's orientation, of the robot or a free object: tasks/orientation.py's Eigen orders, with
+  numpy's arccos between two kernels (`orientation`);
+- the convex hull's area of the shape-change tasks (`hull_areas`).
+The (B,)-sized rewards and terminations stay in numpy. Float constants that float32 cannot hold
+exactly come in as float64 arguments: in an f32 process Taichi makes a literal float32.
 """
 
 from tsim.kernels.layout import state_columns
