@@ -79,7 +79,7 @@ class BatchEnv:
         # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
         # (and what kernels measured of this state, under (what, name): "coms", "orientation",
         # "com_vox")
-        self._points_now: dict[str | tuple[str, str], tuple[np.ndarray, np.ndarray]] = {}
+        self._points_now: dict[str | tuple[str, str], tuple[np.ndarray, ...] | np.ndarray] = {}
         self.task_state: dict[str, np.ndarray] = {}
         self._rngs: dict[int, random.Random] = {}
         self.fused = self.n_worlds >= FUSED_MIN if fused is None else bool(fused)
@@ -182,7 +182,7 @@ class BatchEnv:
             off, n = self._obj_rows[name]
             out = (np.empty((self.n_worlds, 2)), np.empty((self.n_worlds, 2)))
             EK.object_coms(self.sim.kernel_state(), off, n, self.sim.state_shape[1], out[0], out[1],
-                           self._serial)
+                           self._ti_real, self._serial)
         else:
             pos, vel = self._object_points(name)
             ones = np.ones(pos.shape[:2], dtype=bool)
@@ -246,7 +246,8 @@ class BatchEnv:
             points = self._robot()[0].copy()
         return Measure(com, objects, points=points, mask=self._mask, pos0=self._pos0,
                        state=self.task_state,
-                       orientation_of=self._robot_orientation if self.fused else O.orientation)
+                       orientation_of=self._robot_orientation if self.fused else O.orientation,
+                       kernels=self.fused)
 
     def _set_actions(self, actions) -> None:
         """`BatchSim.set_actions`; on the kernel path on a CPU a (B, max_actuators) array of finite
@@ -276,7 +277,7 @@ class BatchEnv:
         sim = self.sim
         EK.robot_coms(sim.kernel_state(), self._npts, sim.state_shape[1], sim.max_robot_points,
                       self._masked, com.reshape(-1), vcom.reshape(-1), self.spec.reads_points,
-                      pts.reshape(-1), self._serial)
+                      pts.reshape(-1), self._ti_real, self._serial)
         return com, vcom, pts if self.spec.reads_points else None
 
     def _fused_observe(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:

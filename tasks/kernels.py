@@ -52,7 +52,7 @@ def _sum_rows(state: ti.template(), so, lo, hi, n, masked: ti.template(), s: ti.
 
 @ti.func
 def _coms(state: ti.template(), npts: ti.template(), b, P, N, masked: ti.template(), com: ti.template(),
-          vcom: ti.template(), copy: ti.template(), points: ti.template()):
+          vcom: ti.template(), copy: ti.template(), points: ti.template(), real: ti.template()):
     """World b's position and velocity COMs into com, vcom (flat (B, 2)), and with `copy` its N
     rows' positions into points (flat (B, N, 2)); its COM. The padding rows' products are +-0.0
     and change no sum but a zero one's sign, so they are read only when a sum of the robot's rows
@@ -60,7 +60,7 @@ def _coms(state: ti.template(), npts: ti.template(), b, P, N, masked: ti.templat
     ns = ti.static(state_columns())
     so = b * P * ns
     n = npts[b]
-    z = state[so] - state[so]  # +0.0 in the state's type (its rows are finite)
+    z = ti.cast(0.0, real)  # +0.0 in the state's type
     s = ti.Vector([z, z, z, z])
     _sum_rows(state, so, 0, n, n, masked, s)
     if n < N and (s[0] == 0.0 or s[1] == 0.0 or s[2] == 0.0 or s[3] == 0.0):
@@ -81,13 +81,13 @@ def _coms(state: ti.template(), npts: ti.template(), b, P, N, masked: ti.templat
 
 @ti.kernel
 def robot_coms(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.template(), com: F64_1,
-               vcom: F64_1, copy: ti.template(), points: REAL_1, serial: ti.template()):
+               vcom: F64_1, copy: ti.template(), points: REAL_1, real: ti.template(), serial: ti.template()):
     """(B, 2) position and velocity COMs (com, vcom: flat) of every world's robot, its first npts[b]
     of the N robot rows of its P state rows (state: flat (B, P, columns)); with `copy`, each
     robot's N rows' positions into points (flat (B, N, 2); `Measure.points`) too."""
     ti.loop_config(serialize=serial)
     for b in range(npts.shape[0]):
-        _coms(state, npts, b, P, N, masked, com, vcom, copy, points)
+        _coms(state, npts, b, P, N, masked, com, vcom, copy, points, real)
 
 
 @ti.kernel
@@ -101,7 +101,7 @@ def observe(state: REAL_1, npts: I32_1, P: ti.i32, N: ti.i32, masked: ti.templat
     ns = ti.static(state_columns())
     ti.loop_config(serialize=serial)
     for b in range(npts.shape[0]):
-        c = _coms(state, npts, b, P, N, masked, com, vcom, copy, points)
+        c = _coms(state, npts, b, P, N, masked, com, vcom, copy, points, real)
         so = b * P * ns
         n = npts[b]
         o = b * W + head
@@ -161,12 +161,13 @@ def _sight_row(b, cy, d: ti.template(), below: ti.template(), rng, cell, e: ti.t
     """World b's 2 d + 1 distances from what `_see` kept: to the point seen, else `rng` voxels;
     clipped to [0, rng], in world units."""
     for k in ti.static(range(2 * d + 1)):
+        v = ti.cast(0.0, ti.f64)
         if ti.static(below):
-            ek = e[k] if seen[k] else cy - rng
-            out[b, k] = ti.min(ti.max(cy - ek, 0.0), rng) * cell
+            v = cy - (e[k] if seen[k] else cy - rng)
         else:
-            ek = e[k] if seen[k] else cy + rng
-            out[b, k] = ti.min(ti.max(ek - cy, 0.0), rng) * cell
+            v = (e[k] if seen[k] else cy + rng) - cy
+        # np.clip keeps a NaN (a non-finite COM), where max and min would drop it
+        out[b, k] = (v if ti.math.isnan(v) else ti.min(ti.max(v, 0.0), rng)) * cell
 
 
 @ti.kernel
@@ -227,7 +228,7 @@ def com_voxel_units(state: REAL_1, npts: I32_1, P: ti.i32, cell: ti.f64, real: t
         so = b * P * ns
         n = npts[b]
         c = ti.cast(cell, real)
-        sx = state[so] - state[so]  # +0.0 of the state's type
+        sx = ti.cast(0.0, real)  # +0.0 of the state's type
         sy = sx
         for p in range(n):
             sx += state[so + p * ns] / c
@@ -261,7 +262,7 @@ def _pairwise(state: ti.template(), at, ns, n):
 
 @ti.kernel
 def object_coms(state: REAL_1, off: I32_1, n: ti.i32, P: ti.i32, com: F64_2, vcom: F64_2,
-                serial: ti.template()):
+                real: ti.template(), serial: ti.template()):
     """(B, 2) position and velocity COMs of a free object of n <= 128 points, its rows off[b] ..
     off[b] + n - 1 of world b's P state rows, as `tasks.observations.com` computes them from
     `BatchEnv._object_points`' arrays: each coordinate's n values summed along a contiguous axis
@@ -271,7 +272,7 @@ def object_coms(state: REAL_1, off: I32_1, n: ti.i32, P: ti.i32, com: F64_2, vco
     ti.loop_config(serialize=serial)
     for b in range(off.shape[0]):
         at = (b * P + off[b]) * ns
-        z = state[at] - state[at]  # +0.0 in the state's type (its rows are finite)
+        z = ti.cast(0.0, real)  # +0.0 in the state's type
         nf = ti.cast(n, ti.f64)
         for c in ti.static(range(2)):
             com[b, c] = ti.cast(z + _pairwise(state, at + c, ns, n), ti.f64) / nf
@@ -352,8 +353,8 @@ def orientation_terms(src: REAL_1, base: I32_1, stride: ti.i32, ref: REAL_1, ref
 
 @ti.func
 def _eigen_sum(a: ti.template(), b, n):
-    """Row b's first n values of a (B, W) added in the order of Eigen's SSE2 reduction, as
-    `tasks.orientation._eigen_sum` (values past n read as 0)."""
+    """Row b's first n >= 4 values of a (B, W) added in the order of Eigen's SSE2 reduction, as
+    `tasks.orientation._eigen_sum` (n >= 4: a body's or object's points)."""
     z = ti.cast(0.0, ti.f64)
     p0x, p0y = a[b, 0], a[b, 1]
     p1x = a[b, 2] if n > 2 else z

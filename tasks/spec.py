@@ -37,6 +37,9 @@ class Measure:
     # how `orientation` is computed from (points, pos0, mask): `tasks.orientation.orientation`, or
     # the env's kernels that give its bits (`BatchEnv`'s kernel path)
     orientation_of: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray] = orientation
+    # whether the env's kernel path made it: a reward may then compute with `tasks.kernels` (the
+    # same bits), and with numpy where the numpy path (the kernels' oracle) made it
+    kernels: bool = False
 
     @cached_property
     def orientation(self) -> np.ndarray:

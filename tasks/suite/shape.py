@@ -11,7 +11,8 @@ import numpy as np
 from tasks import kernels as EK
 from tasks import observations as O
 from tasks.spec import Measure, TaskSpec
-from tsim import backend, runtime
+from tsim import runtime
+from tsim.backends import ARCHS
 
 
 def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
@@ -43,16 +44,24 @@ def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
 
 def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
     """(B,) area of the convex hull of each world's points (B, N, 2) where mask (B, N): by
-    `tasks.kernels.hull_areas` (the same bits) once Taichi runs and the mask is each world's first
-    points (a body's, in `Measure`), else by `hull_area_numpy`."""
+    `tasks.kernels.hull_areas` (the same bits) once Taichi runs, the mask is each world's first
+    points (a body's, in `Measure`) and they are finite (numpy's sort puts a NaN after the
+    padding, the kernel's would not), else by `hull_area_numpy`."""
     B, N = mask.shape
     n = mask.sum(axis=1)
-    if not (runtime.started() and 2 <= N <= 129 and np.array_equal(mask, np.arange(N)[None, :] < n[:, None])):
+    if not (runtime.started() and 2 <= N <= 129 and np.array_equal(mask, np.arange(N)[None, :] < n[:, None])
+            and np.isfinite(points[mask]).all()):
         return hull_area_numpy(points, mask)
     out = np.empty(B)
     EK.hull_areas(np.ascontiguousarray(points).reshape(-1), N, n.astype(np.int32), np.empty((B, N), np.int32),
-                  np.empty((B, 2 * N + 2)), np.empty(B * (N - 1)), out, backend.get().on_host)
+                  np.empty((B, 2 * N + 2)), np.empty(B * (N - 1)), out, ARCHS[runtime.resolved_arch()].host)
     return out
+
+
+def _hull(m: Measure) -> np.ndarray:
+    """The robots' hull areas of a measure: by the kernel where the env's kernel path made it,
+    by numpy where its numpy path (the oracle) did."""
+    return (hull_area if m.kernels else hull_area_numpy)(m.points, m.mask)
 
 
 def hull_area_numpy(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -75,12 +84,12 @@ def _extent(m: Measure, axis: int) -> np.ndarray:
 
 def area_max(before: Measure, after: Measure):
     """10 x the growth of the robot's convex hull area."""
-    return (hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
+    return (_hull(after) - _hull(before)) * 10
 
 
 def area_min(before: Measure, after: Measure):
     """10 x the shrinking of the robot's convex hull area."""
-    return -(hull_area(after.points, after.mask) - hull_area(before.points, before.mask)) * 10
+    return -(_hull(after) - _hull(before)) * 10
 
 
 def wingspan(before: Measure, after: Measure):

@@ -193,3 +193,26 @@ def test_orientation_kernels_give_numpys_bits_bent_turned_and_at_rest():
             got = EK.orientation(pos.reshape(-1), rows, 2, pos0.reshape(-1), rows, 2, n.astype(np.int32), N,
                                  True)
             assert same_bits(got, orientation(pos, pos0, mask)), (dt, trial)
+
+
+@pytest.mark.parametrize("task", ["Carrier-v0", "BeamToppler-v0", "CaveCrawler-v0", "AreaMaximizer-v0",
+                                  "Flipper-v0"])
+def test_a_non_finite_point_gives_the_numpy_paths_bits(task):
+    """A world whose state holds inf or NaN (a blown-up robot, which the simulator freezes) gets
+    the numpy path's observation and reward to the bit on the kernel path: NaN where numpy has NaN
+    (a clip keeps it; a sum from +0.0 does not start from the first point), finite where numpy
+    is finite (the hull's sort puts a NaN after the padding)."""
+    for col, value, row in ((0, np.inf, "object"), (0, np.nan, "object"), (0, np.nan, 3), (1, np.inf, 3)):
+        envs = [BatchEnv(task, bodies(0), episode_steps=40, fused=f, seeds=0) for f in (True, False)]
+        for e in envs:
+            r = row
+            if row == "object":
+                if not e._obj_index:
+                    continue
+                r = e._obj_index[next(iter(e._obj_index))][1][0, 0]
+            e.sim.state[0, r, col] = value
+        assert same_bits(envs[0].observe(), envs[1].observe()), (col, value, row)
+        a = np.full((envs[0].n_worlds, envs[0].sim.max_actuators), 1.1)
+        outs = [e.step(a) for e in envs]
+        for k in range(2):
+            assert same_bits(outs[0][k], outs[1][k]), (col, value, row, k)
