@@ -122,7 +122,7 @@ def test_kernel_path_equals_numpy_path_in_f32():
     """In an f32 process (float32 state, observations and rewards; COMs in float64 from float32
     sums, as numpy's float32 / int64) the kernels still give numpy's bits."""
     tasks = ("Walker-v0,Carrier-v0,UpStepper-v0,BidirectionalWalker-v0,Catcher-v0,Flipper-v0,CaveCrawler-v0,"
-             "Traverser-v0")
+             "Traverser-v0,AreaMaximizer-v0")
     r = _subprocess("cpu", "f32", tasks, 60)
     assert r.returncode == 0, r.stderr[-2000:]
     assert "ok f32" in r.stdout
