@@ -31,6 +31,8 @@ from tsim.runtime import ti
 class HostArray:
     """The CPU's case: one numpy array that both the host and the kernels use."""
 
+    on_device = False  # the kernels step the host array itself
+
     def __init__(self, host: np.ndarray):
         self._host = host
         self._flat = host.reshape(-1)  # a view: the kernels write the host array in place
@@ -55,6 +57,8 @@ class DeviceMirror:
     `_device_newer`: a kernel wrote the device array since the host's copy was made;
     `_host_newer`: the host array may have been written since the device's copy was made. Never
     both: each side is brought up to date before the other is handed out for writing."""
+
+    on_device = True  # the kernels step `device()`'s array, which a kernel may also write
 
     def __init__(self, host: np.ndarray):
         self._host = host

@@ -19,6 +19,7 @@ from tsim import kernels as K
 from tsim import launch, spirv
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected, is_connected_batch
 from tsim.bodybatch import BodyBatch, build_bodies
+from tsim.kernels.reset import reset_worlds
 from tsim.launch import CachedLaunch
 from tsim.mirror import constant, mirror
 from tsim.rounding import rest, to_pair
@@ -386,17 +387,31 @@ class BatchSim:
         if mask is None:
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
         self.state_version += 1
-        # every world's rows are rewritten by a full reset: a device's values need not come back
-        state = self._state_m.host(write=True, keep=mask is not None)
-        state[sel] = 0.0
-        state[sel, :, 0:2] = self._pos0[sel]
-        state[sel, :, 4:6] = self._pos0[sel]
-        if self._pos0_lo is not None:  # f32: the placement's low parts (`_round_world`)
-            state[sel, :, K.S_POS_LO:K.S_POS_LO + 2] = self._pos0_lo[sel]
-            state[sel, :, K.S_LO_OF:K.S_LO_OF + 2] = self._pos0_lo_of[sel]
+        if mask is not None and self._state_m.on_device:
+            self._reset_on_device(sel)
+        else:
+            # every world's rows are rewritten by a full reset: a device's values need not come back
+            state = self._state_m.host(write=True, keep=mask is not None)
+            state[sel] = 0.0
+            state[sel, :, 0:2] = self._pos0[sel]
+            state[sel, :, 4:6] = self._pos0[sel]
+            if self._pos0_lo is not None:  # f32: the placement's low parts (`_round_world`)
+                state[sel, :, K.S_POS_LO:K.S_POS_LO + 2] = self._pos0_lo[sel]
+                state[sel, :, K.S_LO_OF:K.S_LO_OF + 2] = self._pos0_lo_of[sel]
         self.counts[sel] = self._counts0[sel]  # in place: a cached launch holds its address
         self.actions[sel] = 1.0
         self.time[sel] = 0
+
+    def _reset_on_device(self, sel: np.ndarray) -> None:
+        """`reset`'s state writes for the worlds in `sel` where the state lives on a device: by
+        `tsim.kernels.reset.reset_worlds` there, so the state does not come to the host and back."""
+        worlds = np.flatnonzero(sel).astype(np.int32)
+        if len(worlds) == 0:
+            return
+        f32 = self._pos0_lo is not None  # the placement's low parts (`_round_world`)
+        parts = (self._pos0, self._pos0_lo, self._pos0_lo_of) if f32 else (self._pos0,) * 3
+        flat = (np.ascontiguousarray(a).reshape(-1) for a in parts)
+        reset_worlds(self._state_m.device(), *flat, worlds, self._state_m.shape[1])
 
     def place_object(self, w: int, name: str, cell: tuple[int, int]) -> None:
         """Start free object `name` of world w with its bounding box's bottom-left at grid cell

@@ -3,6 +3,11 @@ works over the CPU's Taichi ndarrays as over a GPU's, so forcing it here tests i
 (that every read sees the last step, every write reaches the next, and nothing else crosses) with
 the CPU's bits as the oracle. Vulkan runs it for real in tests/tsim/test_vulkan.py."""
 
+import os
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -10,6 +15,8 @@ import tsim.sim as sim_mod
 from tasks.env import BatchEnv
 from tsim import mirror as mirror_mod
 from tsim.sampling import sample_robot
+
+ROOT = Path(__file__).resolve().parents[2]
 
 
 class Counted(mirror_mod.DeviceMirror):
@@ -56,8 +63,27 @@ def _actions(env: BatchEnv, t: int) -> np.ndarray:
 @pytest.mark.parametrize("task", ["Walker-v0", "Carrier-v0", "Climber-v2"])
 def test_a_device_state_gives_the_hosts_bits_through_reads_writes_and_resets(task, monkeypatch):
     """The same run with the state on the 'device' and on the host: observations, rewards and
-    states equal to the bit, through outside reads, an outside write (a nudge), a partial reset and
-    a state assigned whole (on the host, the same values written in place)."""
+    states equal to the bit, through outside reads, an outside write (a nudge), a partial reset
+    (on the device by its kernel) and a state assigned whole (on the host, the same values written
+    in place)."""
+    parity(task, monkeypatch)
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_a_device_state_gives_the_hosts_bits_in_f32():
+    """The same in an f32 process, where a reset also writes the placement's low parts."""
+    code = ("import pytest; from tests.tsim.test_mirror import parity; "
+            "[parity(t, pytest.MonkeyPatch()) for t in ('Walker-v0', 'Catcher-v0')]; "
+            "from tsim import runtime; print('ok', runtime.precision())")
+    r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
+                       env={**os.environ, "SGR_PRECISION": "f32", "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0, r.stderr[-2000:]
+    assert "ok f32" in r.stdout
+
+
+def parity(task: str, monkeypatch) -> None:
+    """`test_a_device_state_gives_the_hosts_bits_through_reads_writes_and_resets` of one task."""
     host, dev = _envs(task, 5, False, monkeypatch), _envs(task, 5, True, monkeypatch)
     assert isinstance(dev.sim._state_m, Counted) and not isinstance(host.sim._state_m, Counted)
     for t in range(24):
@@ -105,6 +131,12 @@ def test_stepping_an_env_moves_no_state_between_device_and_host(monkeypatch):
     assert m.copies == {"in": start["in"] + 1, "out": start["out"] + 2}
     env.sim.reset()
     env.step(_actions(env, 0))
+    assert m.copies == {"in": start["in"] + 2, "out": start["out"] + 2}
+    # a partial reset is made on the device (`tsim.kernels.reset`): nothing crosses
+    for t in range(1, 4):
+        env.step(_actions(env, t))
+    env.reset(np.array([True, False, True, False]))
+    env.step(_actions(env, 4))
     assert m.copies == {"in": start["in"] + 2, "out": start["out"] + 2}
 
 
