@@ -78,7 +78,7 @@ class BatchEnv:
         # reward's measure and several observation blocks ask for them); emptied whenever the
         # state may have changed (a step, a reset, a caller writing `sim.state` between steps)
         # (and what kernels measured of this state, under (what, name): "coms", "orientation",
-        # "com_vox")
+        # "com_vox"; `_per_state`)
         self._points_now: dict[str | tuple[str, str], tuple[np.ndarray, ...] | np.ndarray] = {}
         self.task_state: dict[str, np.ndarray] = {}
         self._rngs: dict[int, random.Random] = {}
@@ -100,21 +100,20 @@ class BatchEnv:
         # device and back (Vulkan: only those a kernel reads)
         self._cpu = self._serial = self.sim.backend.on_host
         self._ti_real = EK.ti.f32 if self.dtype == np.float32 else EK.ti.f64
-        # each free object's first row in every world, for `tasks.kernels.object_coms` (objects of
-        # at most 128 points, the pairwise sum's one block; larger ones keep numpy)
-        first = {o.name: self._obj_index[o.name][1][:, 0] for o in self.sim.free_objects}
-        self._obj_rows = {o.name: (constant(first[o.name].astype(np.int32), self._cpu), o.body.n_points)
-                          for o in self.sim.free_objects if o.body.n_points <= 128}
-        # for `tasks.kernels.orientation`: each world's first row of the robots' (B, N, 2) arrays,
-        # and of each such object in the state (with its point count, per world)
+        # for `tasks.kernels.object_coms` and `orientation`: each free object's first row in the
+        # flat state in every world, its point count, and that count per world (objects of at most
+        # 128 points, the pairwise sum's one block; larger ones keep numpy)
         P = self.sim.state_shape[1]
+        first = {name: np.arange(B) * P + pts[:, 0] for name, (_, pts) in self._obj_index.items()}
+        self._obj_rows = {
+            o.name: (constant(first[o.name].astype(np.int32), self._cpu), o.body.n_points,
+                     constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
+            for o in self.sim.free_objects if o.body.n_points <= 128}
+        # for `tasks.kernels.orientation`: each world's first row of the robots' (B, N, 2) arrays
+        # and of the flat state
         self._dense_rows = constant((np.arange(B) * N).astype(np.int32), self._cpu)
         self._state_rows = constant((np.arange(B) * P).astype(np.int32), self._cpu)
         self._sight_plans: dict[tuple[str, ...], tuple] = {}  # `_object_sight`'s, by objects seen
-        self._obj_state_rows = {
-            o.name: (constant((np.arange(B) * P + first[o.name]).astype(np.int32), self._cpu),
-                     o.body.n_points, constant(np.full(B, o.body.n_points, dtype=np.int32), self._cpu))
-            for o in self.sim.free_objects if o.name in self._obj_rows}
         self._n_act = self.n_actuators.astype(np.int32)
         self._masked = bool(self.sim.free_objects)
         # the robots' points before and after a step (two, used in turn), if rewards read them
@@ -155,48 +154,48 @@ class BatchEnv:
 
     def _object_points(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(B, n, 2) positions and velocities of free object `name` in every world."""
-        hit = self._points_now.get(name)
-        if hit is not None:
-            return hit
-        try:
+        if name not in self._obj_index:
+            raise KeyError(f"no free object {name!r} in world {self.sim.world.name}")
+
+        def gather():
             rows, pts = self._obj_index[name]
-        except KeyError:
-            raise KeyError(f"no free object {name!r} in world {self.sim.world.name}") from None
-        s = self.sim.read_state()[rows, pts].transpose(0, 2, 1)
-        # (B, 2, n) contiguous, seen as (B, n, 2): numpy's sums over the points depend on the
-        # layout, and this one gives the COMs evogym's rewards were validated with, bit for bit
-        out = (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
-               np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
-        self._points_now[name] = out
-        return out
+            s = self.sim.read_state()[rows, pts].transpose(0, 2, 1)
+            # (B, 2, n) contiguous, seen as (B, n, 2): numpy's sums over the points depend on the
+            # layout, and this one gives the COMs evogym's rewards were validated with, bit for bit
+            return (np.ascontiguousarray(s[:, 0:2]).transpose(0, 2, 1),
+                    np.ascontiguousarray(s[:, 2:4]).transpose(0, 2, 1))
+        return self._per_state(name, gather)
+
+    def _per_state(self, key, compute):
+        """`compute()`, once per state: kept in `_points_now`, which is emptied whenever the state
+        may have changed."""
+        hit = self._points_now.get(key)
+        if hit is None:
+            hit = self._points_now[key] = compute()
+        return hit
 
     def _object_coms(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         """(B, 2) position and velocity COMs of free object `name` (`O.com` of `_object_points`):
         on the kernel path by `tasks.kernels.object_coms`, the same bits without gathering the
         object's points (on a device the state stays there)."""
-        key = ("coms", name)
-        hit = self._points_now.get(key)
-        if hit is not None:
-            return hit
-        if self.fused and name in self._obj_rows:
-            off, n = self._obj_rows[name]
-            out = (np.empty((self.n_worlds, 2)), np.empty((self.n_worlds, 2)))
-            EK.object_coms(self.sim.kernel_state(), off, n, self.sim.state_shape[1], out[0], out[1],
-                           self._ti_real, self._serial)
-        else:
+        def compute():
+            if self.fused and name in self._obj_rows:
+                rows, n, _ = self._obj_rows[name]
+                out = (np.empty((self.n_worlds, 2)), np.empty((self.n_worlds, 2)))
+                EK.object_coms(self.sim.kernel_state(), rows, n, out[0], out[1], self._ti_real, self._serial)
+                return out
             pos, vel = self._object_points(name)
             ones = np.ones(pos.shape[:2], dtype=bool)
-            out = (O.com(pos, ones), O.com(vel, ones))
-        self._points_now[key] = out
-        return out
+            return O.com(pos, ones), O.com(vel, ones)
+        return self._per_state(("coms", name), compute)
 
     def _robot_orientation(self, points: np.ndarray, pos0: np.ndarray, mask: np.ndarray) -> np.ndarray:
         """`O.orientation(points, pos0, mask)` of the robots' (B, N, 2) points by
         `tasks.kernels.orientation` (the same bits; mask is the env's own)."""
-        B, N = mask.shape
         rows = self._dense_rows
         return EK.orientation(np.ascontiguousarray(points).reshape(-1), rows, 2,
-                              np.ascontiguousarray(pos0).reshape(-1), rows, 2, self._npts, N, self._serial)
+                              np.ascontiguousarray(pos0).reshape(-1), rows, 2, self._npts, mask.shape[1],
+                              self._serial)
 
     def _robot_orientation_now(self) -> np.ndarray:
         """(B,) the robots' orientation now (`O.orientation` of `_robot()`'s points), by
@@ -212,17 +211,11 @@ class BatchEnv:
         if name not in self._obj_rows:
             pos = self._object_points(name)[0]
             return O.orientation(pos, self._object_pos0(name), np.ones(pos.shape[:2], dtype=bool))
-        key = ("orientation", name)
-        hit = self._points_now.get(key)
-        if hit is not None:
-            return hit
         sim = self.sim
-        B, P, ns = sim.state_shape
-        rows, n, count = self._obj_state_rows[name]
-        out = EK.orientation(sim.kernel_state(), rows, ns, sim.initial_positions.reshape(-1), rows, 2, count,
-                             n, self._serial)
-        self._points_now[key] = out
-        return out
+        rows, n, count = self._obj_rows[name]
+        ref = sim.initial_positions.reshape(-1)
+        return self._per_state(("orientation", name), lambda: EK.orientation(
+            sim.kernel_state(), rows, sim.state_shape[2], ref, rows, 2, count, n, self._serial))
 
     def _object_now(self, name: str) -> np.ndarray:
         """(B, 2, n) current points of world object `name`: a simulated one's state, a static
@@ -339,16 +332,13 @@ class BatchEnv:
     def _com_vox(self) -> np.ndarray:
         """(B, 2) `O.com_voxel_units` of the robots now, by `tasks.kernels.com_voxel_units`
         (once per state)."""
-        key = ("com_vox", "")
-        hit = self._points_now.get(key)
-        if hit is not None:
-            return hit[0]
-        sim = self.sim
-        com_vox = np.empty((self.n_worlds, 2))
-        EK.com_voxel_units(sim.kernel_state(), self._npts, sim.state_shape[1], C.CELL, self._ti_real,
-                           com_vox, self._serial)
-        self._points_now[key] = (com_vox, com_vox)
-        return com_vox
+        def compute():
+            sim = self.sim
+            com_vox = np.empty((self.n_worlds, 2))
+            EK.com_voxel_units(sim.kernel_state(), self._npts, sim.state_shape[1], C.CELL, self._ti_real,
+                               com_vox, self._serial)
+            return com_vox
+        return self._per_state(("com_vox", ""), compute)
 
     def _object_sight(self, dist: int, below: bool, objects: tuple[str, ...]) -> np.ndarray | None:
         """`O.terrain_sight` over the named objects' current points (`O._sight_points`), by

@@ -261,17 +261,17 @@ def _pairwise(state: ti.template(), at, ns, n):
 
 
 @ti.kernel
-def object_coms(state: REAL_1, off: I32_1, n: ti.i32, P: ti.i32, com: F64_2, vcom: F64_2,
-                real: ti.template(), serial: ti.template()):
-    """(B, 2) position and velocity COMs of a free object of n <= 128 points, its rows off[b] ..
-    off[b] + n - 1 of world b's P state rows, as `tasks.observations.com` computes them from
+def object_coms(state: REAL_1, rows: I32_1, n: ti.i32, com: F64_2, vcom: F64_2, real: ti.template(),
+                serial: ti.template()):
+    """(B, 2) position and velocity COMs of a free object of n <= 128 points, in world b the flat
+    state's rows rows[b] .. rows[b] + n - 1, as `tasks.observations.com` computes them from
     `BatchEnv._object_points`' arrays: each coordinate's n values summed along a contiguous axis
     (numpy's pairwise sum, `_pairwise`) after +0.0 (add.reduce's initial value), in the state's
     type, then divided by n in float64 (numpy's real / int64)."""
     ns = ti.static(state_columns())
     ti.loop_config(serialize=serial)
-    for b in range(off.shape[0]):
-        at = (b * P + off[b]) * ns
+    for b in range(rows.shape[0]):
+        at = rows[b] * ns
         z = ti.cast(0.0, real)  # +0.0 in the state's type
         nf = ti.cast(n, ti.f64)
         for c in ti.static(range(2)):
