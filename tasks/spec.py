@@ -40,11 +40,22 @@ class Measure:
     # whether the env's kernel path made it: a reward may then compute with `tasks.kernels` (the
     # same bits), and with numpy where the numpy path (the kernels' oracle) made it
     kernels: bool = False
+    # what rewards derived from this measure, by name (`derived`)
+    _derived: dict[str, np.ndarray] = field(default_factory=dict, repr=False, compare=False)
 
     @cached_property
     def orientation(self) -> np.ndarray:
         """(B,) evogym's orientation of the robot (`object_orientation_at_time`)."""
         return self.orientation_of(self.points, self.pos0, self.mask)
+
+    def derived(self, name: str, compute: Callable[[Measure], np.ndarray]) -> np.ndarray:
+        """`compute(self)`, once per measure: the env passes a step's `after` as the next step's
+        `before`, so a reward that reads a costly quantity of both (a hull's area) computes it
+        once per state. Treat the result as read-only: the next step reads it again."""
+        hit = self._derived.get(name)
+        if hit is None:
+            hit = self._derived[name] = compute(self)
+        return hit
 
 
 @dataclass(frozen=True)

@@ -50,7 +50,7 @@ def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
     B, N = mask.shape
     n = mask.sum(axis=1)
     if not (runtime.started() and 2 <= N <= 129 and np.array_equal(mask, np.arange(N)[None, :] < n[:, None])
-            and np.isfinite(points[mask]).all()):
+            and (np.isfinite(points).all() or np.isfinite(points[mask]).all())):
         return hull_area_numpy(points, mask)
     out = np.empty(B)
     EK.hull_areas(np.ascontiguousarray(points).reshape(-1), N, n.astype(np.int32), np.empty((B, N), np.int32),
@@ -59,9 +59,9 @@ def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def _hull(m: Measure) -> np.ndarray:
-    """The robots' hull areas of a measure: by the kernel where the env's kernel path made it,
-    by numpy where its numpy path (the oracle) did."""
-    return (hull_area if m.kernels else hull_area_numpy)(m.points, m.mask)
+    """The robots' hull areas of a measure (once per measure): by the kernel where the env's kernel
+    path made it, by numpy where its numpy path (the oracle) did."""
+    return m.derived("hull_area", lambda m: (hull_area if m.kernels else hull_area_numpy)(m.points, m.mask))
 
 
 def hull_area_numpy(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
@@ -78,8 +78,11 @@ def hull_area_numpy(points: np.ndarray, mask: np.ndarray) -> np.ndarray:
 
 
 def _extent(m: Measure, axis: int) -> np.ndarray:
-    v = m.points[:, :, axis]
-    return np.where(m.mask, v, -np.inf).max(axis=1) - np.where(m.mask, v, np.inf).min(axis=1)
+    """The robots' extent along `axis` (max - min of their points), once per measure."""
+    def compute(m: Measure) -> np.ndarray:
+        v = m.points[:, :, axis]
+        return np.where(m.mask, v, -np.inf).max(axis=1) - np.where(m.mask, v, np.inf).min(axis=1)
+    return m.derived(f"extent{axis}", compute)
 
 
 def area_max(before: Measure, after: Measure):

@@ -146,7 +146,8 @@ def test_kernel_path_equals_numpy_path_on_vulkan():
 def test_kernel_com_voxel_units_and_sight_equal_numpys():
     """The sight kernels alone against `tasks.observations`: the COM in voxel units to the bit after
     some steps, and the floor and ceiling sight for COMs anywhere, on lattice lines and half-way
-    between them (where evogym's open windows drop terrain points) included."""
+    between them (where evogym's open windows drop terrain points) included, beyond the terrain's
+    ends and not finite."""
     from tasks import kernels as EK
     from tasks import observations as O
     env = BatchEnv("UpStepper-v0", bodies(5) * 3, episode_steps=50, fused=True)
@@ -160,11 +161,13 @@ def test_kernel_com_voxel_units_and_sight_equal_numpys():
     terrain = env._terrain
     tv = np.ascontiguousarray(terrain / 0.1)
     cv = np.concatenate([rng.uniform(0, 80, (40, 2)), np.round(rng.uniform(0, 80, (20, 2))),
-                         np.round(rng.uniform(0, 80, (20, 2))) + 0.5])
-    for dist, below in ((5, True), (3, False), (2, True)):
+                         np.round(rng.uniform(0, 80, (20, 2))) + 0.5, rng.uniform(-20, 0, (4, 2)),
+                         [[tv[0].max() + 3, 2.0], [tv[0].min() - 0.5, 3.0], [np.nan, 1.0], [5.0, np.nan],
+                          [np.inf, 1.0], [-np.inf, 1.0], [5.0, np.inf]]])
+    for dist, below in ((5, True), (3, False), (2, True), (0, False)):
         out = np.empty((len(cv), 2 * dist + 1))
         EK.terrain_sight(cv, tv[0], tv[1], dist, below, 5.0, 0.1, out, False)
-        assert same_bits(out, O.terrain_sight(cv, terrain, dist, below=below))
+        assert same_bits(out, O.terrain_sight(cv, terrain, dist, below=below)), (dist, below)
 
 
 def test_orientation_kernels_give_numpys_bits_bent_turned_and_at_rest():

@@ -232,6 +232,31 @@ def test_hull_area_kernel_gives_the_numpy_bits():
             assert got.tobytes() == want.tobytes(), (dt, trial)
 
 
+def test_a_hull_area_is_computed_once_per_state(monkeypatch):
+    """The kernel path passes a step's `after` measure as the next step's `before`, and the shape
+    rewards keep what they derive on it (`Measure.derived`): one hull area per step after the
+    first, and the same rewards as the numpy path, which measures afresh each step."""
+    from tasks.suite import shape
+
+    calls = []
+    real = shape.hull_area
+
+    def counted(points, mask):
+        calls.append(1)
+        return real(points, mask)
+
+    monkeypatch.setattr(shape, "hull_area", counted)
+    bodies = [np.array([[3, 3, 3], [3, 4, 3], [4, 0, 4]]), np.array([[4, 3], [3, 4]])] * 4
+    rng = np.random.default_rng(3)
+    acts = rng.uniform(0.6, 1.6, (6, len(bodies), 8))
+    rewards = {}
+    for fused in (True, False):
+        env = BatchEnv("AreaMaximizer-v0", bodies, episode_steps=10, fused=fused)
+        rewards[fused] = [env.step(a[:, :env.sim.max_actuators])[1] for a in acts]
+    assert len(calls) == 2 + (len(acts) - 1)
+    assert np.array_equal(np.array(rewards[True]), np.array(rewards[False]))
+
+
 @pytest.mark.parametrize("task", NEW_TASKS)
 def test_gymnasium_env_checker(task):
     body = np.array([[3, 3, 3], [3, 0, 3], [4, 0, 4]])
