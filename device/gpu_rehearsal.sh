@@ -8,8 +8,13 @@
 # docs/BENCHMARKS.md ("Running on a GPU").
 set -euo pipefail
 cd "$(dirname "$0")/.."
-PY312=${PY312:-$(command -v python3.12 || ls -d "$(pyenv root 2>/dev/null || echo ~/.pyenv)"/versions/3.12*/bin/python3.12 2>/dev/null | head -1)}
-[ -x "$PY312" ] || { echo "gpu_rehearsal: no Python 3.12 (pyenv install 3.12)"; exit 1; }
+# the first Python 3.12 that runs (pyenv's shim is on the PATH but fails where 3.12 is not selected)
+if [ -z "${PY312:-}" ]; then
+  for c in $(command -v python3.12) "$(pyenv root 2>/dev/null || echo ~/.pyenv)"/versions/3.12*/bin/python3.12; do
+    if [ -x "$c" ] && "$c" -c 'import sys; assert sys.version_info[:2] == (3, 12)' 2>/dev/null; then PY312=$c; break; fi
+  done
+fi
+[ -x "${PY312:-}" ] || { echo "gpu_rehearsal: no Python 3.12 (pyenv install 3.12)"; exit 1; }
 ENV=${ENV_DIR:-${TMPDIR:-/tmp}/sgr-device-env}
 if [ ! -x "$ENV/bin/python" ]; then
   "$PY312" -m venv "$ENV"
