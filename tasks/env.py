@@ -201,8 +201,9 @@ class BatchEnv:
         """(B,) the robots' orientation now (`O.orientation` of `_robot()`'s points), by
         `tasks.kernels.orientation` over the state's rows."""
         sim = self.sim
-        ref = self._pos0.reshape(-1)
-        return EK.orientation(sim.kernel_state(), self._state_rows, sim.state_shape[2], ref,
+        if self._pos0_k is None:  # on a device, copied there once per full reset
+            self._pos0_k = constant(self._pos0.reshape(-1), self._cpu)
+        return EK.orientation(sim.kernel_state(), self._state_rows, sim.state_shape[2], self._pos0_k,
                               self._dense_rows, 2, self._npts, self._mask.shape[1], self._serial)
 
     def _object_orientation(self, name: str) -> np.ndarray:
@@ -213,7 +214,7 @@ class BatchEnv:
             return O.orientation(pos, self._object_pos0(name), np.ones(pos.shape[:2], dtype=bool))
         sim = self.sim
         rows, n, count = self._obj_rows[name]
-        ref = sim.initial_positions.reshape(-1)
+        ref = sim.kernel_initial_positions()[0]
         return self._per_state(("orientation", name), lambda: EK.orientation(
             sim.kernel_state(), rows, sim.state_shape[2], ref, rows, 2, count, n, self._serial))
 
@@ -429,6 +430,7 @@ class BatchEnv:
             self.elapsed = np.zeros(self.n_worlds, dtype=np.int64)
             self.terminated = np.zeros(self.n_worlds, dtype=bool)
             self._pos0 = self._robot()[0].copy()
+            self._pos0_k = None  # `_robot_orientation_now`'s copy of it
         else:
             self.elapsed[mask] = 0
             self.terminated[mask] = False

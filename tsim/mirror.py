@@ -91,8 +91,11 @@ class DeviceMirror:
         return self._device
 
     def assign(self, value: np.ndarray) -> None:
-        """Copy `value` into the array (its shape; cast to its type)."""
-        np.copyto(self.host(write=True, keep=False), value, casting="unsafe")
+        """Copy `value` into the array (its shape; cast to its type). A `value` that views the host
+        array itself reads what the host array holds after the device's newer values came back,
+        as on the host, where such a view sees every launch."""
+        keep = np.may_share_memory(value, self._host)
+        np.copyto(self.host(write=True, keep=keep), value, casting="unsafe")
 
 
 def mirror(host: np.ndarray, on_host: bool) -> HostArray | DeviceMirror:

@@ -281,6 +281,8 @@ class BatchSim:
         # f32: the placement's low parts (its rest below float32, `_round_world`), and the
         # positions they belong to (a `reset` after `initial_positions` was written drops them)
         self._pos0_lo = self._pos0_lo_of = None
+        # (version, arrays) of `kernel_initial_positions`; the version moves on with every change
+        self._pos0_version, self._pos0_kernel = 0, None
         if real != np.float64:
             self._pos0_lo = np.zeros(pos0.shape, dtype=real)
             self._pos0_lo_of = np.zeros(pos0.shape, dtype=real)
@@ -408,16 +410,29 @@ class BatchSim:
         worlds = np.flatnonzero(sel).astype(np.int32)
         if len(worlds) == 0:
             return
-        f32 = self._pos0_lo is not None  # the placement's low parts (`_round_world`)
-        parts = (self._pos0, self._pos0_lo, self._pos0_lo_of) if f32 else (self._pos0,) * 3
-        flat = (np.ascontiguousarray(a).reshape(-1) for a in parts)
-        reset_worlds(self._state_m.device(), *flat, worlds, self._state_m.shape[1])
+        reset_worlds(self._state_m.device(), *self.kernel_initial_positions(), worlds, self._state_m.shape[1])
+
+    def kernel_initial_positions(self) -> tuple:
+        """`initial_positions` flat, and in f32 the placement's low parts (`_round_world`; else a
+        one-element stand-in), as kernels take them: on a device copied there once per placement
+        (it changes only by `place_object`, `shift_robots` or a write through
+        `initial_positions`), so a partial reset or an object's orientation does not send
+        (B, P, 2) arrays across the bus each time."""
+        cached = self._pos0_kernel
+        if cached is None or cached[0] != self._pos0_version:
+            f32 = self._pos0_lo is not None
+            parts = (self._pos0, self._pos0_lo, self._pos0_lo_of) if f32 else (
+                self._pos0, np.zeros(1, self.dtype), np.zeros(1, self.dtype))
+            cached = self._pos0_kernel = (self._pos0_version, tuple(
+                constant(np.ascontiguousarray(a).reshape(-1), self.backend.on_host) for a in parts))
+        return cached[1]
 
     def place_object(self, w: int, name: str, cell: tuple[int, int]) -> None:
         """Start free object `name` of world w with its bounding box's bottom-left at grid cell
         `cell` from the next `reset` of that world on (objects placed anew each episode, e.g.
         Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
         k, obj = self._free_object(name)
+        self._pos0_version += 1
         off = self._obj_offsets[k][w]
         self._pos0_f64[w, off:off + obj.body.n_points] = obj.body.place(int(cell[0]), int(cell[1])).T
         if self._pos0 is not self._pos0_f64:  # f32: the world rounded anew (`tsim.rounding`)
@@ -431,6 +446,7 @@ class BatchSim:
         if dx.shape != (self.n_worlds,) or not np.all(np.isfinite(dx)):
             raise ValueError(f"shift_robots needs {self.n_worlds} finite shifts, got shape {dx.shape}")
         robot = np.arange(self._pos0.shape[1])[None, :] < self.n_robot_points[:, None]
+        self._pos0_version += 1
         self._pos0_f64[:, :, 0] += np.where(robot, dx[:, None], 0.0)
         if self._pos0 is not self._pos0_f64:  # f32: shifted in float64, then rounded anew
             self._round_placement(range(self.n_worlds))
@@ -570,7 +586,8 @@ class BatchSim:
         place by `step` and `reset`. Each read moves `state_version` on, as the reader may write
         it: `BatchEnv` then measures the state anew rather than reuse its last measurement. So
         write through `state` each time, not through a reference kept across any launch (a
-        `step`, or `BatchEnv`'s measuring and observing kernels): on a device a launch copies in
+        `step`, a partial `reset(mask)`, or `BatchEnv`'s measuring and observing kernels): on a
+        device a launch copies in
         what was written through the last read and no later write, and a reference kept from
         before a step does not see that step (`tsim.mirror`). To read only, `read_state`."""
         self.state_version += 1
@@ -629,6 +646,7 @@ class BatchSim:
         object's orientation). Writing it moves where the next reset starts, as `place_object`
         and `shift_robots` do (in f32 until one of them, which round evogym's float64 placement
         anew, `tsim.rounding`)."""
+        self._pos0_version += 1  # the caller may write it (`kernel_initial_positions`)
         return self._pos0
 
     @property
@@ -650,6 +668,7 @@ class BatchSim:
         """(2, n) point positions of free object `name` in world w, world units; KeyError when the
         world has no free object of that name (fixed objects are terrain, not simulated)."""
         k, obj = self._free_object(name)
+        self._pos0_version += 1
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 0:2].T.copy()
 
@@ -657,6 +676,7 @@ class BatchSim:
         """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
         as `object_pos`."""
         k, obj = self._free_object(name)
+        self._pos0_version += 1
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 2:4].T.copy()
 

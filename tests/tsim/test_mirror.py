@@ -106,8 +106,34 @@ def parity(task: str, monkeypatch) -> None:
             host.sim.state[...] = nudged
             dev.sim.state = nudged
             assert host.observe().tobytes() == dev.observe().tobytes()
+        if t == 19:  # a view of the state kept across a step, then assigned: on the host it saw
+            # the step, so the assignment changes nothing; so on the device
+            kept = [e.sim.read_state() for e in (host, dev)]
+        if t == 20:
+            host.sim.state, dev.sim.state = kept
+            assert host.observe().tobytes() == dev.observe().tobytes()
     assert host.sim.read_state().tobytes() == dev.sim.read_state().tobytes()
     assert np.array_equal(host.sim.counts, dev.sim.counts)
+
+
+def test_a_partial_reset_on_the_device_starts_from_the_placement_as_it_now_is(monkeypatch):
+    """The placement a partial reset on the device starts from (`kernel_initial_positions`) is
+    copied there once per placement: a write through `initial_positions` and a `shift_robots`
+    each reach the next partial reset (the kernels' constant arrays copied here, as a device
+    holds its own copy)."""
+    monkeypatch.setattr(sim_mod, "constant", lambda a, on_host: np.array(a))
+    host, dev = _envs("Walker-v0", 4, False, monkeypatch), _envs("Walker-v0", 4, True, monkeypatch)
+    mask = np.array([True, False, True, True])
+
+    def lift(sim):
+        sim.initial_positions[:, :, 1] += 0.01
+
+    for t, change in enumerate((lift, lambda sim: sim.shift_robots(np.full(4, 0.02)), lift)):
+        for e in (host, dev):
+            e.step(_actions(e, t))
+            change(e.sim)
+            e.sim.reset(mask)
+        assert host.sim.read_state().tobytes() == dev.sim.read_state().tobytes(), t
 
 
 def test_stepping_an_env_moves_no_state_between_device_and_host(monkeypatch):
