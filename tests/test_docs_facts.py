@@ -8,6 +8,8 @@
    exists: a backticked `bench/x.py`, `configs/...`, `docs/...` is a file of the repository
    (`../shared/...`: of the shared folder beside it), and `sgr <command>` is a command of the CLI's
    parser.
+3. Every option on a command line there is one its command takes (`sgr <command> --opt`, `python
+   bench/x.py --opt`), and a script's required options are given.
 """
 
 import json
@@ -37,6 +39,10 @@ THE_READERS = {"tasks/suite/hopper.py": "TASKS.md: how to add a task", "evolve/m
                "how to add a method"}
 # `sgr CMD` at the start of a command line (after `VAR=value`s, `&&`, `|`), not `sgr` in prose
 COMMAND = re.compile(r"(?:^|(?:&&|\|)\s*)(?:[A-Z_]+=\S*\s+)*sgr\s+([a-z][\w-]*)")
+# `python SCRIPT.py` of the repository's scripts, and an option on a command line
+SCRIPT = re.compile(r"(?:[A-Z_]+=\S*\s+)*(?:\S*/)?python3?\s+"
+                    r"((?:bench|studies|tools|device|references|examples)/[\w/]+\.py)")
+OPTION = re.compile(r"(?<![\w-])(--[a-z][\w-]*)")
 
 
 def section(text: str, heading: str) -> str:
@@ -184,6 +190,76 @@ def sgr_commands(text: str) -> set[str]:
     return {m for span in spans(text) for m in COMMAND.findall(span.strip().removeprefix("$ "))}
 
 
+def command_lines(text: str) -> list[str]:
+    """`spans`, with a code block's lines ending in a backslash joined to the next."""
+    out: list[str] = []
+    for line in spans(text):
+        if out and out[-1].endswith("\\"):
+            out[-1] = out[-1][:-1] + " " + line
+        else:
+            out.append(line)
+    return out
+
+
+def named_commands(text: str) -> list[tuple[str, set[str]]]:
+    """(what, its options) of every `sgr CMD` or `python SCRIPT.py` command line: what is
+    "sgr CMD" or the script's path, the options every `--option` written after it on the same
+    command (up to `&&`, `|` or `;`)."""
+    found = []
+    for line in command_lines(text):
+        for part in re.split(r"&&|\|\||;|\|", line.strip().removeprefix("$ ")):
+            m = COMMAND.match(part.strip()) or SCRIPT.match(part.strip())
+            if m is not None:
+                what = f"sgr {m.group(1)}" if m.re is COMMAND else m.group(1)
+                found.append((what, set(OPTION.findall(part.strip()[m.end():]))))
+    return found
+
+
+def sgr_options() -> dict[str, set[str]]:
+    """"sgr CMD" -> the options its parser takes (the top-level ones included)."""
+    from evolve.cli import build_parser
+
+    parser = build_parser()
+    top = {o for a in parser._actions for o in a.option_strings}
+    sub = next(a for a in parser._actions if a.dest == "cmd")
+    return {f"sgr {name}": top | {o for a in p._actions for o in a.option_strings}
+            for name, p in sub.choices.items()}
+
+
+def script_options(path: Path) -> tuple[set[str], set[str]] | None:
+    """(the options, the required ones) a script's argparse parser declares, read from its source
+    (reading runs no code); None where it declares none (it reads its arguments another way)."""
+    import ast
+
+    options, required = set(), set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Call) and getattr(node.func, "attr", None) == "add_argument":
+            names = {a.value for a in node.args
+                     if isinstance(a, ast.Constant) and str(a.value).startswith("--")}
+            options |= names
+            if any(k.arg == "required" and getattr(k.value, "value", False) is True for k in node.keywords):
+                required |= names
+    return (options | {"--help"}, required) if options else None
+
+
+def wrong_options(text: str) -> list[str]:
+    """Each command line of `named_commands(text)` with an option that its command does not take, or
+    without one its script requires (a missing command or file: the tests above)."""
+    known = sgr_options()
+    wrong = []
+    for what, options in named_commands(text):
+        if what.startswith("sgr "):
+            takes, needs = known.get(what, options), set()
+        else:
+            parsed = script_options(ROOT / what) if (ROOT / what).exists() else None
+            takes, needs = parsed if parsed is not None else (options, set())
+            if "--help" in options:
+                needs = set()
+        wrong += [f"{what} {o}: no such option" for o in sorted(options - takes)]
+        wrong += [f"{what} without {o}" for o in sorted(needs - options)]
+    return sorted(set(wrong))
+
+
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_every_file_path_a_page_names_exists(page):
     missing = sorted(p for p in named_paths(page.read_text())
@@ -206,6 +282,24 @@ def test_every_sgr_command_a_page_names_exists(page):
     sub = next(a for a in build_parser()._actions if a.dest == "cmd")
     unknown = sorted(sgr_commands(page.read_text()) - set(sub.choices))
     assert not unknown, f"{page.name} names sgr commands that do not exist: {unknown}"
+
+
+@pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
+def test_every_option_a_command_line_names_is_one_its_command_takes(page):
+    """`sgr CMD --opt` against the CLI's parser; `python bench/x.py --opt` (and studies/, tools/,
+    device/, references/) against the options the script's argparse declares, its required ones
+    included, read from its source."""
+    wrong = wrong_options(page.read_text())
+    assert not wrong, f"{page.name} names command lines that would not run: {wrong}"
+
+
+def test_the_option_check_can_fail():
+    text = ("Run `sgr evolve --frobnicate 3`, `python bench/gpu_probe.py` and\n```\n"
+            "python bench/env_host_tasks.py --robots 8 \\\n    --tasks A --nope\n```\n")
+    assert wrong_options(text) == ["bench/env_host_tasks.py --nope: no such option",
+                                   "bench/gpu_probe.py without --out",
+                                   "sgr evolve --frobnicate: no such option"]
+    assert not wrong_options("`sgr evolve --task Walker-v0 --debug && python bench/gpu_probe.py --out d`")
 
 
 def test_the_path_and_command_checks_can_fail():
