@@ -329,17 +329,22 @@ def bodies_markdown(rows: list[dict]) -> str:
         return ""
     out = io.StringIO()
     out.write("\n## Champion bodies\n\nEach run's champion body (docs/EVOLVE.md \"Body measures\"): the "
-              "rows x columns of its bounding box, its share of actuator voxels, its left-right and "
+              "rows x columns of its bounding box, the share of the box it fills, its materials' shares of "
+              "its voxels (rigid / soft / horizontal / vertical actuators), its left-right and "
               "top-bottom symmetry (1: its own mirror image), its irregularity (the compressed size of its "
               "material grid, 0 for one material throughout); and the body diversity of the run's last "
               "generation (the mean pairwise distance per cell of its valid bodies; - for runs made before "
               "it was recorded).\n\n")
-    out.write("| run | body | actuators | symmetry lr | symmetry tb | irregularity | final diversity |\n"
-              + "|---" * 7 + "|\n")
+    out.write("| run | body | fill | rigid / soft / h / v | symmetry lr | symmetry tb | irregularity | "
+              "final diversity |\n" + "|---" * 8 + "|\n")
     for r in sorted(shown, key=lambda r: r["run"]):
-        cells = (["-"] * 5 if "width" not in r else
-                 [f"{r['height']}x{r['width']}", f"{100 * r['actuator']:.0f} %", f"{r['symmetry_lr']:.2f}",
-                  f"{r['symmetry_tb']:.2f}", str(r["irregularity"])])
+        shares = ("rigid", "soft", "h_actuator", "v_actuator")
+        materials = (" / ".join(f"{100 * r[k]:.0f}" for k in shares) + " %"
+                     if all(k in r for k in shares) else "-")
+        fill = f"{100 * r['fill']:.0f} %" if "fill" in r else "-"
+        cells = (["-"] * 6 if "width" not in r else
+                 [f"{r['height']}x{r['width']}", fill, materials,
+                  f"{r['symmetry_lr']:.2f}", f"{r['symmetry_tb']:.2f}", str(r["irregularity"])])
         diversity = f"{r['body_diversity']:.3f}" if "body_diversity" in r else "-"
         out.write(f"| {r['run']} | " + " | ".join(cells) + f" | {diversity} |\n")
     return out.getvalue()
@@ -484,9 +489,11 @@ SETTING_COLUMNS = ("shape", "pop", "steps", "evaluation", "selection", "precisio
 
 
 # summary.csv's columns of a run's champion body (evolve/methods/body_measures.py: its bounding box's
-# width and height, actuator share, symmetries, irregularity) and of its last generation's population
+# width and height, the share of its box it fills, each material's share of its voxels and both
+# actuators' together, symmetries, irregularity) and of its last generation's population
 # (body_diversity, generations.csv's last row): empty where a run has no body or no such column
-BODY_COLUMNS = ("width", "height", "actuator", "symmetry_lr", "symmetry_tb", "irregularity", "body_diversity")
+BODY_COLUMNS = ("width", "height", "fill", "rigid", "soft", "h_actuator", "v_actuator", "actuator",
+                "symmetry_lr", "symmetry_tb", "irregularity", "body_diversity")
 
 
 def write_summary_csv(rows: list[dict], path: Path) -> None:

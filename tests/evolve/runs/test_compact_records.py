@@ -150,6 +150,25 @@ def test_an_old_champion_whose_genome_decodes_otherwise_keeps_its_controller_in_
     assert w == record["controller"]["layers"][0]["weights"][0][0]
 
 
+def test_every_committed_sgr_champion_decodes_again_to_its_recorded_body_and_weights():
+    """The results' champion files (results/**/champion*.json) in the compact format are decoded
+    again from their genomes and checked against their recorded bodies and weights' SHA-256s:
+    data written by the runs, over every body decoder and at 5x5, 10x5 and 10x10, so a change to
+    any decoder's bits (or to the default's, which every older run used) fails here."""
+    from evolve.methods.sgr_record import FORMAT, rebuild
+
+    seen = set()
+    for path in sorted((OLD.parents[2] / "results").rglob("champion*.json")):
+        record = json.loads(path.read_text())
+        c = record.get("controller")
+        if not (isinstance(c, dict) and c.get("format") == FORMAT):
+            continue
+        rebuild(record)  # ValueError naming what differs
+        seen.add((c["decoder"].get("body_decoder", "substrate"), tuple(c["decoder"]["shape"])))
+    assert {d for d, _ in seen} == {"substrate", "cppn", "fourier", "growth"}
+    assert {(5, 5), (10, 5), (10, 10)} <= {shape for _, shape in seen}
+
+
 def test_record_json_puts_lists_of_plain_values_on_one_line_and_parses_to_the_same_data():
     data = {"body": [[0, 3], [4, 1]], "genome": {"key": 5, "nodes": {"bias": [0.1, -2.5e-17]}},
             "controller": None, "nested": [{"a": 1}, [1, 2], 3.0]}

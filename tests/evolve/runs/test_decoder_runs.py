@@ -112,3 +112,21 @@ def test_a_continuation_may_switch_to_a_decoder_whose_cppn_has_as_many_outputs(d
     champ = json.loads((out / "champion.json").read_text())
     assert champ["controller"]["decoder"]["body_decoder"] == other
     assert rescore_champion(out) == champ["fitness"]
+
+
+@pytest.mark.parametrize("name, given", [("growth", {"steps": 2}),
+                                         ("fourier", {"frequencies": 1, "hidden": 3})])
+def test_a_run_with_a_decoders_own_settings_records_them_and_decodes_to_its_champion(tmp_path, name, given):
+    """A decoder's non-default settings reach the champion file, and decoding its genome at the
+    run's size with them (`sgr decode`'s path) gives the champion bit for bit: a path that dropped
+    the settings would decode with the defaults."""
+    folder = tmp_path / "run"
+    cfg = {"method": "sgr", **TINY, "generations": 2, "body_decoder": name, "body_decoder_settings": given}
+    with Experiment.from_config(cfg, folder, quiet=True) as exp:
+        exp.run_all()
+    before = json.loads((folder / "champion.json").read_text())
+    decoder = before["controller"]["decoder"]
+    assert decoder["body_decoder"] == name and decoder["body_decoder_settings"] == given
+    after = json.loads((write_decoded(folder, (5, 5), tmp_path / "same") / "champion.json").read_text())
+    assert after["body"] == before["body"] and after["controller"] == before["controller"]
+    assert rescore_champion(folder) == before["fitness"]

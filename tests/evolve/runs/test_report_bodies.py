@@ -54,9 +54,12 @@ def test_an_older_run_without_body_diversity_reports_its_champions_body_and_no_d
     out = write_report(runs, tmp_path / "out" / "report.md", robustness=False, gallery=False)
     row = summary(out)[OLD_RUN.name]
     assert (row["width"], row["height"], float(row["actuator"])) == ("4", "4", 1.0)
+    assert float(row["fill"]) == 10 / 16 and float(row["v_actuator"]) == 1.0
+    assert float(row["rigid"]) == float(row["soft"]) == float(row["h_actuator"]) == 0.0
     assert float(row["symmetry_lr"]) == float(row["symmetry_tb"]) == pytest.approx(6 / 14, rel=1e-12)
     assert int(row["irregularity"]) > 0 and row["body_diversity"] == ""
-    assert f"| {OLD_RUN.name} | 4x4 | 100 % | 0.43 | 0.43 | {row['irregularity']} | - |" in out.read_text()
+    assert f"| {OLD_RUN.name} | 4x4 | 62 % | 0 / 0 / 0 / 100 % | 0.43 | 0.43 | {row['irregularity']} | - |" \
+        in out.read_text()
 
 
 def test_a_run_without_a_champion_body_leaves_the_columns_empty(tmp_path):
@@ -67,8 +70,9 @@ def test_a_run_without_a_champion_body_leaves_the_columns_empty(tmp_path):
 
 
 def test_the_gallery_caption_under_a_champions_picture_gives_its_body(tmp_path):
-    """report.html's figure of a champion: its body's size, symmetries, irregularity, actuator share
-    and the final population's diversity under the fitness."""
+    """report.html's figure of a champion: its body's size, symmetries, irregularity, actuator share,
+    fill and materials, and the final population's diversity under the fitness (a row measured
+    before the materials were reported: without them)."""
     gif, png = tmp_path / "a.gif", tmp_path / "a-body.png"
     gif.write_bytes(b"GIF89a")
     png.write_bytes(b"\x89PNG")
@@ -80,6 +84,11 @@ def test_the_gallery_caption_under_a_champions_picture_gives_its_body(tmp_path):
     page = report_html("# Results\n", curves, [{"row": row, "run": tmp_path, "gif": gif, "body": png}])
     assert ("fitness 1.500<br>body 4x3, symmetry lr 1.00 tb 0.25, irregularity 7, actuators 50 % · "
             "final diversity 0.125</figcaption>") in page
+    row.update(fill=0.75, rigid=0.25, soft=0.25, h_actuator=0.125, v_actuator=0.375)
+    page = report_html("# Results\n", curves, [{"row": row, "run": tmp_path, "gif": gif, "body": png}])
+    assert ("fitness 1.500<br>body 4x3, symmetry lr 1.00 tb 0.25, irregularity 7, actuators 50 % · "
+            "fill 75 %, rigid / soft / h / v 25 / 25 / 12 / 38 % · final diversity 0.125</figcaption>"
+            ) in page
 
 
 def test_a_runs_end_names_its_champions_body_before_the_verdict(tmp_path, capsys):
