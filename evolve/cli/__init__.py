@@ -46,9 +46,13 @@ def build_parser() -> argparse.ArgumentParser:
 def main(argv: list[str] | None = None) -> int:
     """The `sgr` command; returns the exit code. Bad input (SgrError, tsim/errors.py) is printed as
     one line, sgr: error: ..., on stderr with exit code 2 (argparse's own errors exit 2 as well).
-    Another ValueError (bad input from code that does not say SgrError yet, or a bug) is that line
-    plus the path of a file holding its full traceback; any other exception keeps its traceback
-    (exit 1). `--debug` lets every exception through with its traceback."""
+    Another ValueError (bad input from code that does not say SgrError yet, or a bug), a file that
+    cannot be read or written (OSError: its path and why), an input nested too deeply to parse
+    (RecursionError) or too large for memory (MemoryError) is that line plus the path of a file
+    holding its full traceback, exit 2; any other exception (a bug, or bad input no check caught)
+    is one line naming its type, with the traceback's file, exit 1, but for a user's task module
+    that raised (its traceback shows the user's code). `--debug` lets every exception through with
+    its traceback."""
     args = build_parser().parse_args(argv)
     trusted = None  # --trust-imports holds for this command only, also when main() runs in-process
     if getattr(args, "trust_imports", False):
@@ -64,17 +68,41 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"sgr: error: {exc}", file=sys.stderr)
         return 2
-    except ValueError as exc:
+    except (ValueError, OSError, RecursionError, MemoryError) as exc:
         if args.debug:
             raise
-        print(f"sgr: error: {exc} (full traceback: {_write_traceback(exc)})", file=sys.stderr)
+        print(f"sgr: error: {_one_line(exc)} (full traceback: {_write_traceback(exc)})", file=sys.stderr)
         return 2
+    except Exception as exc:  # noqa: BLE001 (the last resort: one line, the traceback in a file)
+        from tasks.registry import TaskModuleError
+
+        if args.debug or isinstance(exc, TaskModuleError):  # a user's task module: its traceback
+            raise
+        print(f"sgr: error: unexpected {type(exc).__name__}: {_one_line(exc)} (full traceback: "
+              f"{_write_traceback(exc)}; --debug shows it here)", file=sys.stderr)
+        return 1
     finally:
         sys.stdout = stdout
         if trusted is not None:
             from tasks.registry import trust_imports
 
             trust_imports(trusted)
+
+
+def _one_line(exc: BaseException, most: int = 300) -> str:
+    """`exc` as the error line says it: a file's path and why for an OSError, a word for a too deep
+    or too large input, else its message; on one line, cut at `most` characters (an error may
+    quote an input)."""
+    if isinstance(exc, OSError) and exc.filename is not None:  # a rename's: its target
+        text = f"{exc.filename2 if exc.filename2 is not None else exc.filename}: {exc.strerror or exc}"
+    elif isinstance(exc, RecursionError):
+        text = f"an input is nested too deeply to read ({exc})"
+    elif isinstance(exc, MemoryError):
+        text = f"not enough memory ({exc or 'the input asks for more than this machine has'})"
+    else:
+        text = str(exc) or type(exc).__name__
+    text = " ".join(text.split())
+    return text if len(text) <= most else text[:most] + " ..."
 
 
 def _write_traceback(exc: BaseException) -> str:

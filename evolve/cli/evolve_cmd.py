@@ -59,6 +59,8 @@ def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None
     from evolve.runs.config import configs_dir, find_config
     from tasks.specs import TASKS, unknown_name, unknown_task
 
+    if args.task == "" or args.method == "":
+        raise SgrError(f"--{'task' if args.task == '' else 'method'} needs a name, got an empty one")
     if args.config and (args.task or args.method):
         raise SgrError("give --config, or --task (with --method), not both")
     if args.config:

@@ -47,10 +47,17 @@ class SgrProblem(Problem):
     @classmethod
     def validate(cls, cfg: dict, source: str) -> None:
         """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller);
+        `max_weight` > 0, `weight_threshold` and `body_distance_weight` >= 0 (finite: every float
+        key is);
         `body_decoder` a registered decoder (evolve/methods/decoders/) and
         `body_decoder_settings` its settings."""
         if cfg.cppn_outputs not in (1, 2):
             raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg.cppn_outputs}")
+        for key, least, strict in (("max_weight", 0.0, True), ("weight_threshold", 0.0, False),
+                                   ("body_distance_weight", 0.0, False)):
+            v = getattr(cfg, key, None)  # (a method built on SGR's decoding may have no speciation)
+            if v is not None and (v < least or strict and v == least):
+                raise SgrError(f"{source}: key {key!r} must be {'>' if strict else '>='} {least:g}, got {v}")
         body_decoder(cfg.body_decoder, source).resolve(cfg.body_decoder_settings, source)
 
     @classmethod

@@ -21,13 +21,30 @@ def yaml_problem(exc: yaml.YAMLError) -> str:
     return f"{what} at line {mark.line + 1}, column {mark.column + 1}" if mark else what
 
 
+class _NoAliases(yaml.SafeLoader):
+    """safe_load's loader, refusing aliases (`*name`): a config has no use for them, and nested
+    ones expand a kilobyte of YAML into gigabytes (a "billion laughs")."""
+
+    def compose_node(self, parent, index):  # noqa: ANN001, ANN201 (PyYAML's signature)
+        if self.check_event(yaml.AliasEvent):
+            event = self.peek_event()
+            raise yaml.composer.ComposerError(None, None, "aliases (*name) are not read in sgr's files",
+                                              event.start_mark)
+        return super().compose_node(parent, index)
+
+
+def load_yaml(text: str) -> object:
+    """`yaml.safe_load(text)` without aliases (`_NoAliases`): what every sgr file is read with."""
+    return yaml.load(text, Loader=_NoAliases)  # noqa: S506 (a SafeLoader)
+
+
 def read_yaml(path: Path, what: str = "file") -> object:
     """The parsed YAML file; ValueError naming the file when it is missing, not text or not YAML."""
     path = Path(path)
     if not path.is_file():
         raise SgrError(f"{what} not found: {path}")
     try:
-        return yaml.safe_load(path.read_text())
+        return load_yaml(path.read_text())
     except UnicodeDecodeError:
         raise SgrError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:

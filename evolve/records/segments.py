@@ -15,7 +15,7 @@ from pathlib import Path
 
 import yaml
 
-from evolve.records.files import atomic_write
+from evolve.records.files import atomic_write, load_yaml
 from tsim.backend import DEFAULT_PRECISION
 
 SEGMENTS_FILE = "segments.json"
@@ -33,7 +33,7 @@ def segments(run: str | Path) -> list[dict]:
             return []
         return [s for s in data if isinstance(s, dict)] if isinstance(data, list) else []
     try:
-        raw = yaml.safe_load((Path(run) / "config.yaml").read_text())
+        raw = load_yaml((Path(run) / "config.yaml").read_text())
     except (OSError, yaml.YAMLError):
         return []
     if isinstance(raw, dict) and isinstance(raw.get("arch"), str):  # an older sgr's record
@@ -57,7 +57,7 @@ def record_segment(run: str | Path, after_generation: int, backend: dict, worker
     found.append(entry)
     atomic_write(run / SEGMENTS_FILE, (json.dumps(found, indent=1) + "\n").encode())
     cfg_file = run / "config.yaml"
-    raw = yaml.safe_load(cfg_file.read_text())
+    raw = load_yaml(cfg_file.read_text())
     if isinstance(raw, dict) and "arch" in raw:  # recorded above now, where it stays true
         atomic_write(cfg_file, yaml.safe_dump({k: v for k, v in raw.items() if k != "arch"},
                                               sort_keys=False).encode())

@@ -8,7 +8,7 @@ never averaged together unless the caller pools that setting (`sgr report --pool
 `--pool all`: every one but method and task, the old (method, task) grouping). A group's label is
 its method as plots have always named it ("sgr", "sgr robust 10x10"), and where two groups of one
 task would share it, the settings that tell them apart ("sgr (pop 64)", "sgr (pop 128)").
-Reading a folder never runs code: config.yaml is read with yaml.safe_load.
+Reading a folder never runs code: config.yaml is read with yaml's safe loader (`load_yaml`).
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pathlib import Path
 
 import yaml
 
+from evolve.records.files import load_yaml
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
 
@@ -125,7 +126,7 @@ def _not_a_run(folder: Path, need_config: bool) -> str | None:
         if "config.yaml" not in has:
             return "generations.csv but no config.yaml" if need_config else None
         try:
-            raw = yaml.safe_load((folder / "config.yaml").read_text())
+            raw = load_yaml((folder / "config.yaml").read_text())
         except (yaml.YAMLError, UnicodeDecodeError):
             return "config.yaml is not valid YAML"
         return None if isinstance(raw, dict) else "config.yaml is not a mapping of settings"
@@ -142,7 +143,7 @@ def read_config(run_dir: Path) -> dict:
     if not f.is_file():
         return {}
     try:
-        raw = yaml.safe_load(f.read_text())
+        raw = load_yaml(f.read_text())
     except UnicodeDecodeError:
         raise SgrError(f"{f}: not a text file") from None
     except yaml.YAMLError as exc:

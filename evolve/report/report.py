@@ -33,10 +33,9 @@ from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
-import yaml
 
 from evolve.records import verdict as verdict_rule
-from evolve.records.files import atomic_write
+from evolve.records.files import atomic_write, load_yaml
 from evolve.records.segments import backend_summary
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
@@ -155,7 +154,7 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
     rows = []
     for d in runs:
         g = group_of[d]
-        raw = yaml.safe_load((d / "config.yaml").read_text()) or {}
+        raw = load_yaml((d / "config.yaml").read_text()) or {}
         best = best_so_far(d)
         cols = read_generations(d)
         row = {"method": g.label, "task": g.task, "seed": raw.get("seed"), "generations": len(best),
@@ -533,7 +532,7 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     for d in runs:
         g = group_of[d]
         classic[g.label] = g.classic
-        steps[(g.label, g.task)].append(episode_length(yaml.safe_load((d / "config.yaml").read_text()) or {},
+        steps[(g.label, g.task)].append(episode_length(load_yaml((d / "config.yaml").read_text()) or {},
                                                        g.task))
         b = best_so_far(d)
         if len(b):

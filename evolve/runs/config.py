@@ -21,6 +21,7 @@ null is the paper's nominal one.
 
 from __future__ import annotations
 
+import math
 import sys
 from pathlib import Path
 
@@ -36,6 +37,15 @@ from tsim import runtime
 from tsim.errors import SgrError
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
+
+
+MAX_POP = 1_000_000  # a population beyond it is a typo (neat-python would fill memory making it)
+
+
+def _short(value: object, most: int = 80) -> str:
+    """`repr(value)` for an error line, cut at `most` characters (a YAML value may be huge)."""
+    text = repr(value)
+    return text if len(text) <= most else text[:most] + " ..."
 
 
 def configs_dir() -> Path:
@@ -86,7 +96,9 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
         types = typ if isinstance(typ, tuple) else (typ,)
         ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
-            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {val!r}")
+            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {_short(val)}")
+        if isinstance(val, float) and not math.isfinite(val):
+            raise SgrError(f"{source}: key {key!r} must be a finite number, got {val!r}")
         values[key] = val
     imports = values["imports"]
     if not all(isinstance(m, str) for m in imports):
@@ -102,6 +114,8 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
     for key in ("generations", "pop_size", "checkpoint_every"):
         if values[key] < 1:
             raise SgrError(f"{source}: key {key!r} must be >= 1, got {values[key]}")
+    if values["pop_size"] > MAX_POP:
+        raise SgrError(f"{source}: key 'pop_size' must be at most {MAX_POP:,}, got {values['pop_size']:,}")
     shape = values["robot_shape"]
     if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
         raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")

@@ -366,11 +366,41 @@ BUG = ("import evolve.report.plots as plots\n"
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-def test_an_internal_error_inside_a_command_shows_its_traceback(tmp_path):
+def test_an_internal_error_inside_a_command_is_one_line_and_the_file_with_its_traceback(tmp_path):
+    """An exception no check expected (a bug, or bad input that reached code unguarded: a KeyError
+    of malformed data) is one line naming its type, exit 1; its traceback is in the named file."""
     r = sgr_with(BUG.format(exc="KeyError"), "plot", str(tmp_path), cwd=tmp_path)
     assert r.returncode == 1, r.stderr
-    assert "Traceback (most recent call last)" in r.stderr, r.stderr
-    assert "in plot_run" in r.stderr and "KeyError: 'a planted bug'" in r.stderr, r.stderr
+    line, = r.stderr.splitlines()
+    assert line.startswith("sgr: error: unexpected KeyError: 'a planted bug' (full traceback: "), line
+    path = Path(line.split("(full traceback: ")[1].split(";")[0])
+    kept = path.read_text()
+    path.unlink()
+    assert kept.startswith("Traceback (most recent call last)") and "in plot_run" in kept, kept
+
+
+def test_a_file_that_cannot_be_written_or_a_too_deep_input_is_one_line(tmp_path, capsys, monkeypatch):
+    """An OSError names the path and why (a rename's target, not its temporary file), a
+    RecursionError (JSON nested 100,000 deep) says the input is nested too deeply: one line each,
+    exit 2."""
+    import evolve.report.plots as plots
+
+    def plot_run(*a, **k):
+        raise PermissionError(13, "Permission denied", str(tmp_path / ".tmp.x"), None,
+                              str(tmp_path / "p.png"))
+
+    monkeypatch.setattr(plots, "plot_run", plot_run)
+    assert main(["plot", str(tmp_path)]) == 2
+    line, = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"sgr: error: {tmp_path / 'p.png'}: Permission denied (full traceback: "), line
+    Path(line.split("(full traceback: ")[1].removesuffix(")")).unlink()
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "champion.json").write_text("[" * 100000 + "]" * 100000)
+    assert main(["render", str(run), "--out", str(tmp_path / "x.gif")]) == 2
+    line, = capsys.readouterr().err.splitlines()
+    assert line.startswith("sgr: error: an input is nested too deeply to read ("), line
+    Path(line.split("(full traceback: ")[1].removesuffix(")")).unlink()
 
 
 def test_an_internal_value_error_gives_one_line_and_the_file_with_its_traceback(tmp_path, capsys,
@@ -423,3 +453,28 @@ def test_an_error_in_a_users_task_module_shows_the_users_code(tmp_path):
     assert "return {}['missing key']" in r.stderr, r.stderr
     assert r.stderr.splitlines()[-1].endswith(f"task module {tmp_path / 'my_tasks.py'} raised KeyError: "
                                               "'missing key'; its traceback is above"), r.stderr
+
+
+@pytest.mark.parametrize("extra, says", [
+    ("body_distance_weight: .nan", "key 'body_distance_weight' must be a finite number, got nan"),
+    ("max_weight: .inf", "key 'max_weight' must be a finite number, got inf"),
+    ("max_weight: -1", "key 'max_weight' must be > 0, got -1.0"),
+    ("weight_threshold: -0.5", "key 'weight_threshold' must be >= 0, got -0.5"),
+    ("pop_size: 100000000000000000000", "key 'pop_size' must be at most 1,000,000"),
+    ("a: &x [1, 2]\nseed: *x", "not valid YAML: aliases (*name) are not read in sgr's files"),
+])
+def test_a_config_value_out_of_its_range_or_an_alias_is_one_line(tmp_path, capsys, extra, says):
+    """Values found accepted by a probe of bad inputs (a NaN speciation weight, a negative weight
+    bound, a population of 1e20 that filled memory) and YAML aliases (a 1.4 KB "billion laughs"
+    config expanded into a 17 MB error line, or never finished) are refused in one line."""
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(f"method: sgr\ntask: Walker-v0\n{extra}\n")
+    assert main(["evolve", "--config", str(cfg), "--out", str(tmp_path / "r")]) == 2
+    line, = capsys.readouterr().err.splitlines()
+    assert line.startswith(f"sgr: error: {cfg}: ") and says in line, line
+    assert not (tmp_path / "r").exists()
+
+
+def test_an_empty_task_name_is_refused_not_taken_as_none(tmp_path, capsys):
+    assert main(["evolve", "--task", "", "--out", str(tmp_path / "r")]) == 2
+    assert capsys.readouterr().err.splitlines() == ["sgr: error: --task needs a name, got an empty one"]
