@@ -216,13 +216,12 @@ def named_commands(text: str) -> list[tuple[str, set[str]]]:
 
 
 def sgr_options() -> dict[str, set[str]]:
-    """"sgr CMD" -> the options its parser takes (the top-level ones included)."""
+    """"sgr CMD" -> the options its parser takes (each also takes the top level's, --help and
+    --debug)."""
     from evolve.cli import build_parser
 
-    parser = build_parser()
-    top = {o for a in parser._actions for o in a.option_strings}
-    sub = next(a for a in parser._actions if a.dest == "cmd")
-    return {f"sgr {name}": top | {o for a in p._actions for o in a.option_strings}
+    sub = next(a for a in build_parser()._actions if a.dest == "cmd")
+    return {f"sgr {name}": {o for a in p._actions for o in a.option_strings}
             for name, p in sub.choices.items()}
 
 

@@ -34,8 +34,13 @@ class _NoAliases(yaml.SafeLoader):
 
 
 def load_yaml(text: str) -> object:
-    """`yaml.safe_load(text)` without aliases (`_NoAliases`): what every sgr file is read with."""
-    return yaml.load(text, Loader=_NoAliases)  # noqa: S506 (a SafeLoader)
+    """`yaml.safe_load(text)` without aliases (`_NoAliases`, a SafeLoader): what every sgr file is
+    read with."""
+    loader = _NoAliases(text)
+    try:
+        return loader.get_single_data()
+    finally:
+        loader.dispose()
 
 
 def read_yaml(path: Path, what: str = "file") -> object:

@@ -218,7 +218,7 @@ def test_a_generations_build_s_is_the_time_its_genomes_took_to_decode(tmp_path, 
     """generations.csv's build_s (the console's "decode", issue 47 item 4) holds the decoding: with
     each decode slowed by 10 ms, the rows add up to 10 ms for each decode of their populations (the
     initial one in the first row; an elite is not decoded again), every generation of 8 genomes
-    shows at least 4 (its offspring), and decoding stays a part of the generation's total."""
+    shows at least 4 (its offspring)."""
     import csv
     import time
 
@@ -251,8 +251,9 @@ def test_a_generations_build_s_is_the_time_its_genomes_took_to_decode(tmp_path, 
         exp.run_all()
     rows = list(csv.DictReader((tmp_path / "run" / "generations.csv").open()))
     assert len(rows) == 3
-    for r in rows:
-        assert 0.04 <= float(r["build_s"]) < float(r["total_s"]), r
+    for r in rows:  # (not compared with total_s: a row's decoding ran in the breeding that ended
+        # the generation before, whose total_s counts it)
+        assert float(r["build_s"]) >= 0.04, r
     # a generation's row holds the pass that decoded its population: the initial one, then the one
     # at the end of the generation before (its breeding); the last pass decodes the population of a
     # generation not run (a checkpoint keeps its time for a resumed run's next row)
