@@ -42,6 +42,7 @@ ABSENT_BEFORE = {"robust": None, "final_selection": None}
 # ------------------------------------------------ final_selection (evolve/runs/final_selection.py)
 RANKS = ("min", "score", "pooled")
 AUTO = "auto"
+MAX_EPISODE_STEPS = 1_000_000  # a longer episode in a config or a record is a typo or a planted value
 SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
 MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
 FLOORS = {"candidates": 2, "episodes": 8, "confirm": 8}  # ... and the least it shrinks to

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evolve.config import MAX_EPISODE_STEPS
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
@@ -17,7 +18,7 @@ from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir
 from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
-from tasks.specs import TASKS
+from tasks.specs import MAX_SIDE, TASKS
 from tsim import runtime
 from tsim.backend import DEFAULT_PRECISION
 from tsim.body import build_body, check_robot
@@ -79,6 +80,12 @@ def read_champion(run_dir: str | Path,
     positive = isinstance(steps, int) and not isinstance(steps, bool) and steps > 0
     if not (positive or steps in (None, "evogym")):
         raise SgrError(f"{f}: key 'episode_steps' must be a positive int, 'evogym' or null, got {steps!r}")
+    if positive and steps > MAX_EPISODE_STEPS:
+        raise SgrError(f"{f}: key 'episode_steps' must be at most {MAX_EPISODE_STEPS:,}, got {steps:,}")
+    rows = champ["body"]
+    if isinstance(rows, list) and (len(rows) > MAX_SIDE or any(isinstance(r, list) and len(r) > MAX_SIDE
+                                                               for r in rows)):
+        raise SgrError(f"{f}: key 'body': sgr places bodies of up to {MAX_SIDE}x{MAX_SIDE}")
     try:
         body = check_robot(champ["body"])
     except ValueError as exc:

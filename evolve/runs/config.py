@@ -25,7 +25,7 @@ import math
 import sys
 from pathlib import Path
 
-from evolve.config import COMMON, FinalSelection, RunConfig, default
+from evolve.config import COMMON, MAX_EPISODE_STEPS, FinalSelection, RunConfig, default
 from evolve.methods import METHODS
 from evolve.records.files import read_yaml
 from evolve.rollout.pool import workers_problem
@@ -125,6 +125,8 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
     if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
         raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
                        f"got {steps!r}")
+    if isinstance(steps, int) and steps > MAX_EPISODE_STEPS:
+        raise SgrError(f"{source}: key 'episode_steps' must be at most {MAX_EPISODE_STEPS:,}, got {steps:,}")
     # the run records the episode length it uses, not a rule for it
     values["episode_steps"] = TASKS[values["task"]].episode_length(steps)
     if (why := workers_problem(values["workers"])) is not None:

@@ -179,7 +179,10 @@ CHAMPIONS = {"not JSON": ("{not json", "not valid JSON"),
              "body of text": ({**GOOD, "body": "xyz"}, "key 'body': bad body matrix"),
              "controller lacks keys": ({**GOOD, "controller": {}}, "key 'controller'"),
              "controller for another body": ({**GOOD, "controller": _dense(5, 3, [0, 1, 2])}, "controller"),
-             "too few actions": ({**GOOD, "controller": _dense(OBS, 3, [0])}, "3 actuators")}
+             "too few actions": ({**GOOD, "controller": _dense(OBS, 3, [0])}, "3 actuators"),
+             # sizes that hung a replay (a probe of hostile inputs): refused before any simulation
+             "an episode of 1e12 steps": ({**GOOD, "episode_steps": 10**12}, "must be at most 1,000,000"),
+             "a 65-column body": ({**GOOD, "body": [[3] * 65]}, "bodies of up to 64x64")}
 
 
 @pytest.mark.parametrize("case", CHAMPIONS)
@@ -461,6 +464,7 @@ def test_an_error_in_a_users_task_module_shows_the_users_code(tmp_path):
     ("max_weight: -1", "key 'max_weight' must be > 0, got -1.0"),
     ("weight_threshold: -0.5", "key 'weight_threshold' must be >= 0, got -0.5"),
     ("pop_size: 100000000000000000000", "key 'pop_size' must be at most 1,000,000"),
+    ("episode_steps: 1000000000000", "key 'episode_steps' must be at most 1,000,000"),
     ("a: &x [1, 2]\nseed: *x", "not valid YAML: aliases (*name) are not read in sgr's files"),
 ])
 def test_a_config_value_out_of_its_range_or_an_alias_is_one_line(tmp_path, capsys, extra, says):
