@@ -23,7 +23,7 @@ from evolve.methods import METHODS, sgr_record
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
-from evolve.records.files import atomic_write, read_yaml, record_json
+from evolve.records.files import atomic_write, read_regular, read_yaml, record_json
 from evolve.search.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 
 MALFORMED = (KeyError, TypeError, ValueError, IndexError)
@@ -73,7 +73,7 @@ def compact_file(path: str | Path) -> tuple[int, int]:
     it); returns its size in bytes before and after. The file is replaced only when the new text
     reads back as a record whose controller is the old one's, bit for bit."""
     path = Path(path)
-    text = path.read_text()
+    text = read_regular(path)
     record = json.loads(text)
     if not isinstance(record, dict):  # not a champion record: left as it is
         return len(text.encode()), len(text.encode())

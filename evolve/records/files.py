@@ -43,6 +43,14 @@ def load_yaml(text: str) -> object:
         loader.dispose()
 
 
+def read_regular(path: Path) -> str:
+    """A file's text, OSError unless it is a regular file: a FIFO or a device (a champion.json
+    linked to /dev/zero) would never end."""
+    if not Path(path).is_file():
+        raise FileNotFoundError(2, "not a regular file", str(path))
+    return Path(path).read_text()
+
+
 def read_yaml(path: Path, what: str = "file") -> object:
     """The parsed YAML file; ValueError naming the file when it is missing, not text or not YAML."""
     path = Path(path)

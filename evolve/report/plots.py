@@ -28,7 +28,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from evolve.records.files import atomic_write
+from evolve.records.files import atomic_write, read_regular
 from tsim.errors import SgrError
 
 UNKNOWN = "unknown"
@@ -295,7 +295,7 @@ def plot_run(run_dir: str | Path, out: str | Path, diversity: bool = False) -> P
 def _champion(run_dir: str | Path) -> tuple[int, float] | None:
     """(generation, fitness) of the run's champion.json, None without a readable one."""
     try:
-        champ = json.loads((Path(run_dir) / "champion.json").read_text())
+        champ = json.loads(read_regular(Path(run_dir) / "champion.json"))
         return int(champ["generation"]), float(champ["fitness"])
     except (OSError, ValueError, KeyError, TypeError):
         return None

@@ -35,7 +35,7 @@ from pathlib import Path
 import numpy as np
 
 from evolve.records import verdict as verdict_rule
-from evolve.records.files import atomic_write, load_yaml
+from evolve.records.files import atomic_write, load_yaml, read_regular
 from evolve.records.segments import backend_summary
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
@@ -185,7 +185,7 @@ def champion_body_measures(run_dir: Path) -> dict[str, float]:
     from evolve.methods.body_measures import measures
 
     try:
-        body = np.asarray(json.loads((run_dir / "champion.json").read_text())["body"], dtype=np.int64)
+        body = np.asarray(json.loads(read_regular(run_dir / "champion.json"))["body"], dtype=np.int64)
         m = measures(body) if body.ndim == 2 else {}
     except (OSError, ValueError, KeyError, TypeError):
         return {}
@@ -195,7 +195,7 @@ def champion_body_measures(run_dir: Path) -> dict[str, float]:
 def _recorded_fitness(run_dir: Path) -> float | None:
     """champion.json's fitness, None without a readable one."""
     try:
-        return float(json.loads((run_dir / "champion.json").read_text())["fitness"])
+        return float(json.loads(read_regular(run_dir / "champion.json"))["fitness"])
     except (OSError, ValueError, KeyError, TypeError):
         return None
 

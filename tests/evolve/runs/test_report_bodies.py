@@ -104,3 +104,23 @@ def test_a_runs_end_names_its_champions_body_before_the_verdict(tmp_path, capsys
     assert lines[named + 1] == (f"champion body: {m['height']}x{m['width']}, symmetry lr "
                                   f"{m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, irregularity "
                                   f"{m['irregularity']}, actuators {100 * m['actuator']:.0f} %")
+
+
+@pytest.mark.subprocess
+def test_a_champion_json_that_is_a_fifo_or_a_device_is_skipped_not_read_forever(tmp_path):
+    """A planted champion.json that never ends (a FIFO, a link to /dev/zero) hung `sgr report` and
+    `sgr migrate`: read only as a regular file, it is a champion that cannot be read (checked in
+    a child process with a time limit, so a regression fails instead of hanging the suite)."""
+    import os
+    import subprocess
+    import sys
+
+    (tmp_path / "devzero").mkdir()
+    (tmp_path / "devzero" / "champion.json").symlink_to("/dev/zero")
+    os.mkfifo((tmp_path / "fifo-run").mkdir() or tmp_path / "fifo-run" / "champion.json")
+    code = ("import sys; from pathlib import Path; from evolve.report.report import champion_body_measures; "
+            "print([champion_body_measures(Path(p)) for p in sys.argv[1:]])")
+    r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "fifo-run"), str(tmp_path / "devzero")],
+                       cwd=ROOT, capture_output=True, text=True, timeout=60,
+                       env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert r.returncode == 0 and r.stdout.strip() == "[{}, {}]", r.stderr
