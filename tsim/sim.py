@@ -668,7 +668,6 @@ class BatchSim:
         """(2, n) point positions of free object `name` in world w, world units; KeyError when the
         world has no free object of that name (fixed objects are terrain, not simulated)."""
         k, obj = self._free_object(name)
-        self._pos0_version += 1
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 0:2].T.copy()
 
@@ -676,7 +675,6 @@ class BatchSim:
         """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
         as `object_pos`."""
         k, obj = self._free_object(name)
-        self._pos0_version += 1
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 2:4].T.copy()
 

@@ -185,3 +185,23 @@ def test_sgr_device_mirror_makes_the_cpu_use_a_device_mirror(monkeypatch):
     assert isinstance(BatchSim(task_world("Walker-v0"), [body], (1, 1))._state_m, mirror_mod.DeviceMirror)
     monkeypatch.delenv("SGR_DEVICE_MIRROR")
     assert isinstance(BatchSim(task_world("Walker-v0"), [body], (1, 1))._state_m, mirror_mod.HostArray)
+
+
+def test_the_kernels_placement_is_copied_again_only_after_it_may_have_changed(monkeypatch):
+    """`kernel_initial_positions` keeps its copy through reads that cannot change the placement
+    (object and robot positions, steps, partial resets) and makes a new one after a write through
+    `initial_positions`, a `shift_robots` or a `place_object`."""
+    env = _envs("Carrier-v0", 3, True, monkeypatch)
+    sim = env.sim
+    kept = sim.kernel_initial_positions()
+    env.step(_actions(env, 0))
+    sim.object_pos(0, sim.free_objects[0].name)
+    sim.object_vel(0, sim.free_objects[0].name)
+    sim.robot_pos(0)
+    sim.reset(np.array([True, False, True]))
+    assert sim.kernel_initial_positions() is kept
+    for change in (lambda: sim.initial_positions, lambda: sim.shift_robots(np.zeros(3)),
+                   lambda: sim.place_object(0, sim.free_objects[0].name, (2, 2))):
+        change()
+        assert sim.kernel_initial_positions() is not kept
+        kept = sim.kernel_initial_positions()
