@@ -43,6 +43,7 @@ ABSENT_BEFORE = {"robust": None, "final_selection": None}
 RANKS = ("min", "score", "pooled")
 AUTO = "auto"
 MAX_EPISODE_STEPS = 1_000_000  # a longer episode in a config or a record is a typo or a planted value
+MAX_POP = 1_000_000  # a larger population is a typo (neat-python would fill memory making it)
 SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
 MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
 FLOORS = {"candidates": 2, "episodes": 8, "confirm": 8}  # ... and the least it shrinks to

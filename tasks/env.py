@@ -214,9 +214,9 @@ class BatchEnv:
             return O.orientation(pos, self._object_pos0(name), np.ones(pos.shape[:2], dtype=bool))
         sim = self.sim
         rows, n, count = self._obj_rows[name]
-        ref = sim.kernel_initial_positions()[0]
         return self._per_state(("orientation", name), lambda: EK.orientation(
-            sim.kernel_state(), rows, sim.state_shape[2], ref, rows, 2, count, n, self._serial))
+            sim.kernel_state(), rows, sim.state_shape[2], sim.kernel_initial_positions()[0], rows, 2, count,
+            n, self._serial))
 
     def _object_now(self, name: str) -> np.ndarray:
         """(B, 2, n) current points of world object `name`: a simulated one's state, a static

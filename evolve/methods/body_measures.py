@@ -95,3 +95,11 @@ def describe(m: dict[str, float]) -> str:
     actuators 48 %"; the size is its bounding box's rows x columns, as `--shape` writes a shape."""
     return (f"{m['height']}x{m['width']}, symmetry lr {m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, "
             f"irregularity {m['irregularity']}, actuators {100 * m['actuator']:.0f} %")
+
+
+def material_shares(m: dict[str, float]) -> str | None:
+    """The materials' shares of a body's voxels in percent, rigid / soft / h / v (MATERIALS'
+    order), e.g. "10 / 42 / 24 / 24 %"; None where `m` lacks one (a row measured before)."""
+    if not all(name in m for name in MATERIALS.values()):
+        return None
+    return " / ".join(f"{100 * m[name]:.0f}" for name in MATERIALS.values()) + " %"

@@ -163,13 +163,11 @@ def _body_caption(row: dict) -> str:
     """"<br>body 5x5, symmetry lr 1.00 tb 0.40, irregularity 9, actuators 48 %", its fill and
     materials ("fill 80 %, rigid / soft / h / v 10 / 42 / 24 / 24 %") and the final population's body
     diversity, where the report measured them (evolve/methods/body_measures.py)."""
-    from evolve.methods.body_measures import describe
+    from evolve.methods.body_measures import describe, material_shares
 
     parts = [f"body {describe(row)}"] if "width" in row else []
-    shares = ("rigid", "soft", "h_actuator", "v_actuator")
-    if "fill" in row and all(k in row for k in shares):
-        parts.append(f"fill {100 * row['fill']:.0f} %, rigid / soft / h / v "
-                     + " / ".join(f"{100 * row[k]:.0f}" for k in shares) + " %")
+    if "fill" in row and (shares := material_shares(row)) is not None:
+        parts.append(f"fill {100 * row['fill']:.0f} %, rigid / soft / h / v {shares}")
     if "body_diversity" in row:
         parts.append(f"final diversity {row['body_diversity']:.3f}")
     return "<br>" + html.escape(" · ".join(parts)) if parts else ""

@@ -323,6 +323,8 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
 def bodies_markdown(rows: list[dict]) -> str:
     """report.md's "Champion bodies": each run's champion body measured (`champion_body_measures`)
     and its final population's body diversity; "" when no run has either."""
+    from evolve.methods.body_measures import material_shares
+
     shown = [r for r in rows if "width" in r or "body_diversity" in r]
     if not shown:
         return ""
@@ -337,9 +339,7 @@ def bodies_markdown(rows: list[dict]) -> str:
     out.write("| run | body | fill | rigid / soft / h / v | symmetry lr | symmetry tb | irregularity | "
               "final diversity |\n" + "|---" * 8 + "|\n")
     for r in sorted(shown, key=lambda r: r["run"]):
-        shares = ("rigid", "soft", "h_actuator", "v_actuator")
-        materials = (" / ".join(f"{100 * r[k]:.0f}" for k in shares) + " %"
-                     if all(k in r for k in shares) else "-")
+        materials = material_shares(r) or "-"
         fill = f"{100 * r['fill']:.0f} %" if "fill" in r else "-"
         cells = (["-"] * 6 if "width" not in r else
                  [f"{r['height']}x{r['width']}", fill, materials,

@@ -25,7 +25,7 @@ import math
 import sys
 from pathlib import Path
 
-from evolve.config import COMMON, MAX_EPISODE_STEPS, FinalSelection, RunConfig, default
+from evolve.config import COMMON, MAX_EPISODE_STEPS, MAX_POP, FinalSelection, RunConfig, default
 from evolve.methods import METHODS
 from evolve.records.files import read_yaml
 from evolve.rollout.pool import workers_problem
@@ -37,9 +37,6 @@ from tsim import runtime
 from tsim.errors import SgrError
 
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
-
-
-MAX_POP = 1_000_000  # a population beyond it is a typo (neat-python would fill memory making it)
 
 
 def _short(value: object, most: int = 80) -> str:
