@@ -117,7 +117,8 @@ def test_a_champion_json_that_is_a_fifo_or_a_device_is_skipped_not_read_forever(
 
     (tmp_path / "devzero").mkdir()
     (tmp_path / "devzero" / "champion.json").symlink_to("/dev/zero")
-    os.mkfifo((tmp_path / "fifo-run").mkdir() or tmp_path / "fifo-run" / "champion.json")
+    (tmp_path / "fifo-run").mkdir()
+    os.mkfifo(tmp_path / "fifo-run" / "champion.json")
     code = ("import sys; from pathlib import Path; from evolve.report.report import champion_body_measures; "
             "print([champion_body_measures(Path(p)) for p in sys.argv[1:]])")
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "fifo-run"), str(tmp_path / "devzero")],
