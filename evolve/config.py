@@ -24,7 +24,8 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from types import MappingProxyType
 from typing import Any
 
-from evolve.rollout.robust import STATISTICS, Robust, config_dataclass
+from evolve.rollout.robust import MAX_EPISODES, STATISTICS, Robust, config_dataclass
+from tasks.cli import MAX_STEPS
 from tasks.specs import TASKS
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
@@ -42,7 +43,7 @@ ABSENT_BEFORE = {"robust": None, "final_selection": None}
 # ------------------------------------------------ final_selection (evolve/runs/final_selection.py)
 RANKS = ("min", "score", "pooled")
 AUTO = "auto"
-MAX_EPISODE_STEPS = 1_000_000  # a longer episode in a config or a record is a typo or a planted value
+MAX_EPISODE_STEPS = MAX_STEPS  # a longer episode in a config or a record is a typo or a planted value
 MAX_POP = 1_000_000  # a larger population is a typo (neat-python would fill memory making it)
 SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
 MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
@@ -101,8 +102,10 @@ class FinalSelection:
         sel = config_dataclass(cls, raw, name)
         for key, least in (("candidates", 1), ("episodes", 1), ("confirm", 0), ("holdout", 1)):
             v = getattr(sel, key)
-            if v != AUTO and (not isinstance(v, int) or isinstance(v, bool) or v < least):
-                raise SgrError(f"{name}.{key}' must be an int >= {least} or auto, got {v!r}")
+            bad = not isinstance(v, int) or isinstance(v, bool) or not least <= v <= MAX_EPISODES
+            if v != AUTO and bad:
+                raise SgrError(f"{name}.{key}' must be an int from {least} to {MAX_EPISODES:,} or auto, "
+                               f"got {v!r}")
         try:
             Robust.from_config({"statistic": sel.statistic}, source)
         except ValueError:

@@ -22,8 +22,14 @@ PRECISIONS = tuple(backend.PRECISIONS)
 PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default $SGR_PRECISION, else f64"
 
 
-def positive(cast):
-    """argparse type: a positive number of type `cast` (int or float)."""
+# the most a command line may ask for: more is a typo, and would run for days or fill memory
+MAX_STEPS = 1_000_000  # env steps of one episode (the same bound a config or a record has)
+MAX_ROBOTS = 1_000_000  # robots in one batch
+MAX_PIXELS = 4096  # a frame's width or height
+
+
+def positive(cast, most: float | None = None):
+    """argparse type: a positive number of type `cast` (int or float), at most `most` if given."""
     def parse(text: str):
         try:
             value = cast(text)
@@ -31,6 +37,8 @@ def positive(cast):
             value = 0
         if not value > 0:
             raise argparse.ArgumentTypeError(f"must be a positive {cast.__name__}, got {text!r}")
+        if most is not None and not value <= most:
+            raise argparse.ArgumentTypeError(f"must be at most {most:,}, got {text!r}")
         return value
     return parse
 
@@ -43,7 +51,8 @@ def nonnegative(cast):
         except ValueError:
             value = -1
         if not 0 <= value < float("inf"):
-            raise argparse.ArgumentTypeError(f"must be a {cast.__name__} >= 0, got {text!r}")
+            raise argparse.ArgumentTypeError(f"must be {'an' if cast is int else 'a'} {cast.__name__} >= 0, "
+                                             f"got {text!r}")
         return value
     return parse
 
@@ -86,6 +95,9 @@ def parse_body(text: str) -> np.ndarray:
             if "body" not in data and "matrix" not in data:
                 raise SgrError(f"bad body matrix: {path}: a JSON object needs a 'body' or 'matrix' key")
             data = data.get("body", data.get("matrix"))
+        if not (isinstance(data, list) and data and all(isinstance(r, list) for r in data)
+                and len({len(r) for r in data}) == 1):
+            raise SgrError(f"bad body matrix: {path}: not a list of equal-length rows")
         return np.asarray(data)
     rows = text.split(",")
     if not all(r and r.isdigit() for r in rows) or len({len(r) for r in rows}) != 1:
@@ -182,9 +194,9 @@ def register_task_commands(sub) -> None:
     """Add demo, validate and bench to an argparse subparsers object."""
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
     d.add_argument("--task", default="Walker-v0")
-    d.add_argument("--robots", type=positive(int), default=32)
-    d.add_argument("--steps", type=positive(int), default=300)
-    d.add_argument("--seed", type=int, default=0)
+    d.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=32)
+    d.add_argument("--steps", type=positive(int, MAX_STEPS), default=300)
+    d.add_argument("--seed", type=nonnegative(int), default=0)
     d.add_argument("--out", default="runs/demo")
     d.set_defaults(fn=_demo)
     v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
@@ -194,8 +206,8 @@ def register_task_commands(sub) -> None:
     v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
     b.add_argument("--task", default="Walker-v0")
-    b.add_argument("--robots", type=positive(int), default=128)
-    b.add_argument("--steps", type=positive(int), default=100)
+    b.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=128)
+    b.add_argument("--steps", type=positive(int, MAX_STEPS), default=100)
     b.add_argument("--json", action="store_true")
     b.add_argument("--record", metavar="PATH", help="also write the figures as a record (JSON with the "
                    "machine, commit, date and command; docs/records/ holds those the docs quote)")

@@ -8,7 +8,10 @@ import numpy as np
 
 from tasks.env import BatchEnv
 from tsim.body import Body
+from tsim.errors import SgrError
 from tsim.render import Renderer
+
+FRAME_BYTES = 4 << 30  # the most an episode's frames may hold: more would fill memory before the GIF
 
 
 def render_episode(task: str, body: Body | object, policy: Callable[[int, np.ndarray], np.ndarray],
@@ -27,6 +30,11 @@ def render_episode(task: str, body: Body | object, policy: Callable[[int, np.nda
         raise ValueError(f"every must be >= 1, got {every}")
     env = BatchEnv(task, [body], episode_steps=steps, robot_shift=[start_shift] if start_shift else None,
                    precision=precision)
+    frames_at_most = env.episode_steps // every + 2
+    need = frames_at_most * width * height * (1 if indexed else 3)
+    if need > FRAME_BYTES:
+        raise SgrError(f"{frames_at_most:,} frames of {width}x{height} would hold {need / 2**30:.0f} GiB "
+                       f"(at most {FRAME_BYTES >> 30} GiB): render fewer steps or smaller frames")
     renderer = Renderer(env.sim.world, env.sim.bodies[0], width, height, **renderer_kw)
     names = [o.name for o in env.sim.free_objects]
     draw = renderer.frame_indexed if indexed else renderer.frame

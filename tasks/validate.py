@@ -7,6 +7,7 @@ Two folder formats are understood (see the READMEs of shared/reference): trace f
 
 from __future__ import annotations
 
+import hashlib
 import json
 import zipfile
 from pathlib import Path
@@ -35,21 +36,64 @@ def _npz(path: Path):
         raise SgrError(f"{path}: unreadable .npz file ({exc})") from None
 
 
+TRACES_FORMAT = 1  # index.json's format_version of a trace set (references/'s evogym recorder)
+EVOGYM32_FORMAT = 2  # ... and of tests/data/evogym32's
+
+
+def _index(folder: Path, version: int) -> dict:
+    """`folder`'s index.json, checked to be of the format this sgr reads: a set recorded in a
+    format we do not know would be compared field by field as if we did."""
+    path = folder / "index.json"
+    index = _json(path)
+    if not isinstance(index, dict) or not isinstance(index.get("cases", []), list):
+        raise SgrError(f"{path}: not a reference index (a JSON object with a list of cases)")
+    if index.get("format_version") != version:
+        raise SgrError(f"{path}: format_version {index.get('format_version')!r}; this sgr reads {version}")
+    return index
+
+
+def _case(folder: Path, case: object, index: Path):
+    """A trace case's .npz, checked against what index.json says of it: its file inside `folder`,
+    the same bytes (sha256) and the same task (a swapped or edited file would be validated as the
+    case it is not)."""
+    if not isinstance(case, dict) or not isinstance(case.get("file"), str) or "task" not in case:
+        raise SgrError(f"{index}: a case must be an object with 'file' and 'task', got {str(case)[:80]!r}")
+    path = _recorded_file(folder, case, index)
+    z = _npz(path)
+    if "task" in z.files and str(z["task"]) != case["task"]:
+        raise SgrError(f"{path}: holds task {str(z['task'])!r}, {index} says {case['task']!r}")
+    return z
+
+
+def _recorded_file(folder: Path, entry: dict, index: Path) -> Path:
+    """The file an index entry ({"file": name, "sha256": ...}) names: inside `folder`, there, and
+    with the bytes recorded when the entry has a sha256."""
+    path = folder / str(entry.get("file"))
+    if path.resolve().parent != folder.resolve():
+        raise SgrError(f"{index}: file {entry.get('file')!r} is not a file of {folder}")
+    if not path.is_file():
+        raise SgrError(f"{path}: not found (named by {index})")
+    if "sha256" in entry and hashlib.sha256(path.read_bytes()).hexdigest() != entry["sha256"]:
+        raise SgrError(f"{path}: its sha256 is not the one {index} records: not the file recorded")
+    return path
+
+
 def validate_traces(folder: Path) -> dict:
     """Replay every trace case of `folder` with evogym's recorded actions, one batch per task: per
     case COM (world units), step-0 observation and return errors; per task the median COM errors
     and, with chaos_floor.json, evogym's own spread under tiny perturbations (chaos_median); and
     per case the largest observation error over the first 50 steps, the orientation entries apart
     (`obs_err_max50`, `obs_err_orientation_max50`)."""
-    index = _json(folder / "index.json")
+    index = _index(folder, TRACES_FORMAT)
     chaos_file = folder / "chaos_floor.json"
     chaos = _json(chaos_file) if chaos_file.exists() else None
     by_task: dict[str, list] = {}
-    for case in index["cases"]:
-        by_task.setdefault(case["task"], []).append(case)
+    for case in index["cases"]:  # every file checked before anything is simulated
+        z = _case(folder, case, folder / "index.json")
+        by_task.setdefault(case["task"], []).append((case, z))
     cases_out, tasks_out = [], {}
-    for task, cases in by_task.items():
-        data = [_npz(folder / c["file"]) for c in cases]
+    for task, pairs in by_task.items():
+        cases, data = [c for c, _ in pairs], [z for _, z in pairs]
         steps = int(data[0]["steps"])
         bodies = [z["body"] for z in data]
         env = BatchEnv(task, bodies, episode_steps=steps, passive_ok=True)
@@ -108,11 +152,12 @@ def validate_returns(folder: Path) -> dict:
     recorded actions: Spearman and median absolute difference of our returns against evogym's."""
     tasks_out = {}
     summary = _json(folder / "summary.json") if (folder / "summary.json").exists() else {}
-    for f in sorted(folder.glob("*.npz")):
-        z = _npz(f)
-        if "returns" not in z.files:
-            continue
-        task = str(z["task"])
+    files = [(f, z) for f in sorted(folder.glob("*.npz")) if "returns" in (z := _npz(f)).files]
+    for f, z in files:  # <task>.npz: a file named for one task holding another's robots is refused first
+        if str(z["task"]) != f.stem:
+            raise SgrError(f"{f}: holds task {str(z['task'])!r}, its name says {f.stem!r}")
+    for f, z in files:
+        task = f.stem
         n_act, steps_run = z["n_act"], z["steps_run"]
         bodies = list(z["body"])
         steps = int(z["episode_length"])
@@ -167,9 +212,13 @@ def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dic
     from tasks.specs import TASKS
 
     folder = Path(folder)
-    index = _json(folder / "index.json")
+    index = _index(folder, EVOGYM32_FORMAT)
     out = {}
-    for task in tasks or [t for t in index["all_tasks"] if t in TASKS]:
+    for task in tasks or [t for t in index.get("all_tasks", []) if t in TASKS]:
+        facts = index.get("tasks", {}).get(task, {})  # every file its set holds, checked first
+        for entry in [facts.get("returns_file", {}), *facts.get("traces", [])]:
+            if isinstance(entry, dict) and "file" in entry:
+                _recorded_file(folder, entry, folder / "index.json")
         r = evogym32_returns(folder, task)
         if not backend.real().bits:  # no bits to match: evogym's chaos floor is the measure
             c = chaos_row(r, _npz(folder / f"returns_{task}.npz"))
@@ -327,7 +376,7 @@ def chaos_check(folder: str | Path, tasks: list[str] | None = None,
     from tasks.specs import TASKS
 
     folder = Path(folder)
-    index = _json(folder / "index.json")
+    index = _index(folder, EVOGYM32_FORMAT)
     return {task: chaos_row(evogym32_returns(folder, task), _npz(folder / f"returns_{task}.npz"), factor)
             for task in tasks or [t for t in index["all_tasks"] if t in TASKS]}
 

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from evolve.cli.common import add_noise, nonnegative, output_path, parse_body, positive
+from tasks.cli import MAX_PIXELS, MAX_STEPS
 from tsim.errors import SgrError
 
 
@@ -19,14 +20,15 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
     r.add_argument("--task")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
-    r.add_argument("--steps", type=positive(int), help="episode length (default: the task's paper length)")
+    r.add_argument("--steps", type=positive(int, MAX_STEPS),
+                   help="with --body: the episode's length (default: the task's paper length)")
     r.add_argument("--out", help="GIF path, or .mp4 for an MP4 (needs pip install 'sgr[video]'); default "
                                  "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), with "
                                  "--exact RUN_DIR/champion-exact.gif, with --replay I "
                                  "RUN_DIR/champion-replayI.gif; with --body robot.gif")
-    r.add_argument("--width", type=positive(int), default=640)
-    r.add_argument("--height", type=positive(int), default=320)
-    r.add_argument("--fps", type=positive(float), default=30.0)
+    r.add_argument("--width", type=positive(int, MAX_PIXELS), default=640)
+    r.add_argument("--height", type=positive(int, MAX_PIXELS), default=320)
+    r.add_argument("--fps", type=positive(float, 1000), default=30.0)
     r.add_argument("--replay", type=nonnegative(int), metavar="I",
                    help="the champion's perturbed replay I (as sgr report replays it; 0: the exact "
                         "episode; default: the replay whose return is the median of the verdict's 20)")
@@ -59,6 +61,9 @@ def run(args: argparse.Namespace) -> int:
     if args.run_dir:
         if args.task or args.body:
             raise SgrError("give either RUN_DIR or --task with --body, not both")
+        if args.steps is not None:
+            raise SgrError("--steps sets the length of a --body episode: a run's champion is drawn over "
+                           "its run's episode")
         if args.exact and args.replay is not None:
             raise SgrError("give either --exact or --replay I, not both")
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from evolve.cli.common import add_noise, positive
+from evolve.rollout.robust import MAX_EPISODES
 
 
 def register(sub) -> argparse.ArgumentParser:
@@ -20,7 +21,7 @@ def register(sub) -> argparse.ArgumentParser:
     add_noise(rp, several=True, default=[1e-9, 1e-3],
               help="noise levels: each champion replayed with uniform(+-EPS) added to every "
                    "action (default 1e-9 1e-3)")
-    rp.add_argument("--replays", type=positive(int), default=10, metavar="N",
+    rp.add_argument("--replays", type=positive(int, MAX_EPISODES), default=10, metavar="N",
                     help="replays per champion and noise level (default 10)")
     rp.add_argument("--no-gallery", action="store_true",
                     help="no champion GIFs (gallery/) in report.html")

@@ -32,6 +32,7 @@ from typing import Any
 
 import numpy as np
 
+from evolve.config import MAX_POP
 from evolve.methods.descriptors import DESCRIPTORS
 from evolve.methods.sgr import SgrProblem
 from evolve.rollout.pool import RolloutPool
@@ -130,8 +131,8 @@ class QdSettings:
             if v is None:
                 v = counts["batch"] if key == "initial" else max(1, counts["batch"] // 4)
             least = 0 if key == "rescore" else 1
-            if not is_int(v) or v < least:
-                raise SgrError(f"{name}.{key}' must be an int >= {least}, got {v!r}")
+            if not is_int(v) or not least <= v <= MAX_POP:  # more: a typo that fills memory
+                raise SgrError(f"{name}.{key}' must be an int from {least} to {MAX_POP:,}, got {v!r}")
             counts[key] = v
         offset = raw.get("score_offset", 0.0)
         if isinstance(offset, bool) or not isinstance(offset, int | float) or not math.isfinite(offset):

@@ -283,6 +283,10 @@ class RunDir:
         """Keep the rows of the first `generation` generations (the others are recomputed after a
         resume). Rows count generations from 1; a run written when they counted from 0 is renumbered."""
         rows = self.rows()
+        for i, r in enumerate(rows):
+            if not str(r.get("generation")).isdigit():  # a row we did not write
+                raise SgrError(f"{self.path / 'generations.csv'}: row {i + 2} has no generation number "
+                               f"(got {str(r.get('generation'))[:40]!r}): a damaged file")
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
         self._write_rows([r for r in rows if int(r["generation"]) <= generation])
@@ -312,12 +316,18 @@ class RunDir:
         atomic_write(self.path / ELITES_FILE, record_json(elites).encode())
 
     def champion(self) -> dict:
-        """champion.json as a dict; ValueError when there is none yet or it is not valid JSON
-        (json.JSONDecodeError)."""
+        """champion.json as a dict; SgrError naming the file when there is none yet, or it is not a
+        JSON object (a damaged file: ours are written whole)."""
         f = self.path / "champion.json"
         if not f.is_file():
             raise SgrError(f"{self.path} has no champion.json yet")
-        return json.loads(f.read_text())
+        try:
+            champ = json.loads(f.read_text())
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+            raise SgrError(f"{f}: not valid JSON ({exc})") from None
+        if not isinstance(champ, dict):
+            raise SgrError(f"{f}: a champion record is a JSON object, got {type(champ).__name__}")
+        return champ
 
     def save_checkpoint(self, generation: int, data: dict) -> Path:
         """Write `data` (JSON-able: numbers, strings, lists, dicts) atomically as

@@ -71,8 +71,16 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
             return float("nan")
 
     cols = {k: np.array([num(r.get(k)) for r in rows]) for k in rows[0]}
-    if "generation" in cols and cols["generation"][0] == 0:  # written when rows counted from 0
-        cols["generation"] = cols["generation"] + 1
+    gen = cols.get("generation")
+    if gen is not None:  # one row per generation, in order (a grown run's first is not 1): else damaged
+        start = gen[0] if gen[0] >= 0 and gen[0] % 1 == 0 else 0
+        bad = np.flatnonzero(gen != np.arange(start, start + len(gen)))
+        if len(bad):
+            i = int(bad[0])
+            raise SgrError(f"{f}: row {i + 2} is not generation {start + i:.0f} (its generation column "
+                           f"holds {str(rows[i].get('generation'))[:40]!r}): a damaged file")
+        if start == 0:  # written when rows counted from 0
+            cols["generation"] = gen + 1
     return cols
 
 

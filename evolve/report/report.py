@@ -24,7 +24,6 @@ from __future__ import annotations
 import csv
 import io
 import itertools
-import json
 import math
 import os
 import statistics
@@ -161,10 +160,10 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
                "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
                "episode_steps": episode_length(raw, g.task), "settings": g.settings, "classic": g.classic,
                "path": d, "backend": backend_summary(d)}
-        fitness = _recorded_fitness(d)
-        if fitness is not None:
-            row["champion_fitness"] = fitness
-        row.update(champion_body_measures(d))
+        champ = champion_of(d)
+        if champ is not None:
+            row["champion_fitness"] = float(champ["fitness"])
+            row.update(champion_body_measures(champ))
         diversity = cols.get("body_diversity", np.zeros(0))  # older runs: no column
         if len(diversity) and math.isfinite(diversity[-1]):
             row["body_diversity"] = float(diversity[-1])
@@ -179,25 +178,37 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
     return rows
 
 
-def champion_body_measures(run_dir: Path) -> dict[str, float]:
-    """The measures of champion.json's body (evolve/methods/body_measures.py) that summary.csv
-    keeps (BODY_COLUMNS); {} without a champion or a body to measure."""
+def champion_body_measures(champ: dict) -> dict[str, float]:
+    """The measures of a champion record's body (evolve/methods/body_measures.py) that summary.csv
+    keeps (BODY_COLUMNS); {} without a body."""
     from evolve.methods.body_measures import measures
 
-    try:
-        body = np.asarray(json.loads(read_regular(run_dir / "champion.json"))["body"], dtype=np.int64)
-        m = measures(body) if body.ndim == 2 else {}
-    except (OSError, ValueError, KeyError, TypeError):
+    if "body" not in champ:
         return {}
+    m = measures(np.asarray(champ["body"], dtype=np.int64))
     return {k: m[k] for k in BODY_COLUMNS if k in m}
 
 
-def _recorded_fitness(run_dir: Path) -> float | None:
-    """champion.json's fitness, None without a readable one."""
-    try:
-        return float(json.loads(read_regular(run_dir / "champion.json"))["fitness"])
-    except (OSError, ValueError, KeyError, TypeError):
+def champion_of(run_dir: Path) -> dict | None:
+    """champion.json's record, None where the run has none yet; SgrError naming the file where it
+    is not one (a damaged file would otherwise show as a run without a champion)."""
+    f = run_dir / "champion.json"
+    if not f.exists():
         return None
+    from evolve.records.rundir import RunDir
+    from tsim.body import check_robot
+
+    read_regular(f)  # OSError for a FIFO or a device, before it is read
+    champ = RunDir(run_dir).champion()
+    fitness = champ.get("fitness")
+    if isinstance(fitness, bool) or not isinstance(fitness, int | float):
+        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+    try:  # a record without a body (a hand-made one) reports without the body's measures
+        if "body" in champ:
+            check_robot(champ["body"])
+    except (ValueError, TypeError) as exc:
+        raise SgrError(f"{f}: key 'body': {str(exc)[:200]}") from None
+    return champ
 
 
 def _levels(rows: list[dict]) -> list[float]:

@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 NOISE_KINDS = ("none", "uniform", "gaussian")
+MAX_EPISODES = 100_000  # perturbed episodes of one genome: more is a typo (it would run for days)
 STATISTICS = ("mean", "min", "median", "qNN (a quantile in percent, e.g. q25)")
 
 _M1, _M2 = np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB)
@@ -183,8 +184,9 @@ class Robust:
             return None
         name = f"{source}: key 'robust"
         r = config_dataclass(cls, raw, name)
-        if not isinstance(r.episodes, int) or isinstance(r.episodes, bool) or r.episodes < 1:
-            raise ValueError(f"{name}.episodes' must be an int >= 1, got {r.episodes!r}")
+        k = r.episodes
+        if not isinstance(k, int) or isinstance(k, bool) or not 1 <= k <= MAX_EPISODES:
+            raise ValueError(f"{name}.episodes' must be an int from 1 to {MAX_EPISODES:,}, got {k!r}")
         if r.action_noise not in NOISE_KINDS:
             raise ValueError(f"{name}.action_noise' must be one of {', '.join(NOISE_KINDS)}, "
                              f"got {r.action_noise!r}")

@@ -39,7 +39,7 @@ from tsim.errors import SgrError
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 
-def _short(value: object, most: int = 80) -> str:
+def short_repr(value: object, most: int = 80) -> str:
     """`repr(value)` for an error line, cut at `most` characters (a YAML value may be huge)."""
     text = repr(value)
     return text if len(text) <= most else text[:most] + " ..."
@@ -93,7 +93,7 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
         types = typ if isinstance(typ, tuple) else (typ,)
         ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
         if not ok:
-            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {_short(val)}")
+            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {short_repr(val)}")
         if isinstance(val, float) and not math.isfinite(val):
             raise SgrError(f"{source}: key {key!r} must be a finite number, got {val!r}")
         values[key] = val

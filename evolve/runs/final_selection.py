@@ -74,7 +74,6 @@ from evolve.config import (
     SHARE,
     FinalSelection,
     run_episodes,
-    selection_episodes,
 )
 from evolve.records.champion import best_ever_record, champion_record
 from evolve.records.files import atomic_write, record_json
@@ -161,6 +160,8 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     fit_tag = f"{TAG}-holdout/{cands[i][0]}"
     with problem.scored_with(fit_robust.to_json()):
         fit = float(np.asarray(problem.evaluate([phenotypes[i]], [fit_tag])[0], dtype=float)[0])
+    # what was simulated (selection_episodes is the most: fewer elites than asked may exist)
+    simulated = len(cands) * (settings.episodes + 1 + settings.confirm) + settings.holdout
     best = search.best
     best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]
@@ -178,7 +179,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
         **({"confirmed": float(confirmed[i])} if confirmed is not None else {}),
         "sized": {"share": SHARE, "run_episodes": run_episodes(cfg),
                   "auto": [k for k in COUNTS if getattr(asked, k) == AUTO],
-                  "episodes": selection_episodes(settings.to_json())},
+                  "episodes": simulated},
         "best_ever": {"key": best["key"], "fitness": best["fitness"], "file": BEST_EVER_FILE},
         "candidates": rows}
     atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode())

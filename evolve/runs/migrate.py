@@ -72,6 +72,8 @@ def migrate(path: str | Path, trust_pickle: bool = False) -> list[str]:
             lines.append(f"{f}: {b} -> {a} bytes")
     if files:
         lines.append(f"{len(files)} champion files: {before} -> {after} bytes")
+    if not lines:  # a silent exit would leave the user guessing whether it looked at all
+        lines.append(f"{path}: nothing to migrate (no pickled checkpoints, task.pkl or champion files)")
     return lines
 
 

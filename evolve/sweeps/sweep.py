@@ -35,12 +35,13 @@ from evolve.methods import METHODS
 from evolve.own_modules import child_env, python_command
 from evolve.records.files import atomic_write, read_yaml
 from evolve.records.rundir import RunDir
-from evolve.runs.config import configs_dir
+from evolve.runs.config import configs_dir, short_repr
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 from tsim.errors import SgrError
 
 SWEEP_FILE = "sweep.yaml"
+MAX_RUNS = 10_000  # runs in one sweep: more is a typo (a seed count of 1e9 would fill memory listing them)
 KEYS = ("configs", "imports", "methods", "overrides", "seeds", "tasks")
 RETRIES = 2  # a run whose process dies is resumed from its checkpoints this many more times
 
@@ -103,11 +104,12 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: 
         bad = next((t for t in tasks if t not in TASKS), None) if isinstance(tasks, list) else None
         raise _fail(source, "key 'tasks': " + (unknown_task(bad) if bad is not None else
                                                   f"must be a list of known tasks, got {tasks!r}"))
-    if isinstance(seeds, int) and not isinstance(seeds, bool) and seeds > 0:
+    if isinstance(seeds, int) and not isinstance(seeds, bool) and 0 < seeds <= MAX_RUNS:
         seeds = list(range(seeds))
     if (not isinstance(seeds, list) or not seeds
             or any(not isinstance(s, int) or isinstance(s, bool) or s < 0 for s in seeds)):
-        raise _fail(source, f"key 'seeds' must be a positive count or a list of seeds >= 0, got {seeds!r}")
+        raise _fail(source, f"key 'seeds' must be a count from 1 to {MAX_RUNS:,} or a list of seeds >= 0, "
+                            f"got {short_repr(seeds)}")
     configs = raw.get("configs")
     if configs is None:
         configs = configs_dir()
@@ -121,7 +123,11 @@ def check_sweep(raw, source: str = "sweep", base: Path | None = None, named_in: 
                             "mappings of config keys)")
     if "seed" in overrides:
         raise _fail(source, "key 'overrides' must not set 'seed': the sweep's seeds do")
-    sweep = {"methods": list(methods), "tasks": list(tasks), "seeds": list(dict.fromkeys(seeds)),
+    seeds = list(dict.fromkeys(seeds))
+    if len(methods) * len(tasks) * len(seeds) > MAX_RUNS:
+        raise _fail(source, f"{len(methods)} methods x {len(tasks)} tasks x {len(seeds)} seeds is more "
+                            f"than {MAX_RUNS:,} runs")
+    sweep = {"methods": list(methods), "tasks": list(tasks), "seeds": seeds,
              "configs": str(configs.resolve()), "overrides": overrides}
     if imports:
         sweep["imports"] = imports

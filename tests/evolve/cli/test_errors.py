@@ -203,7 +203,10 @@ def test_champion_check_accepts_a_good_one(tmp_path):
 
 def test_bad_body_files(tmp_path, capsys):
     files = {"a.json": ("{bad", "not valid JSON"), "b.json": ('{"foo": 1}', "'body' or 'matrix' key"),
-             "c.npy": ("xx", "not a .npy file")}
+             "c.npy": ("xx", "not a .npy file"),
+             "ragged.json": ('{"body": [[3, 3], [3]]}', "not a list of equal-length rows"),
+             "flat.json": ("[3, 3]", "not a list of equal-length rows"),
+             "empty.json": ("[]", "not a list of equal-length rows")}
     for name, (text, detail) in files.items():
         (tmp_path / name).write_text(text)
         in_process(capsys, "render", "--task", "Walker-v0", "--body", str(tmp_path / name),
@@ -229,6 +232,48 @@ def test_plot_and_validate_on_folders_that_are_not_runs_or_references(tmp_path, 
     in_process(capsys, "validate", str(tmp_path), names=["index.json", "not valid JSON"])
 
 
+def test_validate_refuses_reference_files_that_are_not_the_ones_recorded(tmp_path, repo_root, capsys):
+    """index.json records each case's sha256, and the sets have a format version; `sgr validate`
+    compared an edited case, a case swapped for another task's, an unknown format and a returns
+    file renamed to another task as if they were evogym's. Each is one line, before any replay."""
+    data = repo_root / "tests" / "data"
+    traces = tmp_path / "traces"
+    shutil.copytree(data / "traces", traces)
+    index = json.loads((traces / "index.json").read_text())
+    first = index["cases"][0]["file"]
+
+    def write(i):
+        (traces / "index.json").write_text(json.dumps(i))
+
+    write({**index, "format_version": 7})
+    in_process(capsys, "validate", str(traces),
+               names=[traces / "index.json", "format_version 7; this sgr reads 1"])
+    write(index)
+    raw = bytearray((traces / first).read_bytes())
+    raw[-30] ^= 1  # one bit of the recorded data (the zip's directory still reads)
+    (traces / first).write_bytes(bytes(raw))
+    in_process(capsys, "validate", str(traces), names=[traces / first, "sha256 is not the one"])
+    shutil.copy(data / "traces" / first, traces / first)
+    other = next(c for c in index["cases"] if c["task"] != index["cases"][0]["task"])
+    swapped = {**other, "file": first, "sha256": index["cases"][0]["sha256"]}  # the file says its own task
+    write({**index, "cases": [swapped, *index["cases"][1:]]})
+    in_process(capsys, "validate", str(traces),
+               names=[traces / first, f"holds task {index['cases'][0]['task']!r}"])
+    write({**index, "cases": [{**index["cases"][0], "file": "../x.npz"}]})
+    in_process(capsys, "validate", str(traces), names=["'../x.npz' is not a file of", traces])
+    returns = tmp_path / "returns"
+    returns.mkdir()
+    shutil.copy(data / "returns" / "Walker-v0.npz", returns / "Climber-v2.npz")
+    in_process(capsys, "validate", str(returns),
+               names=[returns / "Climber-v2.npz", "holds task 'Walker-v0', its name says 'Climber-v2'"])
+    e32 = tmp_path / "evogym32"
+    e32.mkdir()
+    index32 = json.loads((data / "evogym32" / "index.json").read_text())
+    (e32 / "index.json").write_text(json.dumps({**index32, "all_tasks": ["Walker-v0"]}))
+    shutil.copy(data / "evogym32" / "returns_Climber-v2.npz", e32 / "returns_Walker-v0.npz")
+    in_process(capsys, "validate", str(e32), names=[e32 / "returns_Walker-v0.npz", "sha256 is not the one"])
+
+
 def test_out_paths_that_cannot_be_written(tmp_path, repo_root, capsys):
     a_file = tmp_path / "a_file"
     a_file.write_text("")
@@ -247,6 +292,14 @@ def test_out_paths_that_cannot_be_written(tmp_path, repo_root, capsys):
     (["render", "--width", "0"], "argument --width"),
     (["bench", "--robots", "-1"], "argument --robots"),
     (["frobnicate"], "invalid choice"),
+    # typos that ran for days or filled memory (a probe of bad inputs): the most is said
+    (["demo", "--steps", "100000000000"], "argument --steps: must be at most 1,000,000"),
+    (["bench", "--robots", "1000000001"], "argument --robots: must be at most 1,000,000"),
+    (["demo", "--seed", "-1"], "argument --seed: must be an int >= 0"),
+    (["render", "--width", "100000"], "argument --width: must be at most 4,096"),
+    (["render", "--height", "5000"], "argument --height: must be at most 4,096"),
+    (["render", "--steps", "1000001"], "argument --steps: must be at most 1,000,000"),
+    (["report", ".", "--replays", "1000000000"], "argument --replays: must be at most 100,000"),
 ])
 def test_argparse_errors(capsys, argv, detail):
     with pytest.raises(SystemExit) as exc:
@@ -465,6 +518,9 @@ def test_an_error_in_a_users_task_module_shows_the_users_code(tmp_path):
     ("weight_threshold: -0.5", "key 'weight_threshold' must be >= 0, got -0.5"),
     ("pop_size: 100000000000000000000", "key 'pop_size' must be at most 1,000,000"),
     ("episode_steps: 1000000000000", "key 'episode_steps' must be at most 1,000,000"),
+    ("robust: {episodes: 1000000000}", "key 'robust.episodes' must be an int from 1 to 100,000"),
+    ("final_selection: {confirm: 1000000000}",
+     "key 'final_selection.confirm' must be an int from 0 to 100,000"),
     ("a: &x [1, 2]\nseed: *x", "not valid YAML: aliases (*name) are not read in sgr's files"),
 ])
 def test_a_config_value_out_of_its_range_or_an_alias_is_one_line(tmp_path, capsys, extra, says):

@@ -87,9 +87,10 @@ def test_a_rescored_elite_that_falls_is_replaced_by_a_newcomer_it_used_to_beat()
     ({"resolution": [10, 10, 10]}, "key 'qd.resolution' must be an int >= 1 or a list"),
     ({"ranges": {"actuator": [1, 0]}}, "key 'qd.ranges.actuator' must be [low, high]"),
     ({"ranges": {"width": [0, 5]}}, "key 'qd.ranges': 'width' is not one of qd.descriptors"),
-    ({"batch": 0}, "key 'qd.batch' must be an int >= 1, got 0"),
-    ({"initial": 2.5}, "key 'qd.initial' must be an int >= 1, got 2.5"),
-    ({"rescore": -1}, "key 'qd.rescore' must be an int >= 0, got -1"),
+    ({"batch": 0}, "key 'qd.batch' must be an int from 1 to 1,000,000, got 0"),
+    ({"initial": 2.5}, "key 'qd.initial' must be an int from 1 to 1,000,000, got 2.5"),
+    ({"batch": 10**9}, "key 'qd.batch' must be an int from 1 to 1,000,000, got 1000000000"),
+    ({"rescore": -1}, "key 'qd.rescore' must be an int from 0 to 1,000,000, got -1"),
     ({"score_offset": "low"}, "key 'qd.score_offset' must be a number"),
 ])
 def test_a_bad_qd_key_is_one_line_naming_it(tmp_path, capsys, qd, named):

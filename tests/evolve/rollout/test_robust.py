@@ -253,7 +253,7 @@ def test_a_robot_shift_moves_the_robot_alone():
 
 
 @pytest.mark.parametrize("robust, message", [
-    ({"episodes": 0}, "key 'robust.episodes' must be an int >= 1"),
+    ({"episodes": 0}, "key 'robust.episodes' must be an int from 1 to 100,000"),
     ({"action_noise": "pink"}, "key 'robust.action_noise' must be one of none, uniform, gaussian"),
     ({"action_scale": -1}, "key 'robust.action_scale' must be a number >= 0"),
     ({"statistic": "q250"}, "key 'robust.statistic' must be one of mean, min, median, qNN"),

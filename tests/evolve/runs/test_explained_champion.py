@@ -16,11 +16,12 @@ import pytest
 import yaml
 
 from evolve.cli import main
+from evolve.config import selection_episodes
 from evolve.records import verdict
 from evolve.records.replay import champion_gif, replay_champion, rescore_champion
 from evolve.records.rundir import RunDir
 from evolve.rollout.robust import episode_keys
-from evolve.runs.final_selection import FinalSelection, explain, run_episodes, selection_episodes
+from evolve.runs.final_selection import FinalSelection, explain, run_episodes
 
 ROBUST = {"episodes": 2, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0,
           "statistic": "mean"}
@@ -183,7 +184,8 @@ def test_auto_counts_grow_with_the_run_and_explicit_ones_are_kept():
 def test_a_bad_auto_count_names_its_key():
     with pytest.raises(ValueError) as exc:
         FinalSelection.from_config({"holdout": "some"}, "c.yaml")
-    assert "key 'final_selection.holdout' must be an int >= 1 or auto, got 'some'" in str(exc.value)
+    assert ("key 'final_selection.holdout' must be an int from 1 to 100,000 or auto, got 'some'"
+            in str(exc.value))
 
 
 def test_a_selection_record_from_before_the_holdout_still_describes():
@@ -213,6 +215,9 @@ def test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion(tm
     assert whole["selection"]["sized"]["run_episodes"] == 3 * 12 * 2
     from evolve.runs.final_selection import describe
     assert "episodes in all, sized for the run's 72;" in describe(whole)
+    sel = whole["selection"]  # the episodes said are those simulated: one per candidate more (its exact one)
+    assert sel["sized"]["episodes"] == (len(sel["candidates"]) * (sel["episodes"] + 1 + sel["confirm"])
+                                        + sel["holdout"])
     copy = tmp_path / "killed"
     shutil.copytree(tmp_path / "whole", copy)
     (copy / "checkpoints" / "gen-00003.json.gz").unlink()  # killed while choosing: no last checkpoint

@@ -202,7 +202,7 @@ def test_an_unfinished_run_or_a_nested_run_is_one_error_line(runs, tmp_path, cap
 
 
 @pytest.mark.parametrize("raw, message", [
-    ({"candidates": 0}, "key 'final_selection.candidates' must be an int >= 1"),
+    ({"candidates": 0}, "key 'final_selection.candidates' must be an int from 1 to 100,000"),
     ({"tolerance": 1.5}, "key 'final_selection.tolerance' must be a number in [0, 1]"),
     ({"statistic": "best"}, "key 'final_selection.statistic' must be one of mean"),
     ({"episode": 3}, "key 'final_selection': unknown key 'episode'"),

@@ -55,3 +55,10 @@ def test_the_old_command_names_are_aliases_saying_so_in_one_line(tmp_path, repo_
     assert compact_main([str(run)]) == 0
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and "alias of: sgr migrate" in err[0]
+
+
+def test_a_folder_with_nothing_to_migrate_says_so(tmp_path, capsys):
+    """An empty folder (or a typo'd one holding no sgr files) printed nothing and exited 0."""
+    assert main(["migrate", str(tmp_path)]) == 0
+    assert capsys.readouterr().out.splitlines() == [
+        f"{tmp_path}: nothing to migrate (no pickled checkpoints, task.pkl or champion files)"]

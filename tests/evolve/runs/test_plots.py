@@ -149,3 +149,38 @@ def test_sgr_plot_of_several_runs_writes_beside_them_and_says_where(tmp_path, mo
     assert capsys.readouterr().out.strip() == f"wrote {tmp_path / 'runs' / 'fitness.png'}"
     assert (tmp_path / "runs" / "fitness.png").read_bytes().startswith(PNG_MAGIC)
     assert list(cwd.iterdir()) == []
+
+
+@pytest.mark.parametrize("row, says", [
+    ("junk,row", "row 4 is not generation 3 (its generation column holds 'junk')"),
+    ("7,1.0,0.5,0.3,3", "row 4 is not generation 3 (its generation column holds '7')"),
+    ("2,1.0,0.5,0.3,3", "row 4 is not generation 3 (its generation column holds '2')"),
+])
+def test_rows_that_are_not_the_next_generation_are_a_damaged_file_not_more_generations(tmp_path, row, says):
+    """A junk row in generations.csv was counted as one more generation (with NaN fitness) by `sgr
+    report` and `sgr plot`; a row that is not the next generation names the file and the row. A run
+    grown from another's checkpoint starts where that one stopped and reads as it is."""
+    from evolve.report.plots import read_generations
+    from tsim.errors import SgrError
+
+    run = _run(tmp_path / "r", [1.0, 2.0])
+    with (run / "generations.csv").open("a") as f:
+        f.write(row + "\n")
+    with pytest.raises(SgrError) as exc:
+        read_generations(run)
+    assert str(exc.value) == f"{run / 'generations.csv'}: {says}: a damaged file"
+    grown = _run(tmp_path / "grown", [1.0, 2.0, 3.0], first=51)
+    assert read_generations(grown)["generation"].tolist() == [51, 52, 53]
+
+
+def test_resume_over_a_junk_row_names_the_file_and_the_row(tmp_path):
+    from evolve.records.rundir import RunDir
+    from tsim.errors import SgrError
+
+    run = _run(tmp_path / "r", [1.0, 2.0, 3.0])
+    RunDir(run).truncate_rows(2)
+    assert (run / "generations.csv").read_text().splitlines()[-1].startswith("2,")
+    with (run / "generations.csv").open("a") as f:
+        f.write("x,1.0\n")
+    with pytest.raises(SgrError, match=r"generations.csv: row 4 has no generation number \(got 'x'\)"):
+        RunDir(run).truncate_rows(1)

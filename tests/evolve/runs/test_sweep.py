@@ -107,7 +107,11 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
 @pytest.mark.parametrize("change, message", [
     ({"methods": ["cmaes"]}, "key 'methods' must be a list of sgr, direct, nested"),
     ({"tasks": ["Jumper-v9"]}, "key 'tasks': unknown task 'Jumper-v9'; did you mean Jumper-v0"),
-    ({"seeds": -1}, "key 'seeds' must be a positive count or a list of seeds"),
+    ({"seeds": -1}, "key 'seeds' must be a count from 1 to 10,000 or a list of seeds"),
+    ({"seeds": 10**9}, "key 'seeds' must be a count from 1 to 10,000"),  # a typo, not a day's listing
+    ({"seeds": [*range(2000), -1]}, "got [0, 1, 2, 3,"),  # the value cut short in the line
+    ({"seeds": 3334, "methods": ["sgr", "direct", "nested"]}, "3 methods x 1 tasks x 3334 seeds is more "
+                                                               "than 10,000 runs"),
     ({"overrides": {"popsize": 3}}, "unknown key 'popsize'"),
     ({"overrides": {"nested": {"layout": "per_cell"}}}, "unknown key 'layout' for method 'nested'"),
     ({"overrides": {"seed": 3}}, "must not set 'seed'"),
@@ -119,6 +123,7 @@ def test_a_bad_sweep_file_is_one_error_line_and_no_sweep(tmp_path, capsys, chang
     assert main(["sweep", "--config", str(spec), "--out", str(tmp_path / "s")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("sgr: error:") and message in err and err.count("\n") == 1, err
+    assert "1999" not in err  # a long value is cut short in the line
     assert not (tmp_path / "s").exists()
 
 
