@@ -25,8 +25,7 @@ from types import MappingProxyType
 from typing import Any
 
 from evolve.rollout.robust import MAX_EPISODES, STATISTICS, Robust, config_dataclass
-from tasks.cli import MAX_STEPS
-from tasks.specs import TASKS
+from tasks.specs import MAX_STEPS, TASKS
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
 

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
+from tasks.specs import MAX_STEPS
 from tsim import backend
 from tsim.errors import SgrError
 from tsim.files import atomic_write
@@ -23,7 +24,6 @@ PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default
 
 
 # the most a command line may ask for: more is a typo, and would run for days or fill memory
-MAX_STEPS = 1_000_000  # env steps of one episode (the same bound a config or a record has)
 MAX_ROBOTS = 1_000_000  # robots in one batch
 MAX_PIXELS = 4096  # a frame's width or height
 
@@ -43,8 +43,8 @@ def positive(cast, most: float | None = None):
     return parse
 
 
-def nonnegative(cast):
-    """argparse type: a finite number >= 0 of type `cast` (int or float)."""
+def nonnegative(cast, most: float | None = None):
+    """argparse type: a finite number >= 0 of type `cast` (int or float), at most `most` if given."""
     def parse(text: str):
         try:
             value = cast(text)
@@ -53,6 +53,8 @@ def nonnegative(cast):
         if not 0 <= value < float("inf"):
             raise argparse.ArgumentTypeError(f"must be {'an' if cast is int else 'a'} {cast.__name__} >= 0, "
                                              f"got {text!r}")
+        if most is not None and not value <= most:
+            raise argparse.ArgumentTypeError(f"must be at most {most:,}, got {text!r}")
         return value
     return parse
 

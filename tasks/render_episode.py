@@ -2,16 +2,22 @@
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 
 import numpy as np
 
 from tasks.env import BatchEnv
 from tsim.body import Body
-from tsim.errors import SgrError
 from tsim.render import Renderer
 
-FRAME_BYTES = 4 << 30  # the most an episode's frames may hold: more would fill memory before the GIF
+FRAME_BYTES = 2 << 30  # the most an episode's frames may hold (the GIF writer copies them once more)
+
+
+def frame_stride(steps: int, width: int, height: int, indexed: bool) -> int:
+    """The least k such that the reset frame and every k-th step's (and the last) fit FRAME_BYTES."""
+    most = max(2, FRAME_BYTES // (width * height * (1 if indexed else 3)))  # frames
+    return max(1, math.ceil(steps / (most - 1)))  # 1 + ceil(steps / k) frames are kept
 
 
 def render_episode(task: str, body: Body | object, policy: Callable[[int, np.ndarray], np.ndarray],
@@ -20,6 +26,9 @@ def render_episode(task: str, body: Body | object, policy: Callable[[int, np.nda
                    **renderer_kw) -> list[np.ndarray]:
     """Simulate one robot on `task` for `steps` env steps (task default if None) with actions
     `policy(t, obs)` and return frames: the reset state, then every `every`-th step (and the last).
+    An episode whose frames would hold more than FRAME_BYTES keeps every k-th step's instead, k the
+    least that fits (a 1,000,000-step episode at 640x320: every 96th), so that any episode a run may
+    have can be drawn.
 
     Frames are RGB (H, W, 3), or `PALETTE` indices (H, W) with `indexed` (faster, same GIF). Stops
     early when the episode terminates (goal reached or unstable). `start_shift` starts the robot
@@ -30,11 +39,7 @@ def render_episode(task: str, body: Body | object, policy: Callable[[int, np.nda
         raise ValueError(f"every must be >= 1, got {every}")
     env = BatchEnv(task, [body], episode_steps=steps, robot_shift=[start_shift] if start_shift else None,
                    precision=precision)
-    frames_at_most = env.episode_steps // every + 2
-    need = frames_at_most * width * height * (1 if indexed else 3)
-    if need > FRAME_BYTES:
-        raise SgrError(f"{frames_at_most:,} frames of {width}x{height} would hold {need / 2**30:.0f} GiB "
-                       f"(at most {FRAME_BYTES >> 30} GiB): render fewer steps or smaller frames")
+    every = max(every, frame_stride(env.episode_steps, width, height, indexed))
     renderer = Renderer(env.sim.world, env.sim.bodies[0], width, height, **renderer_kw)
     names = [o.name for o in env.sim.free_objects]
     draw = renderer.frame_indexed if indexed else renderer.frame

@@ -33,6 +33,9 @@ from tasks.suite import (
 from tsim.errors import SgrError
 from tsim.world import World, add_world_finder, load_object, load_world
 
+# the most env steps of one episode a command line, a config or a record may ask for: more is a typo
+MAX_STEPS = 1_000_000
+
 TASKS: dict[str, TaskSpec] = {s.name: s for s in (
     walker.SPEC,
     obstacle_traverser.SPEC,

@@ -45,10 +45,14 @@ def _index(folder: Path, version: int) -> dict:
     format we do not know would be compared field by field as if we did."""
     path = folder / "index.json"
     index = _json(path)
-    if not isinstance(index, dict) or not isinstance(index.get("cases", []), list):
-        raise SgrError(f"{path}: not a reference index (a JSON object with a list of cases)")
+    if not isinstance(index, dict):
+        raise SgrError(f"{path}: not a reference index (a JSON object)")
     if index.get("format_version") != version:
         raise SgrError(f"{path}: format_version {index.get('format_version')!r}; this sgr reads {version}")
+    shapes = ({"cases": list} if version == TRACES_FORMAT else {"all_tasks": list, "tasks": dict})
+    for key, kind in shapes.items():
+        if not isinstance(index.get(key), kind):
+            raise SgrError(f"{path}: key {key!r} must be a {kind.__name__}, got {str(index.get(key))[:40]}")
     return index
 
 
@@ -68,14 +72,28 @@ def _case(folder: Path, case: object, index: Path):
 def _recorded_file(folder: Path, entry: dict, index: Path) -> Path:
     """The file an index entry ({"file": name, "sha256": ...}) names: inside `folder`, there, and
     with the bytes recorded when the entry has a sha256."""
-    path = folder / str(entry.get("file"))
-    if path.resolve().parent != folder.resolve():
+    name = str(entry.get("file"))
+    if Path(name).name != name or name in ("", ".", ".."):  # the name, not where a link points
         raise SgrError(f"{index}: file {entry.get('file')!r} is not a file of {folder}")
+    path = folder / name
     if not path.is_file():
         raise SgrError(f"{path}: not found (named by {index})")
     if "sha256" in entry and hashlib.sha256(path.read_bytes()).hexdigest() != entry["sha256"]:
         raise SgrError(f"{path}: its sha256 is not the one {index} records: not the file recorded")
     return path
+
+
+def _evogym32_files(folder: Path, index: dict, task: str) -> None:
+    """SgrError unless the files `evogym32_returns` and `evogym32_traces` replay for `task` are the
+    ones index.json records, byte for byte."""
+    path = folder / "index.json"
+    facts = index["tasks"].get(task)
+    entries = [facts.get("returns_file"), *(facts.get("traces") or [])] if isinstance(facts, dict) else []
+    recorded = {e["file"]: e for e in entries if isinstance(e, dict) and isinstance(e.get("file"), str)}
+    for f in [folder / f"returns_{task}.npz", *sorted(folder.glob(f"trace_{task}_*.npz"))]:
+        if f.name not in recorded:
+            raise SgrError(f"{f}: not recorded in {path} (task {task!r})")
+        _recorded_file(folder, recorded[f.name], path)
 
 
 def validate_traces(folder: Path) -> dict:
@@ -214,11 +232,10 @@ def validate_evogym32(folder: str | Path, tasks: list[str] | None = None) -> dic
     folder = Path(folder)
     index = _index(folder, EVOGYM32_FORMAT)
     out = {}
-    for task in tasks or [t for t in index.get("all_tasks", []) if t in TASKS]:
-        facts = index.get("tasks", {}).get(task, {})  # every file its set holds, checked first
-        for entry in [facts.get("returns_file", {}), *facts.get("traces", [])]:
-            if isinstance(entry, dict) and "file" in entry:
-                _recorded_file(folder, entry, folder / "index.json")
+    tasks = tasks or [t for t in index["all_tasks"] if t in TASKS]
+    for task in tasks:  # every file replayed is checked against index.json before any replay
+        _evogym32_files(folder, index, task)
+    for task in tasks:
         r = evogym32_returns(folder, task)
         if not backend.real().bits:  # no bits to match: evogym's chaos floor is the measure
             c = chaos_row(r, _npz(folder / f"returns_{task}.npz"))

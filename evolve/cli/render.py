@@ -10,7 +10,9 @@ from pathlib import Path
 import numpy as np
 
 from evolve.cli.common import add_noise, nonnegative, output_path, parse_body, positive
-from tasks.cli import MAX_PIXELS, MAX_STEPS
+from evolve.rollout.robust import MAX_EPISODES
+from tasks.cli import MAX_PIXELS
+from tasks.specs import MAX_STEPS
 from tsim.errors import SgrError
 
 
@@ -29,7 +31,7 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--width", type=positive(int, MAX_PIXELS), default=640)
     r.add_argument("--height", type=positive(int, MAX_PIXELS), default=320)
     r.add_argument("--fps", type=positive(float, 1000), default=30.0)
-    r.add_argument("--replay", type=nonnegative(int), metavar="I",
+    r.add_argument("--replay", type=nonnegative(int, MAX_EPISODES), metavar="I",
                    help="the champion's perturbed replay I (as sgr report replays it; 0: the exact "
                         "episode; default: the replay whose return is the median of the verdict's 20)")
     r.add_argument("--exact", action="store_true",

@@ -5,7 +5,6 @@ robot, its replays and GIFs: evolve/records/replay.py.
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
@@ -65,10 +64,7 @@ def read_champion(run_dir: str | Path,
     if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
         run = RunDir(run_dir)
         run.load_task(run.config())
-    try:
-        champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise SgrError(f"{f}: not valid JSON ({exc})") from None
+    champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)  # SgrError: not JSON
     if not isinstance(champ, dict):
         raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
     missing = [k for k in KEYS if k not in champ]

@@ -59,6 +59,56 @@ def checkpoint_generation(path: Path) -> int | None:
     return int(m.group(1)) if m else None
 
 
+def generation_rows(path: Path) -> tuple[list[dict], list[int]]:
+    """generations.csv's rows (dicts of strings), whole lines only (a last line cut short is no row),
+    and each row's line number in the file (the header is line 1; blank lines are skipped)."""
+    text = path.read_text()
+    reader = csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1]))
+    rows, lines = [], []
+    for row in reader:
+        rows.append(row)
+        lines.append(reader.line_num)
+    return rows, lines
+
+
+def check_generation_numbers(rows: list[dict], lines: list[int], path: Path) -> int:
+    """The first row's generation; SgrError naming the file and the line unless the rows are one
+    per generation, in order (sgr writes no other: anything else is a damaged file). A run grown
+    from another's checkpoint starts where that stopped; an older sgr's rows count from 0."""
+    cells = [str(r.get("generation")) for r in rows]
+    for cell, line in zip(cells, lines, strict=True):
+        if not re.fullmatch(r"[0-9]{1,12}", cell):
+            raise SgrError(f"{path}: line {line} has no generation number (got {cell[:40]!r}): a damaged "
+                           "file")
+    start = int(cells[0]) if cells else 1
+    for i, (cell, line) in enumerate(zip(cells, lines, strict=True)):
+        if int(cell) != start + i:
+            raise SgrError(f"{path}: line {line} is generation {cell}, not {start + i}: a damaged file")
+    return start
+
+
+def champion_of(run_dir: str | Path) -> dict | None:
+    """A run's champion.json as read, None where the run has none yet; SgrError naming the file where
+    it is not a champion's record (a fitness that is not a number, a body that is not one), so that a
+    damaged file is not shown as a run without a champion. A record without a body (a hand-made one)
+    is read."""
+    from tsim.body import check_robot
+
+    f = Path(run_dir) / "champion.json"
+    if not f.exists() and not f.is_symlink():
+        return None
+    champ = RunDir(run_dir).champion()
+    fitness = champ.get("fitness")
+    if isinstance(fitness, bool) or not isinstance(fitness, int | float):
+        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+    try:
+        if "body" in champ:
+            check_robot(champ["body"])
+    except (ValueError, TypeError) as exc:
+        raise SgrError(f"{f}: key 'body': {str(exc)[:200]}") from None
+    return champ
+
+
 def _columns(rows: list[dict]) -> list[str]:
     """generations.csv's columns for `rows`: QD_COLUMNS when they are a map-elites run's."""
     return QD_COLUMNS if any("coverage" in r for r in rows) else COLUMNS
@@ -235,8 +285,14 @@ class RunDir:
         f = self.path / "generations.csv"
         if not f.is_file():
             return []
-        text = f.read_text()
-        return list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))  # whole lines only
+        return generation_rows(f)[0]
+
+    def check_rows(self) -> None:
+        """SgrError naming the file and the line unless generations.csv holds one row per
+        generation, in order (what a resume keeps and appends to)."""
+        f = self.path / "generations.csv"
+        if f.is_file():
+            check_generation_numbers(*generation_rows(f), f)
 
     def _write_rows(self, rows: list[dict]) -> None:
         columns = _columns(rows)
@@ -282,11 +338,8 @@ class RunDir:
     def truncate_rows(self, generation: int) -> None:
         """Keep the rows of the first `generation` generations (the others are recomputed after a
         resume). Rows count generations from 1; a run written when they counted from 0 is renumbered."""
+        self.check_rows()
         rows = self.rows()
-        for i, r in enumerate(rows):
-            if not str(r.get("generation")).isdigit():  # a row we did not write
-                raise SgrError(f"{self.path / 'generations.csv'}: row {i + 2} has no generation number "
-                               f"(got {str(r.get('generation'))[:40]!r}): a damaged file")
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
         self._write_rows([r for r in rows if int(r["generation"]) <= generation])
@@ -319,12 +372,16 @@ class RunDir:
         """champion.json as a dict; SgrError naming the file when there is none yet, or it is not a
         JSON object (a damaged file: ours are written whole)."""
         f = self.path / "champion.json"
+        if f.exists() and not f.is_file():  # a FIFO or a device would be read forever
+            raise SgrError(f"{f}: not a regular file")
         if not f.is_file():
             raise SgrError(f"{self.path} has no champion.json yet")
         try:
             champ = json.loads(f.read_text())
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise SgrError(f"{f}: not valid JSON ({exc})") from None
+            raise SgrError(f"{f}: not valid JSON ({str(exc)[:200]})") from None
+        except RecursionError:
+            raise SgrError(f"{f}: not a champion's record (nested too deeply)") from None
         if not isinstance(champ, dict):
             raise SgrError(f"{f}: a champion record is a JSON object, got {type(champ).__name__}")
         return champ

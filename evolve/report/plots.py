@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import csv
 import io
-import json
 import os
 import re
 from collections.abc import Sequence
@@ -28,7 +27,8 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.ticker import MaxNLocator
 
-from evolve.records.files import atomic_write, read_regular
+from evolve.records.files import atomic_write
+from evolve.records.rundir import champion_of, check_generation_numbers, generation_rows
 from tsim.errors import SgrError
 
 UNKNOWN = "unknown"
@@ -55,13 +55,13 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     if not f.is_file():
         raise SgrError(f"{run_dir} has no generations.csv")
     try:
-        text = f.read_text()
-        # a line being written (no newline yet) is no row
-        rows = list(csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1])))
+        rows, lines = generation_rows(f)  # a line being written (no newline yet) is no row
     except (csv.Error, UnicodeDecodeError) as exc:
         raise SgrError(f"{f}: not a readable CSV file ({exc})") from None
     if not rows:
         return {}
+    if "generation" in rows[0]:
+        check_generation_numbers(rows, lines, f)
 
     def num(v: str | None) -> float:
         m = _WRAPPED.match(v or "")  # numpy 2 reprs, e.g. "np.float64(1.5)"
@@ -71,16 +71,8 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
             return float("nan")
 
     cols = {k: np.array([num(r.get(k)) for r in rows]) for k in rows[0]}
-    gen = cols.get("generation")
-    if gen is not None:  # one row per generation, in order (a grown run's first is not 1): else damaged
-        start = gen[0] if gen[0] >= 0 and gen[0] % 1 == 0 else 0
-        bad = np.flatnonzero(gen != np.arange(start, start + len(gen)))
-        if len(bad):
-            i = int(bad[0])
-            raise SgrError(f"{f}: row {i + 2} is not generation {start + i:.0f} (its generation column "
-                           f"holds {str(rows[i].get('generation'))[:40]!r}): a damaged file")
-        if start == 0:  # written when rows counted from 0
-            cols["generation"] = gen + 1
+    if "generation" in cols and cols["generation"][0] == 0:  # written when rows counted from 0
+        cols["generation"] = cols["generation"] + 1
     return cols
 
 
@@ -301,12 +293,13 @@ def plot_run(run_dir: str | Path, out: str | Path, diversity: bool = False) -> P
 
 
 def _champion(run_dir: str | Path) -> tuple[int, float] | None:
-    """(generation, fitness) of the run's champion.json, None without a readable one."""
-    try:
-        champ = json.loads(read_regular(Path(run_dir) / "champion.json"))
-        return int(champ["generation"]), float(champ["fitness"])
-    except (OSError, ValueError, KeyError, TypeError):
+    """(generation, fitness) of the run's champion.json, None without one (or a hand-made record
+    without a generation); SgrError naming the file where it is damaged (`champion_of`)."""
+    champ = champion_of(run_dir)
+    gen = None if champ is None else champ.get("generation")
+    if not isinstance(gen, int) or isinstance(gen, bool):
         return None
+    return gen, float(champ["fitness"])
 
 
 def _style(ax: Axes, title: str, ylabel: str) -> None:

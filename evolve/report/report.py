@@ -34,7 +34,8 @@ from pathlib import Path
 import numpy as np
 
 from evolve.records import verdict as verdict_rule
-from evolve.records.files import atomic_write, load_yaml, read_regular
+from evolve.records.files import atomic_write, load_yaml
+from evolve.records.rundir import champion_of
 from evolve.records.segments import backend_summary
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
@@ -150,6 +151,9 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
 
     group_of = group_of_each_run(runs, pool)
     names = run_names(runs)
+    champions = {d: champion_of(d) for d in runs}  # every damaged file is found before any replay
+    for d in runs:
+        read_generations(d)
     rows = []
     for d in runs:
         g = group_of[d]
@@ -160,7 +164,7 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
                "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
                "episode_steps": episode_length(raw, g.task), "settings": g.settings, "classic": g.classic,
                "path": d, "backend": backend_summary(d)}
-        champ = champion_of(d)
+        champ = champions[d]
         if champ is not None:
             row["champion_fitness"] = float(champ["fitness"])
             row.update(champion_body_measures(champ))
@@ -187,28 +191,6 @@ def champion_body_measures(champ: dict) -> dict[str, float]:
         return {}
     m = measures(np.asarray(champ["body"], dtype=np.int64))
     return {k: m[k] for k in BODY_COLUMNS if k in m}
-
-
-def champion_of(run_dir: Path) -> dict | None:
-    """champion.json's record, None where the run has none yet; SgrError naming the file where it
-    is not one (a damaged file would otherwise show as a run without a champion)."""
-    f = run_dir / "champion.json"
-    if not f.exists():
-        return None
-    from evolve.records.rundir import RunDir
-    from tsim.body import check_robot
-
-    read_regular(f)  # OSError for a FIFO or a device, before it is read
-    champ = RunDir(run_dir).champion()
-    fitness = champ.get("fitness")
-    if isinstance(fitness, bool) or not isinstance(fitness, int | float):
-        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
-    try:  # a record without a body (a hand-made one) reports without the body's measures
-        if "body" in champ:
-            check_robot(champ["body"])
-    except (ValueError, TypeError) as exc:
-        raise SgrError(f"{f}: key 'body': {str(exc)[:200]}") from None
-    return champ
 
 
 def _levels(rows: list[dict]) -> list[float]:

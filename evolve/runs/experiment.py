@@ -149,6 +149,7 @@ class Experiment:
             if state is None:
                 raise SgrError(f"{out} has no checkpoint to resume from")
             done = state["generation"]
+            run.check_rows()  # a damaged generations.csv is refused before anything changes
             if generations is not None:
                 if generations < done:
                     raise SgrError(f"{out} has already run {done} generations; --generations must be "

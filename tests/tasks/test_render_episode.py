@@ -38,3 +38,26 @@ def test_render_episode_frames_and_lossless_gif(tmp_path):
     back = iio.imread(path)[..., :3]
     assert back.shape == (4, 80, 160, 3)
     assert np.array_equal(back, np.stack(frames))
+
+
+def test_an_episode_too_long_to_keep_every_frame_keeps_every_kth_and_fits(monkeypatch):
+    """Frames at most FRAME_BYTES: a run may ask for 1,000,000 steps, whose GIF at 640x320 would
+    need 191 GiB (its end files then failed, and so did every resume). The least stride that fits
+    is taken, and the frames are those of that stride asked for, bit for bit."""
+    import tasks.render_episode as module
+
+    body = build_body(BODY)
+    n = body.n_actuators
+
+    def policy(t, obs):
+        return np.full(n, 1.0 + 0.3 * (t % 2))
+
+    monkeypatch.setattr(module, "FRAME_BYTES", 96 * 48 * 6)  # six indexed frames of 96x48
+    assert module.frame_stride(20, 96, 48, True) == 4 and module.frame_stride(21, 96, 48, True) == 5
+    frames = render_episode("Thrower-v0", body, policy, 20, 96, 48, indexed=True)
+    assert len(frames) == 6 and sum(f.nbytes for f in frames) <= module.FRAME_BYTES
+    monkeypatch.setattr(module, "FRAME_BYTES", 2 << 30)
+    assert module.frame_stride(20, 96, 48, True) == 1
+    strided = render_episode("Thrower-v0", body, policy, 20, 96, 48, every=4, indexed=True)
+    assert all(np.array_equal(a, b) for a, b in zip(frames, strided, strict=True))
+    assert module.frame_stride(1_000_000, 640, 320, True) == 96  # ~2 GiB of a 1,000,000-step episode

@@ -232,7 +232,8 @@ def test_plot_and_validate_on_folders_that_are_not_runs_or_references(tmp_path, 
     in_process(capsys, "validate", str(tmp_path), names=["index.json", "not valid JSON"])
 
 
-def test_validate_refuses_reference_files_that_are_not_the_ones_recorded(tmp_path, repo_root, capsys):
+def test_validate_refuses_reference_files_that_are_not_the_ones_recorded(tmp_path, repo_root, capsys,
+                                                                          monkeypatch):
     """index.json records each case's sha256, and the sets have a format version; `sgr validate`
     compared an edited case, a case swapped for another task's, an unknown format and a returns
     file renamed to another task as if they were evogym's. Each is one line, before any replay."""
@@ -266,12 +267,27 @@ def test_validate_refuses_reference_files_that_are_not_the_ones_recorded(tmp_pat
     shutil.copy(data / "returns" / "Walker-v0.npz", returns / "Climber-v2.npz")
     in_process(capsys, "validate", str(returns),
                names=[returns / "Climber-v2.npz", "holds task 'Walker-v0', its name says 'Climber-v2'"])
+    (traces / "linked").mkdir()  # a set whose files are links (git-annex) is read through them
+    (traces / "linked" / first).symlink_to(data / "traces" / first)
+    (traces / "linked" / "index.json").write_text(json.dumps({**index, "cases": index["cases"][:1]}))
+    assert main(["validate", str(traces / "linked")]) == 0
+    capsys.readouterr()
     e32 = tmp_path / "evogym32"
     e32.mkdir()
     index32 = json.loads((data / "evogym32" / "index.json").read_text())
-    (e32 / "index.json").write_text(json.dumps({**index32, "all_tasks": ["Walker-v0"]}))
-    shutil.copy(data / "evogym32" / "returns_Climber-v2.npz", e32 / "returns_Walker-v0.npz")
-    in_process(capsys, "validate", str(e32), names=[e32 / "returns_Walker-v0.npz", "sha256 is not the one"])
+    (e32 / "index.json").write_text(json.dumps({**index32, "all_tasks": ["Walker-v0", "Climber-v2"]}))
+    for f in (data / "evogym32").glob("*_Walker-v0*.npz"):
+        shutil.copy(f, e32 / f.name)
+    shutil.copy(data / "evogym32" / "returns_Walker-v0.npz", e32 / "returns_Climber-v2.npz")  # task 2's
+    import tasks.validate
+
+    def no_replay(*args):
+        raise AssertionError("a task was replayed before every file was checked")
+
+    monkeypatch.setattr(tasks.validate, "evogym32_returns", no_replay)
+    in_process(capsys, "validate", str(e32), names=[e32 / "returns_Climber-v2.npz", "sha256 is not the one"])
+    (e32 / "index.json").write_text(json.dumps({**index32, "tasks": []}))
+    in_process(capsys, "validate", str(e32), names=[e32 / "index.json", "key 'tasks' must be a dict"])
 
 
 def test_out_paths_that_cannot_be_written(tmp_path, repo_root, capsys):
@@ -300,6 +316,7 @@ def test_out_paths_that_cannot_be_written(tmp_path, repo_root, capsys):
     (["render", "--height", "5000"], "argument --height: must be at most 4,096"),
     (["render", "--steps", "1000001"], "argument --steps: must be at most 1,000,000"),
     (["report", ".", "--replays", "1000000000"], "argument --replays: must be at most 100,000"),
+    (["render", ".", "--replay", "1000000000"], "argument --replay: must be at most 100,000"),
 ])
 def test_argparse_errors(capsys, argv, detail):
     with pytest.raises(SystemExit) as exc:
@@ -454,6 +471,10 @@ def test_a_file_that_cannot_be_written_or_a_too_deep_input_is_one_line(tmp_path,
     run.mkdir()
     (run / "champion.json").write_text("[" * 100000 + "]" * 100000)
     assert main(["render", str(run), "--out", str(tmp_path / "x.gif")]) == 2
+    line, = capsys.readouterr().err.splitlines()  # a champion.json too deep names the file
+    assert line == f"sgr: error: {run / 'champion.json'}: not a champion's record (nested too deeply)", line
+    (tmp_path / "deep.json").write_text("[" * 100000 + "]" * 100000)  # a file no check reads for depth
+    assert main(["render", "--task", "Walker-v0", "--body", str(tmp_path / "deep.json")]) == 2
     line, = capsys.readouterr().err.splitlines()
     assert line.startswith("sgr: error: an input is nested too deeply to read ("), line
     Path(line.split("(full traceback: ")[1].removesuffix(")")).unlink()

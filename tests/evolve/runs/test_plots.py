@@ -152,14 +152,17 @@ def test_sgr_plot_of_several_runs_writes_beside_them_and_says_where(tmp_path, mo
 
 
 @pytest.mark.parametrize("row, says", [
-    ("junk,row", "row 4 is not generation 3 (its generation column holds 'junk')"),
-    ("7,1.0,0.5,0.3,3", "row 4 is not generation 3 (its generation column holds '7')"),
-    ("2,1.0,0.5,0.3,3", "row 4 is not generation 3 (its generation column holds '2')"),
+    ("junk,row", "line 4 has no generation number (got 'junk')"),
+    ("7,1.0,0.5,0.3,3", "line 4 is generation 7, not 3"),
+    ("2,1.0,0.5,0.3,3", "line 4 is generation 2, not 3"),
+    ("\u00b2,1.0,0.5,0.3,3", "line 4 has no generation number (got '\u00b2')"),  # a digit to str.isdigit
+    ("\n\n3,1.0,0.5,0.3,3\nx", "line 7 has no generation number (got 'x')"),  # blank lines counted
 ])
 def test_rows_that_are_not_the_next_generation_are_a_damaged_file_not_more_generations(tmp_path, row, says):
     """A junk row in generations.csv was counted as one more generation (with NaN fitness) by `sgr
     report` and `sgr plot`; a row that is not the next generation names the file and the row. A run
     grown from another's checkpoint starts where that one stopped and reads as it is."""
+    from evolve.records.rundir import RunDir
     from evolve.report.plots import read_generations
     from tsim.errors import SgrError
 
@@ -169,6 +172,8 @@ def test_rows_that_are_not_the_next_generation_are_a_damaged_file_not_more_gener
     with pytest.raises(SgrError) as exc:
         read_generations(run)
     assert str(exc.value) == f"{run / 'generations.csv'}: {says}: a damaged file"
+    with pytest.raises(SgrError, match="a damaged file"):  # what a resume checks first
+        RunDir(run).check_rows()
     grown = _run(tmp_path / "grown", [1.0, 2.0, 3.0], first=51)
     assert read_generations(grown)["generation"].tolist() == [51, 52, 53]
 
@@ -182,5 +187,10 @@ def test_resume_over_a_junk_row_names_the_file_and_the_row(tmp_path):
     assert (run / "generations.csv").read_text().splitlines()[-1].startswith("2,")
     with (run / "generations.csv").open("a") as f:
         f.write("x,1.0\n")
-    with pytest.raises(SgrError, match=r"generations.csv: row 4 has no generation number \(got 'x'\)"):
+    with pytest.raises(SgrError, match=r"generations.csv: line 4 has no generation number \(got 'x'\)"):
         RunDir(run).truncate_rows(1)
+    _run(tmp_path / "dup", [1.0, 2.0, 3.0])
+    with (tmp_path / "dup" / "generations.csv").open("a") as f:
+        f.write("2,1.0,0.5,0.3,3\n")  # a generation twice: resumed and appended to, it would stay wrong
+    with pytest.raises(SgrError, match=r"generations.csv: line 5 is generation 2, not 4: a damaged file"):
+        RunDir(tmp_path / "dup").truncate_rows(3)

@@ -15,8 +15,9 @@ import pytest
 
 from evolve.cli import main
 from evolve.methods.body_measures import measures
+from evolve.records.rundir import champion_of
 from evolve.report.gallery import report_html
-from evolve.report.report import BODY_COLUMNS, champion_of, write_report
+from evolve.report.report import BODY_COLUMNS, write_report
 from evolve.runs.experiment import Experiment
 from tests.evolve.runs.conftest import TINY
 
@@ -68,19 +69,32 @@ def test_an_older_run_without_body_diversity_reports_its_champions_body_and_no_d
     ("[1, 2]", "a champion record is a JSON object, got list"),
     ('{"fitness": "high", "body": [[3]]}', "key 'fitness' must be a number, got 'high'"),
     ('{"fitness": 1.0, "body": [[3, 3], [3]]}', "key 'body': "),
+    (b"\xff\xfe", "not valid JSON ('utf-8' codec can't decode byte 0xff"),
+    ("[" * 100_000, "not a champion's record (nested too deeply)"),
 ])
-def test_a_damaged_champion_stops_the_report_naming_the_file(tmp_path, capsys, text, says):
+def test_a_damaged_champion_stops_the_report_naming_the_file(tmp_path, capsys, monkeypatch, text, says):
     """A champion.json that is not a champion's record (ours are written whole) showed as a run
-    without a champion and `sgr report` exited 0; it is one line naming the file. A run with no
-    champion.json yet is no error (`champion_of` is None, its columns stay empty)."""
+    without a champion and `sgr report` exited 0; it is one line naming the file, found before any
+    run's champion is replayed (the damaged run is the last of two). A run with no champion.json
+    yet is no error (`champion_of` is None, its columns stay empty)."""
+    import evolve.report.report as report
+
     assert champion_of(tmp_path / "missing") is None
-    shutil.copytree(OLD_RUN, tmp_path / "run")
-    (tmp_path / "run" / "champion.json").write_text(text)
-    assert main(["report", str(tmp_path / "run"), "--out", str(tmp_path / "r.md"), "--no-robustness",
-                 "--no-gallery"]) == 2
+    shutil.copytree(OLD_RUN, tmp_path / "runs" / "a-good")
+    shutil.copytree(OLD_RUN, tmp_path / "runs" / "z-bad")
+    f = tmp_path / "runs" / "z-bad" / "champion.json"
+    f.write_bytes(text if isinstance(text, bytes) else text.encode())
+
+    def no_replay(*args, **kwargs):
+        raise AssertionError("a champion was replayed before the damaged file was found")
+
+    monkeypatch.setattr(report, "champion_robustness", no_replay)
+    assert main(["report", str(tmp_path / "runs"), "--out", str(tmp_path / "r.md"), "--no-gallery"]) == 2
     line, = capsys.readouterr().err.splitlines()
-    assert line.startswith(f"sgr: error: {tmp_path / 'run' / 'champion.json'}: {says}"), line
+    assert line.startswith(f"sgr: error: {f}: {says}"), line
     assert not (tmp_path / "r.md").exists()
+    assert main(["plot", str(tmp_path / "runs" / "z-bad"), "--out", str(tmp_path / "p.png")]) == 2
+    assert capsys.readouterr().err.startswith(f"sgr: error: {f}: {says}")
 
 
 def test_the_gallery_caption_under_a_champions_picture_gives_its_body(tmp_path):
@@ -133,13 +147,13 @@ def test_a_champion_json_that_is_a_fifo_or_a_device_is_skipped_not_read_forever(
     (tmp_path / "devzero" / "champion.json").symlink_to("/dev/zero")
     (tmp_path / "fifo-run").mkdir()
     os.mkfifo(tmp_path / "fifo-run" / "champion.json")
-    code = ("import sys; from pathlib import Path; from evolve.report.report import champion_of\n"
+    code = ("import sys; from pathlib import Path; from evolve.records.rundir import champion_of\n"
             "for p in sys.argv[1:]:\n"
             "    try: champion_of(Path(p))\n"
-            "    except OSError as e: print(e)")
+            "    except ValueError as e: print(e)")
     r = subprocess.run([sys.executable, "-c", code, str(tmp_path / "fifo-run"), str(tmp_path / "devzero")],
                        cwd=ROOT, capture_output=True, text=True, timeout=60,
                        env={**os.environ, "PYTHONPATH": str(ROOT)})
     assert r.returncode == 0, r.stderr
-    assert r.stdout.splitlines() == [f"[Errno 2] not a regular file: '{tmp_path / d / 'champion.json'}'"
+    assert r.stdout.splitlines() == [f"{tmp_path / d / 'champion.json'}: not a regular file"
                                      for d in ("fifo-run", "devzero")], r.stdout
