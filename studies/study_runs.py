@@ -59,6 +59,7 @@ def champion_grid(grid: list[list[tuple[Path, str]]], out: Path) -> Path:
     import matplotlib.pyplot as plt
 
     from evolve.report.gallery import body_image
+    from evolve.report.plots import save_png
 
     n_cols = max(len(row) for row in grid)
     fig, axes = plt.subplots(len(grid), n_cols, figsize=(1.9 * n_cols, 1.9 * len(grid)), squeeze=False)
@@ -72,6 +73,6 @@ def champion_grid(grid: list[list[tuple[Path, str]]], out: Path) -> Path:
                 axes[r][c].imshow(body_image(rec["body"], cell=8))
                 axes[r][c].set_title(f"{label}: {rec['fitness']:.2f}", fontsize=6)
     fig.tight_layout()
-    fig.savefig(out, dpi=110)
+    save_png(fig, out, dpi=110)
     plt.close(fig)
     return out

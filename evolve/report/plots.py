@@ -168,13 +168,21 @@ def draw_curves(ax: Axes, curves: dict[tuple[str, str], Curve],
 
 
 def save_png(fig: Figure, out: str | Path, dpi: int = 120) -> Path:
-    """Write the figure as a PNG, whole or not at all (made in memory, then `atomic_write`)."""
+    """Write the figure as a PNG of 256 colours, whole or not at all (made in memory, then
+    `atomic_write`). A figure's few colours plus their anti-aliased edges fit a palette with no
+    visible change, at about a third of the bytes of a true-colour PNG (reports are committed)."""
+    from PIL import Image
+
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     FigureCanvasAgg(fig)
     buf = io.BytesIO()
     fig.savefig(buf, format="png", dpi=dpi)
-    atomic_write(out, buf.getvalue())
+    image = Image.open(buf).convert("RGB")
+    palette = image.quantize(256, method=Image.Quantize.MEDIANCUT, dither=Image.Dither.NONE)
+    small = io.BytesIO()
+    palette.save(small, format="png", optimize=True)
+    atomic_write(out, small.getvalue())
     return out
 
 
