@@ -144,24 +144,27 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     phenotypes = [search.decode(g) for _, g in cands]
     robust = settings.robust(cfg.robust)
     tags = [f"{TAG}/{k}" for k, _ in cands]
-    with problem.scored_with(robust.to_json()):
-        scores = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
-    with problem.scored_with(None):
-        nominal = np.asarray(problem.evaluate(phenotypes, tags)[0], dtype=float)
+    simulated = 0  # episodes, as the problem counts them (fewer elites than asked may exist)
+
+    def scored(scoring: dict | None, which: list, which_tags: list[str]) -> np.ndarray:
+        nonlocal simulated
+        with problem.scored_with(scoring):
+            returns, episodes = problem.evaluate(which, which_tags)
+        simulated += int(episodes)
+        return np.asarray(returns, dtype=float)
+
+    scores = scored(robust.to_json(), phenotypes, tags)
+    nominal = scored(None, phenotypes, tags)
     confirmed = None
     if settings.confirm:
         confirm_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
-        with problem.scored_with(settings.robust(cfg.robust, settings.confirm).to_json()):
-            confirmed = np.asarray(problem.evaluate(phenotypes, confirm_tags)[0], dtype=float)
+        confirmed = scored(settings.robust(cfg.robust, settings.confirm).to_json(), phenotypes, confirm_tags)
     i, holds = choose(scores, nominal, settings.tolerance, settings.rank, confirmed,
                       (settings.episodes, settings.confirm))
     # the headline: the chosen genome alone, on fresh episodes that took no part in the choice
     fit_robust = settings.robust(cfg.robust, settings.holdout)
     fit_tag = f"{TAG}-holdout/{cands[i][0]}"
-    with problem.scored_with(fit_robust.to_json()):
-        fit = float(np.asarray(problem.evaluate([phenotypes[i]], [fit_tag])[0], dtype=float)[0])
-    # what was simulated (selection_episodes is the most: fewer elites than asked may exist)
-    simulated = len(cands) * (settings.episodes + 1 + settings.confirm) + settings.holdout
+    fit = float(scored(fit_robust.to_json(), [phenotypes[i]], [fit_tag])[0])
     best = search.best
     best_ever = best_ever_record(cfg, problem, best)
     genome = cands[i][1]

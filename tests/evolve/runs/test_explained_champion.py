@@ -215,7 +215,7 @@ def test_an_auto_sized_run_killed_while_choosing_resumes_to_the_same_champion(tm
     assert whole["selection"]["sized"]["run_episodes"] == 3 * 12 * 2
     from evolve.runs.final_selection import describe
     assert "episodes in all, sized for the run's 72;" in describe(whole)
-    sel = whole["selection"]  # the episodes said are those simulated: one per candidate more (its exact one)
+    sel = whole["selection"]  # episodes the problem counted: scores, exact ones, confirmations, holdout
     assert sel["sized"]["episodes"] == (len(sel["candidates"]) * (sel["episodes"] + 1 + sel["confirm"])
                                         + sel["holdout"])
     copy = tmp_path / "killed"
