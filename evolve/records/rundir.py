@@ -287,12 +287,15 @@ class RunDir:
             return []
         return generation_rows(f)[0]
 
-    def check_rows(self) -> None:
-        """SgrError naming the file and the line unless generations.csv holds one row per
-        generation, in order (what a resume keeps and appends to)."""
+    def check_rows(self) -> list[dict]:
+        """`rows`, read once; SgrError naming the file and the line unless generations.csv holds
+        one row per generation, in order (what a resume keeps and appends to)."""
         f = self.path / "generations.csv"
-        if f.is_file():
-            check_generation_numbers(*generation_rows(f), f)
+        if not f.is_file():
+            return []
+        rows, lines = generation_rows(f)
+        check_generation_numbers(rows, lines, f)
+        return rows
 
     def _write_rows(self, rows: list[dict]) -> None:
         columns = _columns(rows)
@@ -338,8 +341,7 @@ class RunDir:
     def truncate_rows(self, generation: int) -> None:
         """Keep the rows of the first `generation` generations (the others are recomputed after a
         resume). Rows count generations from 1; a run written when they counted from 0 is renumbered."""
-        self.check_rows()
-        rows = self.rows()
+        rows = self.check_rows()
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
         self._write_rows([r for r in rows if int(r["generation"]) <= generation])

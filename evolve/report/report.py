@@ -110,10 +110,9 @@ def run_names(runs: Sequence[Path]) -> dict[Path, str]:
     return {d: Path(d).resolve().relative_to(base).as_posix() for d in runs}
 
 
-def best_so_far(run_dir: Path) -> np.ndarray:
-    """(G,) best fitness of generations 1..g for each g (non-finite bests count as -inf); empty when
-    the run has no rows."""
-    cols = read_generations(run_dir)
+def best_so_far(cols: dict[str, np.ndarray]) -> np.ndarray:
+    """(G,) best fitness of generations 1..g for each g of a run's columns (`read_generations`;
+    non-finite bests count as -inf); empty when the run has no rows."""
     best = cols.get("best", np.zeros(0))
     best = np.where(np.isfinite(best), best, -np.inf)
     return np.maximum.accumulate(best) if len(best) else best
@@ -152,14 +151,13 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
     group_of = group_of_each_run(runs, pool)
     names = run_names(runs)
     champions = {d: champion_of(d) for d in runs}  # every damaged file is found before any replay
-    for d in runs:
-        read_generations(d)
+    generations = {d: read_generations(d) for d in runs}
     rows = []
     for d in runs:
         g = group_of[d]
         raw = load_yaml((d / "config.yaml").read_text()) or {}
-        best = best_so_far(d)
-        cols = read_generations(d)
+        cols = generations[d]
+        best = best_so_far(cols)
         row = {"method": g.label, "task": g.task, "seed": raw.get("seed"), "generations": len(best),
                "run": names[d], "s_per_gen": (float(np.median(cols["total_s"])) if len(best) else math.nan),
                "episode_steps": episode_length(raw, g.task), "settings": g.settings, "classic": g.classic,
@@ -527,10 +525,10 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
         classic[g.label] = g.classic
         steps[(g.label, g.task)].append(episode_length(load_yaml((d / "config.yaml").read_text()) or {},
                                                        g.task))
-        b = best_so_far(d)
+        cols = read_generations(d)
+        b = best_so_far(cols)
         if len(b):
             by_task[g.task][g.label]["best"].append(b)
-            cols = read_generations(d)
             for column in extra:
                 if column in cols:
                     by_task[g.task][g.label][column].append(cols[column])
