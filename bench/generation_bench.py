@@ -14,15 +14,18 @@ import json
 import statistics
 import tempfile
 import time
+from pathlib import Path
 
 from evolve.cli.common import parse_shape, workers_arg
 from evolve.runs.experiment import Experiment
 from tasks.specs import task_spec
 
+ROOT = Path(__file__).resolve().parents[1]
+
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--config", default="configs/sgr/Walker-v0.yaml")
+    ap.add_argument("--config", default=str(ROOT / "configs/sgr/Walker-v0.yaml"))
     ap.add_argument("--generations", type=int, default=4)
     ap.add_argument("--pop", type=int)
     ap.add_argument("--workers", type=workers_arg,

@@ -13,6 +13,7 @@
 """
 
 import json
+import os
 import re
 from pathlib import Path
 
@@ -322,3 +323,38 @@ def test_sgr_bench_record_writes_a_record_of_what_it_measured(tmp_path, monkeypa
                                                  printed))
     assert figure_values(record, "env") == [env] and figure_values(record, "physics") == [physics]
     assert re.fullmatch(r"[0-9a-f]{12}(\+dirty)?", record["commit"]) and record["machine"]
+
+
+# every benchmark script that writes a record, at sizes that take a second
+BENCH_RECORDS = {
+    "host_build_bench.py": ["--sizes", "16", "--old-max", "16", "--step-size", "32", "--steps", "2"],
+    "body_size_bench.py": ["--sizes", "3", "--robots", "2", "--steps", "5"],
+    "device_state_bench.py": ["--robots", "8", "--steps", "2", "--rounds", "1"],
+    "env_host_tasks.py": ["--tasks", "Walker-v0", "--robots", "8", "--steps", "2"],
+    "generation_bench.py": ["--pop", "4", "--generations", "1", "--workers", "1"],
+}
+
+
+def test_every_bench_script_that_takes_record_is_listed_here():
+    takes = {p.name for p in (ROOT / "bench").glob("*.py") if '"--record"' in p.read_text()}
+    assert takes == set(BENCH_RECORDS)
+
+
+@pytest.mark.parametrize("script", sorted(BENCH_RECORDS))
+def test_a_bench_scripts_record_option_writes_a_record_of_its_figures(script, tmp_path):
+    """The commands BENCHMARKS.md cites write their records (one wrote none: a stale key), from any
+    folder."""
+    import subprocess
+    import sys
+
+    out = tmp_path / "r.json"
+    run = subprocess.run([sys.executable, str(ROOT / "bench" / script), *BENCH_RECORDS[script],
+                          "--record", str(out)], cwd=tmp_path, capture_output=True, text=True,
+                         env={**os.environ, "SGR_THREADS": "1"}, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    record = json.loads(out.read_text())
+    assert RECORD_KEYS <= set(record) and record["name"] == "r" and record["figures"]
+    for key in record["figures"]:
+        values = figure_values(record, key)
+        assert values and all(isinstance(v, int | float) for v in values), (key, values)
+

@@ -1,13 +1,13 @@
 """Random robot bodies with evogym's default distribution (`sample_robot`), seeded with numpy.
 
 `sample_robots` draws many at once: the same bodies, from the same stream, as that many calls of
-`sample_robot` in a row, leaving the generator where they would (~100x faster per body)."""
+`sample_robot` in a row, leaving the generator where they would: ~65x faster per body at 5x5
+and ~40x at 10x10 (2.2 against 143 us, 0.24 against 8.9 ms, on an AMD EPYC VM)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from tsim import constants as C
 from tsim.body import has_actuator, is_connected, is_connected_batch
 
 DEFAULT_PD = (0.6, 0.2, 0.2, 0.2, 0.2)  # empty, rigid, soft, H, V (normalised: 3/7, 1/7 x 4)
@@ -58,10 +58,15 @@ def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
         k = int(min(max(need / max(rate, 1e-3) * 1.15 + 16, 64), 1 << 20))
         k = max(1, min(k, max(1, (1 << 24) // max(h * w, 1))))
         saved = rng.bit_generator.state
-        m = cdf.searchsorted(rng.random((k, h, w)), side="right")
-        ok = _valid(m)
+        r = rng.random((k, h, w))
+        ok = _valid(r, cdf)
         idx = np.flatnonzero(ok)
-        rate = max(len(idx) / k, 1e-4)
+        rate = max(max(len(idx), 0.5) / k, 1e-6)  # none accepted: at most half of one per chunk
+        if not len(idx):  # a chunk of failures (common at 10x10: ~1 draw in 230 is accepted)
+            failed += k
+            if failed >= max_tries:
+                raise RuntimeError(f"no valid robot found in {max_tries} draws")
+            continue
         # the max_tries rule: a run of max_tries failures before the next acceptance
         starts = np.concatenate(([-1], idx))
         gaps = np.diff(starts) - 1  # failures before each accepted draw
@@ -70,9 +75,7 @@ def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
         take = idx[:need]
         if len(over) and over[0] < len(take):
             raise RuntimeError(f"no valid robot found in {max_tries} draws")
-        if len(take) < need and failed + (k - 1 - (idx[-1] if len(idx) else -1)) >= max_tries:
-            raise RuntimeError(f"no valid robot found in {max_tries} draws")
-        out[got:got + len(take)] = m[take]
+        out[got:got + len(take)] = cdf.searchsorted(r[take], side="right")
         got += len(take)
         if len(take) == need:
             used = int(take[-1]) + 1
@@ -80,15 +83,35 @@ def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
                 rng.bit_generator.state = saved
                 rng.random((used, h, w))
             break
-        failed = k - 1 - int(idx[-1]) if len(idx) else failed + k
+        failed = k - 1 - int(idx[-1])
     return out
 
 
-def _valid(m: np.ndarray) -> np.ndarray:
-    """(N,) bool: which of the (N, H, W) matrices `sample_robot` accepts."""
-    flat = m.reshape(len(m), -1)
-    act = ((flat == C.H_ACT) | (flat == C.V_ACT)).any(axis=1)
-    ok = np.zeros(len(m), dtype=bool)
-    sel = np.flatnonzero(act)
-    ok[sel] = is_connected_batch(m[sel])
+def _valid(r: np.ndarray, cdf: np.ndarray) -> np.ndarray:
+    """(N,) bool: which of the matrices `cdf.searchsorted(r, "right")` `sample_robot` accepts,
+    read from the uniform draws `r` (N, H, W) themselves.
+
+    A cell is filled where r >= cdf[0] and an actuator (3 or 4) where r >= cdf[2]: those are the
+    searchsorted values' own tests, so only accepted draws are turned into materials. A filled cell
+    with no filled neighbour among several filled cells rules a body out before the flood fill,
+    which most draws at 10x10 fail (~1 in 230 is accepted there)."""
+    n = len(r)
+    filled = r >= cdf[0]
+    act = (r >= cdf[2]).reshape(n, -1).any(axis=1)
+    ok = np.zeros(n, dtype=bool)
+    sel = np.flatnonzero(act & ~_has_lone_cell(filled))
+    ok[sel] = is_connected_batch(filled[sel])
     return ok
+
+
+def _has_lone_cell(filled: np.ndarray) -> np.ndarray:
+    """(N,) bool: the (N, H, W) masks with a filled cell whose four neighbours are empty while some
+    other cell is filled (such a body is not connected)."""
+    near = np.zeros_like(filled)
+    near[:, 1:, :] |= filled[:, :-1, :]
+    near[:, :-1, :] |= filled[:, 1:, :]
+    near[:, :, 1:] |= filled[:, :, :-1]
+    near[:, :, :-1] |= filled[:, :, 1:]
+    n = len(filled)
+    lone = (filled & ~near).reshape(n, -1).any(axis=1)
+    return lone & (filled.reshape(n, -1).sum(axis=1) > 1)

@@ -12,7 +12,7 @@ from tasks.specs import task_world
 from tsim.body import Body, _build, full_connectivity, is_connected, is_connected_batch
 from tsim.bodybatch import BodyBatch, build_bodies
 from tsim.errors import SgrError
-from tsim.sampling import sample_robot, sample_robots
+from tsim.sampling import _has_lone_cell, sample_robot, sample_robots
 from tsim.sim import BatchSim
 
 HERE = os.path.dirname(__file__)
@@ -112,7 +112,8 @@ def test_is_connected_batch_equals_is_connected(shape):
 @pytest.mark.parametrize("shape, pd", [((5, 5), (0.6, 0.2, 0.2, 0.2, 0.2)),
                                        ((3, 4), (0.1, 0.3, 0.0, 0.5, 0.1)),
                                        ((7, 9), (0.3, 0.2, 0.2, 0.2, 0.2)),
-                                       ((10, 10), (0.2, 0.2, 0.2, 0.2, 0.2))])
+                                       ((10, 10), (0.2, 0.2, 0.2, 0.2, 0.2)),
+                                       ((10, 10), (0.6, 0.2, 0.2, 0.2, 0.2))])
 def test_sample_robots_gives_the_bodies_of_repeated_sample_robot(shape, pd):
     """n bodies at once are the bodies of n `sample_robot` calls with the same generator, and the
     generator is left where those calls leave it (its next draw is the same)."""
@@ -126,6 +127,19 @@ def test_sample_robots_gives_the_bodies_of_repeated_sample_robot(shape, pd):
     r3 = np.random.default_rng(11)
     two = np.concatenate([sample_robots(70, shape, r3, pd), sample_robots(80, shape, r3, pd)])
     assert np.array_equal(two, got)
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 6), (4, 4), (10, 10)])
+def test_a_lone_filled_cell_is_found_only_in_bodies_that_are_not_connected(shape):
+    """The sampler's quick rejection (a filled cell with no filled neighbour, among others) rules
+    out only matrices the flood fill rejects, and it does rule some out."""
+    rng = np.random.default_rng(shape[0] * 7 + shape[1])
+    filled = rng.random((3000, *shape)) < rng.uniform(0.05, 0.95, (3000, 1, 1))
+    lone = _has_lone_cell(filled)
+    connected = np.array([is_connected(m) for m in filled])
+    assert not (lone & connected).any()
+    if shape != (1, 1):
+        assert lone.any() and (connected | lone).sum() < len(filled)  # the flood fill still has work
 
 
 def test_sample_robots_raises_where_sample_robot_runs_out_of_tries():
@@ -144,6 +158,27 @@ def test_sample_robots_raises_where_sample_robot_runs_out_of_tries():
             assert np.array_equal(sample_robots(3, (5, 5), r2, max_tries=4), want)
         outcomes.add(want is None)
     assert outcomes == {True, False}  # both cases were met
+
+
+def test_sample_robots_raises_where_sample_robot_does_at_10x10():
+    """At 10x10 (~1 draw in 230 accepted) chunks of draws hold no body or several, and a run of
+    failures spans chunks: the batch still raises exactly when one of the repeated calls would
+    (seed 12 once raised where they do not: a chunk's trailing failures were added to the run
+    before its first body; and a chunk with no body at all was an IndexError)."""
+    outcomes = set()
+    for seed in range(16):
+        r1, r2 = np.random.default_rng(seed), np.random.default_rng(seed)
+        try:
+            want = np.stack([sample_robot((10, 10), r1, max_tries=600) for _ in range(8)])
+        except RuntimeError:
+            want = None
+        if want is None:
+            with pytest.raises(RuntimeError, match="no valid robot"):
+                sample_robots(8, (10, 10), r2, max_tries=600)
+        else:
+            assert np.array_equal(sample_robots(8, (10, 10), r2, max_tries=600), want)
+        outcomes.add(want is None)
+    assert outcomes == {True, False}
 
 
 LAYOUT = ("edge_i", "edge_f", "vox_i", "lists", "_pos0_f64", "_rest_f64")
