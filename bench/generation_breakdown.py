@@ -124,7 +124,7 @@ def table(acc: dict[str, list[float]], total_wall: float, total_cpu: float) -> d
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--config", default="configs/sgr/Walker-v0.yaml")
+    ap.add_argument("--config", default=str(ROOT / "configs/sgr/Walker-v0.yaml"))
     ap.add_argument("--pop", type=int, default=1024)
     ap.add_argument("--generations", type=int, default=2)
     ap.add_argument("--steps", type=int, help="episode_steps (default: the config's)")
