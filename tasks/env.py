@@ -10,6 +10,7 @@ then on while the others go on.
 
 from __future__ import annotations
 
+import numbers
 import random
 from collections.abc import Sequence
 
@@ -51,9 +52,10 @@ class BatchEnv:
         self.spec = task_spec(task)
         self.task = task
         episode_steps = self.spec.episode_length(episode_steps)
-        if not isinstance(episode_steps, int) or episode_steps < 1:
+        if (not isinstance(episode_steps, numbers.Integral) or isinstance(episode_steps, bool | np.bool_)
+                or episode_steps < 1):
             raise ValueError(f"episode_steps must be a positive int, 'evogym' or None, got {episode_steps!r}")
-        self.episode_steps = episode_steps
+        self.episode_steps = int(episode_steps)  # numpy's integers too (a config's, a sweep's)
         self.sim = BatchSim(task_world(task), bodies, self.spec.origin, arch=arch,
                             precision=precision, passive_ok=passive_ok)
         self.dtype = self.sim.dtype
@@ -422,6 +424,8 @@ class BatchEnv:
     # ------------------------------------------------------------------ API
     def reset(self, mask: np.ndarray | None = None) -> np.ndarray:
         """Start new episodes: all worlds, or only those where `mask` (B,) is True."""
+        if mask is not None:
+            mask = self.sim.reset_mask(mask)
         self._init_state(mask)
         self._place_objects(mask)
         self.sim.reset(mask)

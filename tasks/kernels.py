@@ -424,7 +424,7 @@ def _half_hull(pts: ti.template(), at, b, n, N, order: ti.template(), H: ti.temp
                c: ti.template(), reverse: ti.template()):
     """`tasks.suite.shape._chain` for world b: the monotone chain over its x-sorted points (from
     the right with `reverse`), popping while the turn is not left; then 0.0 plus the pairwise sum
-    (numpy's order) of the N - 1 cross products of consecutive vertices, zero past the chain."""
+    (numpy's order) of the L - 1 cross products of the chain's consecutive vertices."""
     L = 0
     for k in range(n):
         p = order[b, n - 1 - k] if ti.static(reverse) else order[b, k]
@@ -440,12 +440,12 @@ def _half_hull(pts: ti.template(), at, b, n, N, order: ti.template(), H: ti.temp
         H[b, 2 * L] = qx
         H[b, 2 * L + 1] = qy
         L += 1
-    for k in range(N - 1):
-        v = ti.cast(0.0, ti.f64)
-        if k < L - 1:
-            v = H[b, 2 * k] * H[b, 2 * k + 3] - H[b, 2 * k + 2] * H[b, 2 * k + 1]
-        c[b * (N - 1) + k] = v
-    return ti.cast(0.0, ti.f64) + _pairwise(c, b * (N - 1), 1, N - 1)
+    for k in range(L - 1):
+        c[b * (N - 1) + k] = H[b, 2 * k] * H[b, 2 * k + 3] - H[b, 2 * k + 2] * H[b, 2 * k + 1]
+    total = ti.cast(0.0, ti.f64)
+    if L >= 2:
+        total += _pairwise(c, b * (N - 1), 1, L - 1)
+    return total
 
 
 @ti.kernel

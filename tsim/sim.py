@@ -377,15 +377,24 @@ class BatchSim:
         """B, the batch size: one world per body."""
         return len(self.bodies)
 
+    def reset_mask(self, mask: object) -> np.ndarray:
+        """`mask` as (B,) bools, or ValueError. Integers are refused, not cast: numpy reads an int
+        array as indices, so [1, 0] would mean world 1 and world 0 to one reader and world 0 to
+        another."""
+        sel = np.asarray(mask)
+        if sel.dtype != bool:
+            raise ValueError(f"reset mask must be {self.n_worlds} booleans (one per world), got "
+                             f"dtype {sel.dtype}; for world indices idx: mask = np.zeros(B, bool); "
+                             "mask[idx] = True")
+        if sel.shape != (self.n_worlds,):
+            raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
+        return sel
+
     def reset(self, mask: np.ndarray | None = None) -> None:
         """Back to the initial placement at rest (evogym `reset`), running again; `mask` (B,) bool
         resets only those worlds."""
-        if mask is None:
-            sel = slice(None)  # every world: plain slices, several times faster than a full mask
-        else:
-            sel = np.asarray(mask, dtype=bool)
-            if sel.shape != (self.n_worlds,):
-                raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
+        # every world: plain slices, several times faster than a full mask
+        sel = slice(None) if mask is None else self.reset_mask(mask)
         if mask is None:
             self.time = np.zeros(self.n_worlds, dtype=np.int64)
         self.state_version += 1

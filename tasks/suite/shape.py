@@ -17,8 +17,9 @@ from tsim.backends import ARCHS
 
 def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
     """One half of Andrew's monotone chain over the x-sorted points P (B, N, 2), all worlds at once
-    (the loop runs over point positions, not over worlds): returns the sum of the cross products
-    of consecutive chain vertices (twice the signed area under that half)."""
+    (the loop runs over point positions, not over worlds; the sum over chain lengths): returns the
+    sum of the cross products of consecutive chain vertices (twice the signed area under that
+    half)."""
     B, N = P.shape[:2]
     rows = np.arange(B)
     H = np.zeros((B, N + 1, 2))
@@ -37,9 +38,15 @@ def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:
             L -= pop
         H[rows[active], L[active]] = q[active]
         L += active
-    k = np.arange(N)[None, :]
     c = H[:, :-2, 0] * H[:, 1:-1, 1] - H[:, 1:-1, 0] * H[:, :-2, 1]
-    return np.where(k[:, :N - 1] < (L - 1)[:, None], c, 0.0).sum(axis=1)
+    # each chain summed over its own L - 1 terms (numpy's pairwise order for that length), not over
+    # the batch's padded N - 1: the order, so the bits, would depend on the other robots' sizes
+    out = np.zeros(B)
+    for m in np.unique(L - 1):
+        if m > 0:
+            sel = np.flatnonzero(L - 1 == m)
+            out[sel] = c[sel, :m].sum(axis=1)
+    return out
 
 
 def hull_area(points: np.ndarray, mask: np.ndarray) -> np.ndarray:

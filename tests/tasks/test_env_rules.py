@@ -103,3 +103,33 @@ def test_partial_reset_restarts_only_the_chosen_robots():
     obs = env.reset(np.array([True, False]))
     assert np.array_equal(obs[0], obs0[0]) and not np.array_equal(obs[1], obs0[1])
     assert env.elapsed.tolist() == [0, 10]
+
+
+@pytest.mark.parametrize("mask", [np.array([1, 0]), [1, 0], np.array([0.0, 1.0])])
+def test_a_reset_mask_that_is_not_booleans_is_refused_before_anything_resets(mask):
+    """numpy reads [1, 0] as indices (both worlds), the simulator read it as a mask (world 0): the
+    env's step counts and the physics went out of step. Now neither layer guesses."""
+    env = BatchEnv("Walker-v0", [BODY, BODY], episode_steps=10)
+    env.reset()
+    for t in range(3):
+        env.step([sinusoid(t, n) for n in env.n_actuators])
+    state = env.sim.state.copy()
+    with pytest.raises(ValueError, match="reset mask must be 2 booleans"):
+        env.reset(mask)
+    assert env.elapsed.tolist() == [3, 3] and env.sim.time.tolist() == [3, 3]
+    assert np.array_equal(env.sim.state, state)
+    with pytest.raises(ValueError, match="reset mask must be 2 booleans"):
+        env.sim.reset(mask)
+
+
+@pytest.mark.parametrize("steps, ok", [(np.int64(4), True), (np.int32(4), True), (True, False),
+                                       (np.bool_(True), False), (4.0, False), (0, False)])
+def test_episode_steps_takes_numpys_integers_and_refuses_bools_and_floats(steps, ok):
+    """A length read from an array or a config is often a numpy integer: it is an int; True is not
+    an episode of 1 step."""
+    if ok:
+        env = BatchEnv("Walker-v0", [BODY], episode_steps=steps)
+        assert env.episode_steps == 4 and type(env.episode_steps) is int
+    else:
+        with pytest.raises(ValueError, match="episode_steps must be a positive int"):
+            BatchEnv("Walker-v0", [BODY], episode_steps=steps)

@@ -232,6 +232,28 @@ def test_hull_area_kernel_gives_the_numpy_bits():
             assert got.tobytes() == want.tobytes(), (dt, trial)
 
 
+def test_a_worlds_hull_area_has_the_same_bits_alone_and_beside_larger_worlds():
+    """A world's area is summed over its own chain, so its bits do not depend on the batch's padded
+    width (they did: numpy's pairwise sum groups the terms by the padded length; an AreaMaximizer-v0
+    robot's reward differed by ~1e-16 alone and beside bigger robots), by the numpy oracle and by
+    the kernel. Points on parabolas, so that the lower chain holds every point (2 to 128 terms)."""
+    from tsim import runtime
+
+    runtime.init()
+    rng = np.random.default_rng(5)
+    sizes = [3, 5, 7, 8, 9, 12, 17, 20, 33, 64, 100, 129]
+    N = max(sizes)
+    pts = np.zeros((len(sizes), N, 2))
+    for b, n in enumerate(sizes):
+        x = np.sort(rng.uniform(-1, 1, n))
+        pts[b, :n] = np.stack([x + 0.37, x * x * rng.uniform(0.5, 2)], 1)
+    mask = np.arange(N)[None, :] < np.array(sizes)[:, None]
+    for area in (hull_area_numpy, hull_area):
+        batched = area(pts, mask)
+        alone = np.concatenate([area(pts[b:b + 1, :n], mask[b:b + 1, :n]) for b, n in enumerate(sizes)])
+        assert batched.tobytes() == alone.tobytes(), (area.__name__, batched - alone)
+
+
 def test_a_hull_area_is_computed_once_per_state(monkeypatch):
     """The kernel path passes a step's `after` measure as the next step's `before`, and the shape
     rewards keep what they derive on it (`Measure.derived`): one hull area per step after the
