@@ -140,10 +140,17 @@ def _object_from_json(name: str, data: dict, grid_w: int) -> WorldObject:
 def _items(data: object, source: str) -> tuple[int, int, list]:
     try:
         grid_w, grid_h = int(data["grid_width"]), int(data["grid_height"])
+        if grid_w < 1 or grid_h < 1:
+            raise ValueError(f"the grid must be at least 1x1, got {grid_w}x{grid_h}")
         items = sorted(data["objects"].items())
-        for _, d in items:
+        for obj, d in items:
             if len(d["indices"]) != len(d["types"]):
                 raise ValueError(f"{len(d['indices'])} indices but {len(d['types'])} types")
+            # a cell outside the grid would wrap round into another row of the terrain
+            outside = [i for i in d["indices"] if not 0 <= int(i) < grid_w * grid_h]
+            if outside:
+                raise ValueError(f"object {obj!r}: cell index {outside[0]} is outside the "
+                                 f"{grid_w}x{grid_h} grid (0..{grid_w * grid_h - 1})")
     except (ValueError, KeyError, AttributeError, TypeError) as exc:
         raise ValueError(f"bad world {source}: {type(exc).__name__}: {exc}") from None
     return grid_w, grid_h, items

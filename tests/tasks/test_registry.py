@@ -85,6 +85,19 @@ def test_a_world_from_a_matrix_is_the_world_of_the_same_json(tmp_path):
         world_from_dict({"grid_width": 5, "objects": {}})
 
 
+@pytest.mark.parametrize("grid, indices, match", [
+    ((0, 2), [0, 1], "grid must be at least 1x1, got 0x2"),   # was a ZeroDivisionError
+    ((4, 0), [0, 1], "grid must be at least 1x1, got 4x0"),   # was an IndexError
+    ((4, 2), [0, 12], "cell index 12 is outside the 4x2 grid"),
+    ((4, 2), [-1, 0], "cell index -1 is outside the 4x2 grid"),  # wrapped into another row
+])
+def test_a_world_whose_cells_leave_its_grid_is_refused_in_one_line(grid, indices, match):
+    data = {"grid_width": grid[0], "grid_height": grid[1], "objects": {"ground": {
+        "indices": indices, "types": [5] * len(indices), "neighbors": {str(i): [] for i in indices}}}}
+    with pytest.raises(ValueError, match=f"bad world 'custom': .*{match}"):
+        world_from_dict(data)
+
+
 @pytest.mark.parametrize("direction, start, ends", [("left", 20, True), ("right", 20, False)])
 def test_a_goal_to_the_left_ends_the_episode_with_its_bonus(registry, direction, start, ends):
     """A robot that is placed left of the goal's x has passed a "left" goal at its first step

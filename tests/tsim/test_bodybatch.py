@@ -236,3 +236,25 @@ def test_batch_check_raises_for_the_first_bad_body_across_shapes_and_bodies():
     sim = BatchSim(world, [build_body(good), good, [[4, 4, 4]]], (1, 1))
     assert_same_body(sim.bodies[0], oracle(np.array(good)))
     assert_same_body(sim.bodies[2], oracle(np.array([[4, 4, 4]])))
+
+
+@pytest.mark.parametrize("n, shape, pd, match", [
+    (2, (5, 5), (np.nan, 1, 1, 1, 1), "bad voxel distribution"),
+    (2, (5, 5), (np.inf, 1, 1, 1, 1), "bad voxel distribution"),
+    (2, (2, 2, 7), None, "shape must be"),
+    (2, 5, None, "shape must be"),
+    (2, (0, 5), None, "shape must be"),
+    (2, (2.5, 3), None, "shape must be"),
+    (2.7, (3, 3), None, "n must be a non-negative integer"),
+    (True, (3, 3), None, "n must be a non-negative integer"),
+])
+def test_bad_sampling_arguments_get_one_error_naming_them_from_both_samplers(n, shape, pd, match):
+    """A NaN weight used to cost 100,000 draws and then blame the robots; a 3-D shape lost a
+    dimension; 2.7 bodies were 2."""
+    pd = pd or (0.6, 0.2, 0.2, 0.2, 0.2)
+    with pytest.raises(ValueError, match=match):
+        sample_robots(n, shape, np.random.default_rng(0), pd)
+    if not match.startswith("n "):
+        with pytest.raises(ValueError, match=match):
+            sample_robot(shape, np.random.default_rng(0), pd)
+    assert sample_robots(np.int64(2), (np.int64(3), 3), np.random.default_rng(0)).shape == (2, 3, 3)
