@@ -239,7 +239,7 @@ def _connection_sets(matrix: np.ndarray, connections: np.ndarray) -> tuple[set, 
     """Horizontal and vertical glued pairs (flat indices, smaller first), as the C++ loader reads them."""
     h, w = matrix.shape
     horiz, vert = set(), set()
-    for i, j in np.asarray(connections, dtype=np.int64).reshape(2, -1).T:
+    for i, j in connections.T:
         a, b = (int(i), int(j)) if i < j else (int(j), int(i))
         if b - a == 1 and w > 1:
             horiz.add((a, b))
@@ -248,13 +248,30 @@ def _connection_sets(matrix: np.ndarray, connections: np.ndarray) -> tuple[set, 
     return horiz, vert
 
 
+def as_connections(connections: object) -> np.ndarray:
+    """`connections` as evogym's (2, k) int64 array of flat cell-index pairs, or ValueError: a (k, 2)
+    array of pairs (a common mix-up) would otherwise be re-paired into another body."""
+    c = np.asarray(connections)
+    if c.size == 0:
+        return np.zeros((2, 0), dtype=np.int64)
+    if c.ndim != 2 or c.shape[0] != 2:
+        raise ValueError(f"connections must be a (2, k) array of flat cell-index pairs (evogym's "
+                         f"layout: row 0 the first cells, row 1 the second), got shape {c.shape}")
+    if not (np.issubdtype(c.dtype, np.integer)
+            or np.issubdtype(c.dtype, np.floating) and np.array_equal(c, np.round(c))):
+        odd = c[c != np.round(c)] if np.issubdtype(c.dtype, np.floating) else c.ravel()
+        raise ValueError(f"connections must hold whole cell indices, got {c.dtype} values such as "
+                         f"{odd.flat[0].item()!r}")
+    return c.astype(np.int64)
+
+
 def build_body(matrix: object, connections: np.ndarray | None = None, *,
                allow_fixed: bool = False) -> Body:
     """Build (and cache) the topology of a body matrix with evogym's default full connectivity."""
     m = as_body_matrix(matrix, allow_fixed=allow_fixed)
     if connections is None:
         return _build_full(m.tobytes(), m.shape, allow_fixed)
-    return _build(m, np.asarray(connections, dtype=np.int64))
+    return _build(m, as_connections(connections))
 
 
 # ~4.5 KB per 5x5 body: 1,024 bodies (8 generations of 128 distinct ones) hold ~5 MB; 4,096 let a

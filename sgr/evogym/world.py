@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from sgr.evogym.utils import VOXEL_TYPES, Pair, get_full_connectivity
+from tsim.body import as_connections
 
 __all__ = ["EvoWorld", "WorldObject"]
 
@@ -168,8 +169,11 @@ class WorldObject:
             raise ValueError(f"could not load object {name} from array -- structure must be 2-D, "
                              f"got shape {structure.shape}")
         self.name = name
-        conn = get_full_connectivity(structure) if connections is None else np.asarray(connections)
-        conn = conn.reshape(2, -1).T
+        try:
+            conn = (get_full_connectivity(structure) if connections is None
+                    else as_connections(connections)).T
+        except ValueError as exc:
+            raise ValueError(f"could not load object {name} from array -- {exc}") from None
         self.grid = np.flipud(structure)
         w, h = self.grid.shape[1], self.grid.shape[0]
         self.grid_size = Pair(w, h)

@@ -1,6 +1,7 @@
 """Body topology: evogym's point order, exact initial positions, springs and actuator order."""
 
 import json
+import re
 
 import numpy as np
 import pytest
@@ -89,3 +90,25 @@ def test_connectivity_helpers():
 def test_bad_bodies_raise_value_error_naming_the_problem(matrix, words):
     with pytest.raises(ValueError, match=words):
         check_robot(matrix)
+
+
+@pytest.mark.parametrize("connections, words", [
+    ("pairs", "got shape (3, 2)"),                 # (k, 2): was re-paired into a body of 14 points
+    (np.zeros((3, 4), int), "got shape (3, 4)"),   # was read as 6 pairs
+    (np.array([[0.0, 1.5, 2.0], [1.0, 2.0, 3.0]]), "values such as 1.5"),  # was truncated
+])
+def test_connections_not_in_evogyms_2_by_k_layout_are_refused(connections, words):
+    """build_body and sgr.evogym's WorldObject take evogym's (2, k) connections and nothing they
+    would have to reinterpret; (2, k) itself builds the body its full connectivity builds."""
+    from sgr.evogym import WorldObject
+
+    m = np.array([[3, 3, 3, 3]])
+    full = full_connectivity(m)
+    if isinstance(connections, str):
+        connections = full.T
+    for build in (lambda c: build_body(m, c), lambda c: WorldObject.from_array("r", m, c)):
+        with pytest.raises(ValueError, match=re.escape(words)):
+            build(connections)
+    assert build_body(m, full).n_points == build_body(m).n_points == 10
+    assert build_body(m, full.astype(float)).n_points == 10
+    assert build_body(m, np.zeros((2, 0), int)).n_points == 16  # nothing glued: four loose voxels
