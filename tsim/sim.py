@@ -468,6 +468,8 @@ class BatchSim:
         """
         B = self.n_worlds
         if isinstance(actions, np.ndarray) and actions.dtype != object:
+            if actions.dtype.kind not in "fiu":  # complex would lose its imaginary part, bool mean 0.6/1.0
+                raise ValueError(f"actions must be real numbers, got dtype {actions.dtype}")
             a = np.asarray(actions, dtype=np.float64)
             if a.shape != (B, self.max_actuators):
                 raise ValueError(f"wrong action shape: expected ({B}, {self.max_actuators}), "
@@ -487,11 +489,17 @@ class BatchSim:
             np.copyto(self.actions[:, :M], clipped, where=mask)
             return
         else:
+            if not hasattr(actions, "__len__") or isinstance(actions, str | bytes):
+                raise ValueError(f"actions must be a ({B}, {self.max_actuators}) array or {B} rows, "
+                                 f"one per robot, got {type(actions).__name__}")
             if len(actions) != B:
                 raise ValueError(f"wrong action shape: expected {B} rows, got {len(actions)}")
             rows = []
             for w, r in enumerate(actions):
-                r = np.asarray(r, dtype=np.float64).reshape(-1)
+                r = np.asarray(r)
+                if r.dtype.kind not in "fiu":
+                    raise ValueError(f"actions for robot {w} must be real numbers, got dtype {r.dtype}")
+                r = r.astype(np.float64).reshape(-1)
                 if r.shape != (self.n_actuators[w],):
                     raise ValueError(f"wrong action shape for robot {w}: expected "
                                      f"({self.n_actuators[w]},), got {r.shape}")

@@ -14,6 +14,23 @@ def sim():
     return BatchSim(task_world("Walker-v0"), [sample_robot((5, 5), rng) for _ in range(3)], (1, 1))
 
 
+@pytest.mark.parametrize("actions, words", [
+    (1.0, "got float"), (None, "got NoneType"), ("1.0", "got str"),
+    (np.ones((3, 8), complex), "real numbers, got dtype complex128"),  # the imaginary part was dropped
+    (np.ones((3, 8), bool), "real numbers, got dtype bool"),
+    ("a None row", "robot 1 must be real numbers"),
+])
+def test_actions_that_are_not_rows_of_real_numbers_are_refused_naming_what_they_are(sim, actions, words):
+    """A scalar was `TypeError: object of type 'float' has no len()`; complex actions were cast
+    with a warning."""
+    if isinstance(actions, np.ndarray):
+        actions = np.ones((3, sim.max_actuators), actions.dtype)
+    if isinstance(actions, str) and actions == "a None row":
+        actions = [[1.0] * n if w != 1 else [None] * n for w, n in enumerate(sim.n_actuators)]
+    with pytest.raises(ValueError, match=words):
+        sim.set_actions(actions)
+
+
 def test_wrong_action_shape_and_non_finite_actions_raise(sim):
     with pytest.raises(ValueError, match="wrong action shape"):
         sim.set_actions(np.ones((2, sim.max_actuators)))
