@@ -378,7 +378,7 @@ class BatchEnv:
         """Restart the worlds' random streams (`random.Random`), from which a task with per-episode
         randomness (`TaskSpec.state`) draws at every reset of a world: world w's stream is seeded
         with `seeds[w]` (an int: seeds + w; None: w)."""
-        if seeds is None or np.isscalar(seeds):
+        if seeds is None or np.ndim(seeds) == 0:  # None, an int, a numpy integer or a 0-d array
             base = 0 if seeds is None else int(seeds)
             self._seeds = (base, None)
         else:

@@ -45,6 +45,8 @@ def as_body_matrix(matrix: object, *, allow_fixed: bool = False) -> np.ndarray:
 def is_connected(matrix: np.ndarray) -> bool:
     """evogym's `is_connected`: 4-neighbour flood fill; an all-empty matrix is not connected."""
     m = np.asarray(matrix)
+    if m.ndim != 2:
+        raise ValueError(f"is_connected needs a 2-D matrix, got shape {m.shape}")
     filled = list(zip(*np.nonzero(m), strict=False))
     if not filled:
         return False

@@ -10,8 +10,10 @@ later (robot over objects over terrain, later voxels over earlier) wins.
 from __future__ import annotations
 
 import io
+import math
+import numbers
 import os
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from functools import cache
 from pathlib import Path
 
@@ -217,8 +219,11 @@ class Renderer:
     def __init__(self, world: World | str | Path, body: Body | object, width: int = 640, height: int = 320, *,
                  view_voxels: float = 40.0, grid: bool = True, follow: float = 0.15,
                  track_objects: bool = True):
-        if width < 1 or height < 1:
-            raise ValueError(f"image size must be positive, got {width}x{height}")
+        if not all(isinstance(v, numbers.Real) and math.isfinite(v) and v >= 1 and v == int(v)
+                   for v in (width, height)):
+            raise ValueError(f"image size must be whole numbers of pixels >= 1, got {width!r}x{height!r}")
+        if not (isinstance(view_voxels, numbers.Real) and math.isfinite(view_voxels) and view_voxels > 0):
+            raise ValueError(f"view_voxels must be a positive number, got {view_voxels!r}")
         self.world = resolve_world(world)
         self.body = body if isinstance(body, Body) else build_body(body)
         self.width, self.height = int(width), int(height)
@@ -306,8 +311,8 @@ class Renderer:
                       ) -> np.ndarray:
         """As `frame`, but a (height, width) uint8 image of `PALETTE` indices (cheaper; GIF-ready)."""
         object_points = object_points or {}
-        robot_points = np.asarray(robot_points, dtype=np.float64)
-        objs = [(part, np.asarray(object_points.get(name, pos0), dtype=np.float64))
+        robot_points = _points("the robot", robot_points, self._robot.body.n_points)
+        objs = [(part, _points(f"object {name!r}", object_points.get(name, pos0), part.body.n_points))
                 for name, (part, pos0) in self._objects.items()]
         loose = [p for name, (_, p) in zip(self._objects, objs, strict=True)
                  if name in self._loose] if self.track_objects else []
@@ -371,12 +376,38 @@ def _as_indexed(frame: np.ndarray) -> np.ndarray | None:
     return None if np.any(idx == 255) else idx
 
 
-def _check_frames(frames: Sequence[np.ndarray], fps: float) -> None:
-    """ValueError for what no animation can be written from: no frames, or a rate <= 0."""
-    if len(frames) == 0:
+def _points(what: str, points: object, n: int) -> np.ndarray:
+    """`points` as (2, n) float64, or ValueError: fewer points failed deep in the drawing, more
+    were silently left out, and (n, 2) drew another shape."""
+    p = np.asarray(points, dtype=np.float64)
+    if p.shape != (2, n):
+        raise ValueError(f"points of {what} must have shape (2, {n}) (x row, y row), got {p.shape}")
+    return p
+
+
+def _frames(frames: Iterable[np.ndarray], fps: float) -> list[np.ndarray]:
+    """The frames as a list of arrays, or ValueError for what no animation can be written from: no
+    frames, a rate that is not a positive number, or frames that are not `PALETTE` index images
+    (H, W) or RGB images (H, W, 3), uint8, all of one size."""
+    try:
+        frames = [np.asarray(f) for f in frames]
+    except TypeError:
+        raise ValueError(f"frames must be a sequence of images, got {type(frames).__name__}") from None
+    if not frames:
         raise ValueError("no frames to write")
-    if fps <= 0:
-        raise ValueError(f"fps must be positive, got {fps}")
+    if not (isinstance(fps, numbers.Real) and math.isfinite(fps) and fps > 0):
+        raise ValueError(f"fps must be a positive number, got {fps!r}")
+    size = frames[0].shape[:2]
+    for i, f in enumerate(frames):
+        if (f.dtype != np.uint8 or not (f.ndim == 2 or f.ndim == 3 and f.shape[2] == 3)
+                or f.shape[:2] != size or 0 in f.shape):
+            raise ValueError(f"frame {i}: frames must be uint8 images of one size, (H, W) palette "
+                             f"indices or (H, W, 3) RGB, got {f.dtype} {f.shape} "
+                             f"(frame 0: {frames[0].shape})")
+        if f.ndim == 2 and f.max() >= len(PALETTE):
+            raise ValueError(f"frame {i}: a (H, W) frame holds PALETTE indices (0..{len(PALETTE) - 1}), "
+                             f"got {int(f.max())}")
+    return frames
 
 
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
@@ -388,16 +419,16 @@ def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     directly, which skips imageio's per-frame colour quantization (about 10x faster); other RGB frames
     go through imageio's GIF writer.
     """
-    _check_frames(frames, fps)
+    frames = _frames(frames, fps)
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
-    indexed = [f if f.ndim == 2 else _as_indexed(f) for f in (np.asarray(f) for f in frames)]
+    indexed = [f if f.ndim == 2 else _as_indexed(f) for f in frames]
     duration = 1000.0 / fps
     buf = io.BytesIO()  # made in memory, then written whole or not at all (a full disk cuts no GIF)
     if any(f is None for f in indexed):
         import imageio.v3 as iio
 
-        rgb = [to_rgb(f) if f.ndim == 2 else f for f in (np.asarray(f) for f in frames)]
+        rgb = [to_rgb(f) if f.ndim == 2 else f for f in frames]
         iio.imwrite(buf, np.stack(rgb), extension=".gif",
                     duration=duration, loop=0)
         atomic_write(path, buf.getvalue())
@@ -441,7 +472,7 @@ def write_mp4(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0)
     if not video_available():
         from tsim.errors import SgrError
         raise SgrError(f"writing {Path(path).name} needs imageio's ffmpeg plugin: {VIDEO_EXTRA}")
-    _check_frames(frames, fps)
+    frames = _frames(frames, fps)
     import tempfile
 
     import imageio_ffmpeg
@@ -479,6 +510,7 @@ def write_animation(frames: Sequence[np.ndarray], path: str | Path, fps: float =
     path = Path(path)
     if path.suffix.lower() == ".mp4":
         return write_mp4(frames, path, fps=fps)
+    frames = _frames(frames, fps)  # a generator is read once, for both files
     write_gif(frames, path, fps=fps)
     if mp4_beside:
         if video_available():

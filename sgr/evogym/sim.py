@@ -75,6 +75,9 @@ class EvoSim:
         # BatchSim's robot: the first robot, or (no robot) the first object without fixed voxels
         # (BatchSim fixes points of its objects only), in evogym's order
         leads = robots or [n for n in names if not np.any(parts[n].body.voxel_type == VOXEL_TYPES["FIXED"])]
+        if not parts:
+            raise ValueError("sgr cannot simulate this world: it has no objects (add a robot with "
+                             "EvoWorld.add_from_array)")
         if not leads:
             what = ("all fixed (material 5): nothing in it moves" if all(p.is_terrain for p in parts.values())
                     else "fixed voxels in every object, and no robot (sgr needs one object without "

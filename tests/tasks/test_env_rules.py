@@ -133,3 +133,12 @@ def test_episode_steps_takes_numpys_integers_and_refuses_bools_and_floats(steps,
     else:
         with pytest.raises(ValueError, match="episode_steps must be a positive int"):
             BatchEnv("Walker-v0", [BODY], episode_steps=steps)
+
+
+def test_seeds_as_a_0_d_array_are_the_int_they_hold():
+    """`np.array(3)` was `TypeError: len() of unsized object`; it seeds as 3 does (world w: 3 + w)."""
+    bodies = [sample_robot((3, 3), np.random.default_rng(s)) for s in range(3)]
+    a = BatchEnv("Catcher-v0", bodies, seeds=np.array(3))
+    b = BatchEnv("Catcher-v0", bodies, seeds=3)
+    assert np.array_equal(a.reset(), b.reset())
+    assert np.array_equal(a.sim.read_state(), b.sim.read_state())

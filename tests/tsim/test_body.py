@@ -112,3 +112,10 @@ def test_connections_not_in_evogyms_2_by_k_layout_are_refused(connections, words
     assert build_body(m, full).n_points == build_body(m).n_points == 10
     assert build_body(m, full.astype(float)).n_points == 10
     assert build_body(m, np.zeros((2, 0), int)).n_points == 16  # nothing glued: four loose voxels
+
+
+@pytest.mark.parametrize("shape", [(3,), (2, 2, 2)])
+def test_is_connected_of_a_matrix_that_is_not_2_d_says_so(shape):
+    with pytest.raises(ValueError, match=re.escape(f"needs a 2-D matrix, got shape {shape}")):
+        is_connected(np.ones(shape))
+

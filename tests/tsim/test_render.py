@@ -138,3 +138,45 @@ def test_non_finite_points_do_not_break_a_frame():
     img = r.frame(np.full((2, body.n_points), np.nan))
     assert r.view == view
     assert np.any(np.all(img == RIGID_COLOR, axis=-1))
+
+
+@pytest.mark.parametrize("kwargs, words", [
+    ({"view_voxels": 0}, "view_voxels must be a positive number"),     # was a ZeroDivisionError
+    ({"view_voxels": -40}, "view_voxels must be a positive number"),   # drew a mirrored image
+    ({"width": 0.5}, "whole numbers of pixels"),                        # said 0.5 was not positive
+    ({"height": float("nan")}, "whole numbers of pixels"),
+])
+def test_a_renderer_with_a_view_it_cannot_draw_is_refused(kwargs, words):
+    with pytest.raises(ValueError, match=words):
+        Renderer("Walker-v0", build_body(np.array([[3, 3], [3, 3]])), **kwargs)
+
+
+def test_a_frame_of_points_not_shaped_as_the_body_is_refused_naming_the_shape():
+    """Too few points failed deep in the drawing, too many were left out, (n, 2) drew nonsense."""
+    body = build_body(np.array([[3, 3], [3, 3]]))
+    r = Renderer("Walker-v0", body, 64, 32)
+    pts = body.place(3, 1)
+    assert r.frame(pts).shape == (32, 64, 3)
+    for bad in (pts[:, :5], pts.T, np.hstack([pts, pts])):
+        with pytest.raises(ValueError, match=r"points of the robot must have shape \(2, 9\)"):
+            r.frame(bad)
+
+
+@pytest.mark.parametrize("frames, fps, words", [
+    ([np.zeros((4, 4), np.uint8)], float("nan"), "fps must be a positive number"),
+    ([np.zeros((4, 4, 3))], 30, "frames must be uint8"),            # float frames: a PIL TypeError
+    ([np.zeros(4, np.uint8)], 30, "frames must be uint8"),          # a 1-D frame was written
+    ([np.zeros((4, 4), np.uint8), np.zeros((5, 4), np.uint8)], 30, "of one size"),
+    ([np.full((4, 4), 255, np.uint8)], 30, "PALETTE indices"),
+    (7, 30, "frames must be a sequence of images"),
+])
+def test_frames_no_animation_can_be_made_from_are_refused_before_anything_is_written(tmp_path, frames,
+                                                                                      fps, words):
+    with pytest.raises(ValueError, match=words):
+        write_gif(frames, tmp_path / "a.gif", fps=fps)
+    assert not (tmp_path / "a.gif").exists()
+
+
+def test_frames_may_come_from_a_generator(tmp_path):
+    frames = (np.full((4, 6), i % 3, np.uint8) for i in range(5))
+    assert write_gif(frames, tmp_path / "a.gif").stat().st_size > 0

@@ -169,3 +169,9 @@ def test_a_second_robot_goes_unstable_at_evogyms_step():
     np.testing.assert_array_equal(flags, d["unstable"])
     np.testing.assert_array_equal(times, d["time"])
     assert np.abs(sim.pos_at_time(sim.get_time()) - d["pos"]).max() < 1e-9
+
+
+def test_a_world_with_no_objects_is_refused_saying_so():
+    """It said "its objects have all fixed (material 5)": all() of no objects is True."""
+    with pytest.raises(ValueError, match="it has no objects"):
+        EvoSim(EvoWorld())
