@@ -251,7 +251,7 @@ class BatchEnv:
         columns, which a device backend would return with the others as its memory held them).
         Anything else goes to `set_actions` itself (which raises its errors)."""
         sim = self.sim
-        if (self.fused and self._cpu and isinstance(actions, np.ndarray) and actions.dtype != object
+        if (self.fused and self._cpu and isinstance(actions, np.ndarray) and actions.dtype.kind in "fiu"
                 and actions.shape == (self.n_worlds, sim.max_actuators)):
             a = np.ascontiguousarray(actions, dtype=np.float64)
             if np.isfinite(a).all():

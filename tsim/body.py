@@ -259,12 +259,17 @@ def as_connections(connections: object) -> np.ndarray:
     if c.ndim != 2 or c.shape[0] != 2:
         raise ValueError(f"connections must be a (2, k) array of flat cell-index pairs (evogym's "
                          f"layout: row 0 the first cells, row 1 the second), got shape {c.shape}")
-    if not (np.issubdtype(c.dtype, np.integer)
-            or np.issubdtype(c.dtype, np.floating) and np.array_equal(c, np.round(c))):
-        odd = c[c != np.round(c)] if np.issubdtype(c.dtype, np.floating) else c.ravel()
+    if c.dtype.kind in "iu":
+        return c.astype(np.int64)
+    try:
+        f = c.astype(np.float64)  # whole floats, and Python ints in an object array
+    except (TypeError, ValueError):
+        f = np.full(c.shape, np.nan)
+    whole = np.isfinite(f) & (f == np.round(f))
+    if not whole.all():
         raise ValueError(f"connections must hold whole cell indices, got {c.dtype} values such as "
-                         f"{odd.flat[0].item()!r}")
-    return c.astype(np.int64)
+                         f"{c[~whole].tolist()[0]!r}")
+    return f.astype(np.int64)
 
 
 def build_body(matrix: object, connections: np.ndarray | None = None, *,

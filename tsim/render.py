@@ -399,14 +399,20 @@ def _frames(frames: Iterable[np.ndarray], fps: float) -> list[np.ndarray]:
         raise ValueError(f"fps must be a positive number, got {fps!r}")
     size = frames[0].shape[:2]
     for i, f in enumerate(frames):
-        if (f.dtype != np.uint8 or not (f.ndim == 2 or f.ndim == 3 and f.shape[2] == 3)
+        if (f.dtype.kind not in "uif" or not (f.ndim == 2 or f.ndim == 3 and f.shape[2] == 3)
                 or f.shape[:2] != size or 0 in f.shape):
-            raise ValueError(f"frame {i}: frames must be uint8 images of one size, (H, W) palette "
+            raise ValueError(f"frame {i}: frames must be images of one size, (H, W) palette "
                              f"indices or (H, W, 3) RGB, got {f.dtype} {f.shape} "
                              f"(frame 0: {frames[0].shape})")
-        if f.ndim == 2 and f.max() >= len(PALETTE):
-            raise ValueError(f"frame {i}: a (H, W) frame holds PALETTE indices (0..{len(PALETTE) - 1}), "
-                             f"got {int(f.max())}")
+        top = len(PALETTE) - 1 if f.ndim == 2 else 255
+        if f.dtype == np.uint8 and (f.ndim == 3 or f.max() <= top):  # every frame Renderer makes
+            continue
+        what = f"PALETTE indices (0..{top})" if f.ndim == 2 else "RGB values (0..255)"
+        bad = ~((f >= 0) & (f <= top) & (f == np.round(f)))
+        if bad.any():  # e.g. RGB in 0..1 from a plotting library: scale it first
+            raise ValueError(f"frame {i}: a {f.shape} frame holds {what} as whole numbers, "
+                             f"got {f[bad].flat[0].item()!r}")
+        frames[i] = f.astype(np.uint8)
     return frames
 
 

@@ -7,6 +7,7 @@ and ~40x at 10x10 (2.2 against 143 us, 0.24 against 8.9 ms, on an AMD EPYC VM)."
 from __future__ import annotations
 
 import numbers
+import operator
 
 import numpy as np
 
@@ -25,10 +26,18 @@ def _normalised(pd: tuple[float, ...]) -> np.ndarray:
 
 
 def _count(name: str, value: object) -> int:
-    """`value` as a non-negative int (numpy's integers too), or ValueError naming `name`."""
-    if isinstance(value, bool | np.bool_) or not isinstance(value, numbers.Integral) or value < 0:
+    """`value` as a non-negative int (numpy's integers and whole floats too: 2.0 is 2), or
+    ValueError naming `name` (2.7 bodies are not 2)."""
+    n = None
+    if not isinstance(value, bool | np.bool_):
+        try:
+            n = operator.index(value)
+        except TypeError:
+            if isinstance(value, numbers.Real) and float(value).is_integer():
+                n = int(value)
+    if n is None or n < 0:
         raise ValueError(f"{name} must be a non-negative integer, got {value!r}")
-    return int(value)
+    return n
 
 
 def _shape(shape: object) -> tuple[int, int]:

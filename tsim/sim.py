@@ -382,12 +382,12 @@ class BatchSim:
         array as indices, so [1, 0] would mean world 1 and world 0 to one reader and world 0 to
         another."""
         sel = np.asarray(mask)
+        if sel.shape != (self.n_worlds,):
+            raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         if sel.dtype != bool:
             raise ValueError(f"reset mask must be {self.n_worlds} booleans (one per world), got "
                              f"dtype {sel.dtype}; for world indices idx: mask = np.zeros(B, bool); "
                              "mask[idx] = True")
-        if sel.shape != (self.n_worlds,):
-            raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
         return sel
 
     def reset(self, mask: np.ndarray | None = None) -> None:

@@ -146,11 +146,15 @@ def _items(data: object, source: str) -> tuple[int, int, list]:
         for obj, d in items:
             if len(d["indices"]) != len(d["types"]):
                 raise ValueError(f"{len(d['indices'])} indices but {len(d['types'])} types")
-            # a cell outside the grid would wrap round into another row of the terrain
-            outside = [i for i in d["indices"] if not 0 <= int(i) < grid_w * grid_h]
+            # a negative index would wrap round into another row; a free object may start above
+            # the grid (evogym loads it), the terrain's cells are the grid's
+            terrain = all(int(t) == C.FIXED for t in d["types"])
+            top = grid_w * grid_h if terrain else None
+            outside = [i for i in d["indices"] if int(i) < 0 or top is not None and int(i) >= top]
             if outside:
+                where = f"0..{grid_w * grid_h - 1}" if terrain else "0 or more"
                 raise ValueError(f"object {obj!r}: cell index {outside[0]} is outside the "
-                                 f"{grid_w}x{grid_h} grid (0..{grid_w * grid_h - 1})")
+                                 f"{grid_w}x{grid_h} grid ({where}{' for terrain' if terrain else ''})")
     except (ValueError, KeyError, AttributeError, TypeError) as exc:
         raise ValueError(f"bad world {source}: {type(exc).__name__}: {exc}") from None
     return grid_w, grid_h, items

@@ -142,3 +142,14 @@ def test_seeds_as_a_0_d_array_are_the_int_they_hold():
     b = BatchEnv("Catcher-v0", bodies, seeds=3)
     assert np.array_equal(a.reset(), b.reset())
     assert np.array_equal(a.sim.read_state(), b.sim.read_state())
+
+
+@pytest.mark.parametrize("fused", [True, False])
+@pytest.mark.parametrize("dtype", [bool, complex])
+def test_bool_and_complex_actions_are_refused_on_both_env_paths(fused, dtype):
+    """The kernel path took them as 1.0 (complex with a warning) where the numpy path refused."""
+    env = BatchEnv("Walker-v0", [BODY], fused=fused)
+    env.reset()
+    with pytest.raises(ValueError, match="actions must be real numbers"):
+        env.step(np.ones((1, env.sim.max_actuators), dtype))
+

@@ -98,6 +98,17 @@ def test_a_world_whose_cells_leave_its_grid_is_refused_in_one_line(grid, indices
         world_from_dict(data)
 
 
+def test_a_free_object_above_the_grid_loads_as_evogym_loads_it():
+    """Only the terrain's cells must lie in the grid (they make its cell grid); a free box above it
+    is simulated, as evogym simulates it."""
+    data = {"grid_width": 10, "grid_height": 3, "objects": {
+        "ground": {"indices": list(range(10)), "types": [5] * 10,
+                   "neighbors": {str(i): [j for j in (i - 1, i + 1) if 0 <= j < 10] for i in range(10)}},
+        "box": {"indices": [38], "types": [1], "neighbors": {"38": []}}}}
+    world = world_from_dict(data)
+    assert [o.cell for o in world.objects if o.name == "box"] == [(8, 3)]
+
+
 @pytest.mark.parametrize("direction, start, ends", [("left", 20, True), ("right", 20, False)])
 def test_a_goal_to_the_left_ends_the_episode_with_its_bonus(registry, direction, start, ends):
     """A robot that is placed left of the goal's x has passed a "left" goal at its first step

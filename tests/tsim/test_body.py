@@ -96,6 +96,8 @@ def test_bad_bodies_raise_value_error_naming_the_problem(matrix, words):
     ("pairs", "got shape (3, 2)"),                 # (k, 2): was re-paired into a body of 14 points
     (np.zeros((3, 4), int), "got shape (3, 4)"),   # was read as 6 pairs
     (np.array([[0.0, 1.5, 2.0], [1.0, 2.0, 3.0]]), "values such as 1.5"),  # was truncated
+    (np.array([[0.0, 1.0, 2.0], [1.0, 2.0, np.inf]]), "values such as inf"),  # the pair was dropped
+    (np.array([[0, 1, 2], [1, 2, None]], dtype=object), "values such as None"),
 ])
 def test_connections_not_in_evogyms_2_by_k_layout_are_refused(connections, words):
     """build_body and sgr.evogym's WorldObject take evogym's (2, k) connections and nothing they
@@ -111,6 +113,7 @@ def test_connections_not_in_evogyms_2_by_k_layout_are_refused(connections, words
             build(connections)
     assert build_body(m, full).n_points == build_body(m).n_points == 10
     assert build_body(m, full.astype(float)).n_points == 10
+    assert build_body(m, full.astype(object)).n_points == 10  # Python ints, as a list of lists gives
     assert build_body(m, np.zeros((2, 0), int)).n_points == 16  # nothing glued: four loose voxels
 
 

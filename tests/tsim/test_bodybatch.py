@@ -257,4 +257,5 @@ def test_bad_sampling_arguments_get_one_error_naming_them_from_both_samplers(n, 
     if not match.startswith("n "):
         with pytest.raises(ValueError, match=match):
             sample_robot(shape, np.random.default_rng(0), pd)
-    assert sample_robots(np.int64(2), (np.int64(3), 3), np.random.default_rng(0)).shape == (2, 3, 3)
+    for n, shape in ((np.int64(2), (np.int64(3), 3)), (2.0, (3.0, 3)), (np.array(2), (3, 3))):
+        assert sample_robots(n, shape, np.random.default_rng(0)).shape == (2, 3, 3)  # whole numbers

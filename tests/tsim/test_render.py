@@ -8,6 +8,7 @@ from tsim.body import build_body
 from tsim.render import (
     BLUES,
     ORANGES,
+    PALETTE,
     RIGID_COLOR,
     SOFT_COLOR,
     Renderer,
@@ -164,8 +165,9 @@ def test_a_frame_of_points_not_shaped_as_the_body_is_refused_naming_the_shape():
 
 @pytest.mark.parametrize("frames, fps, words", [
     ([np.zeros((4, 4), np.uint8)], float("nan"), "fps must be a positive number"),
-    ([np.zeros((4, 4, 3))], 30, "frames must be uint8"),            # float frames: a PIL TypeError
-    ([np.zeros(4, np.uint8)], 30, "frames must be uint8"),          # a 1-D frame was written
+    ([np.full((4, 4, 3), 0.5)], 30, r"RGB values \(0..255\) as whole numbers, got 0.5"),
+    ([np.zeros(4, np.uint8)], 30, "frames must be images of one size"),  # a 1-D frame was written
+    ([np.zeros((4, 4, 3), complex)], 30, "frames must be images of one size"),
     ([np.zeros((4, 4), np.uint8), np.zeros((5, 4), np.uint8)], 30, "of one size"),
     ([np.full((4, 4), 255, np.uint8)], 30, "PALETTE indices"),
     (7, 30, "frames must be a sequence of images"),
@@ -177,6 +179,14 @@ def test_frames_no_animation_can_be_made_from_are_refused_before_anything_is_wri
     assert not (tmp_path / "a.gif").exists()
 
 
-def test_frames_may_come_from_a_generator(tmp_path):
+def test_frames_may_come_from_a_generator_and_be_whole_numbers_of_any_type(tmp_path):
+    """int64 palette frames and whole-number float RGB frames were written before the checks came:
+    they still are, as their uint8 values."""
     frames = (np.full((4, 6), i % 3, np.uint8) for i in range(5))
     assert write_gif(frames, tmp_path / "a.gif").stat().st_size > 0
+    a = write_gif([np.full((4, 6), 1, np.int64)] * 3, tmp_path / "b.gif").read_bytes()
+    assert a == write_gif([np.full((4, 6), 1, np.uint8)] * 3, tmp_path / "c.gif").read_bytes()
+    rgb = np.zeros((4, 6, 3))
+    rgb[:] = PALETTE[2]
+    a = write_gif([rgb] * 3, tmp_path / "d.gif").read_bytes()
+    assert a == write_gif([rgb.astype(np.uint8)] * 3, tmp_path / "e.gif").read_bytes()

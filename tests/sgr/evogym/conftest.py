@@ -34,6 +34,7 @@ def xvfb_display():
     os.close(read)
     if not got.strip().isdigit():
         proc.kill()
+        proc.wait(timeout=10)
         pytest.fail(f"Xvfb did not report a display within 20 s (got {got!r})")
     display = f":{int(got)}"
     old = os.environ.get("DISPLAY")
