@@ -340,6 +340,8 @@ def test_every_bench_script_that_takes_record_is_listed_here():
     assert takes == set(BENCH_RECORDS)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("script", sorted(BENCH_RECORDS))
 def test_a_bench_scripts_record_option_writes_a_record_of_its_figures(script, tmp_path):
     """The commands BENCHMARKS.md cites write their records (one wrote none: a stale key), from any
