@@ -67,7 +67,7 @@ def sample_robot(shape: tuple[int, int], rng: np.random.Generator,
 def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
                   pd: tuple[float, ...] = DEFAULT_PD, max_tries: int = 100_000) -> np.ndarray:
     """(n, H, W) int64: exactly the bodies of n calls `sample_robot(shape, rng, pd, max_tries)` in a
-    row, and `rng` left where those calls leave it.
+    row, and `rng` left where those calls leave it (where they raise, too).
 
     `Generator.choice(5, size, p)` is `cdf.searchsorted(rng.random(size), 'right')`; so whole
     chunks of draws are made at once, tested together (`is_connected_batch`), and the generator is
@@ -91,19 +91,24 @@ def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
         ok = _valid(r, cdf)
         idx = np.flatnonzero(ok)
         rate = max(max(len(idx), 0.5) / k, 1e-6)  # none accepted: at most half of one per chunk
+        # the max_tries rule: sample_robot gives up after a run of max_tries failed draws, having
+        # made exactly those draws; `failed` draws of the run came before this chunk (< max_tries)
         if not len(idx):  # a chunk of failures (common at 10x10: ~1 draw in 230 is accepted)
+            if failed + k >= max_tries:
+                _give_up(rng, saved, max_tries - failed, h, w, max_tries)
             failed += k
-            if failed >= max_tries:
-                raise RuntimeError(f"no valid robot found in {max_tries} draws")
             continue
-        # the max_tries rule: a run of max_tries failures before the next acceptance
         starts = np.concatenate(([-1], idx))
         gaps = np.diff(starts) - 1  # failures before each accepted draw
         gaps[0] += failed
         over = np.flatnonzero(gaps >= max_tries)
         take = idx[:need]
         if len(over) and over[0] < len(take):
-            raise RuntimeError(f"no valid robot found in {max_tries} draws")
+            j = int(over[0])  # the body sample_robot does not find: its run starts after body j - 1
+            _give_up(rng, saved, int(starts[j]) + 1 - (failed if j == 0 else 0) + max_tries, h, w,
+                     max_tries)
+        if len(take) < need and k - 1 - int(idx[-1]) >= max_tries:  # the run after the last body
+            _give_up(rng, saved, int(idx[-1]) + 1 + max_tries, h, w, max_tries)
         out[got:got + len(take)] = cdf.searchsorted(r[take], side="right")
         got += len(take)
         if len(take) == need:
@@ -114,6 +119,14 @@ def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
             break
         failed = k - 1 - int(idx[-1])
     return out
+
+
+def _give_up(rng: np.random.Generator, saved: dict, used: int, h: int, w: int, max_tries: int) -> None:
+    """Raise as `sample_robot` does, the generator left where it leaves it: rewound to the chunk's
+    start, then advanced by the `used` draws of it that the calls made."""
+    rng.bit_generator.state = saved
+    rng.random((max(used, 0), h, w))
+    raise RuntimeError(f"no valid robot found in {max_tries} draws")
 
 
 def _valid(r: np.ndarray, cdf: np.ndarray) -> np.ndarray:

@@ -156,6 +156,7 @@ def test_sample_robots_raises_where_sample_robot_runs_out_of_tries():
                 sample_robots(3, (5, 5), r2, max_tries=4)
         else:
             assert np.array_equal(sample_robots(3, (5, 5), r2, max_tries=4), want)
+        assert r1.random() == r2.random()  # where the calls left the generator, raising or not
         outcomes.add(want is None)
     assert outcomes == {True, False}  # both cases were met
 
@@ -177,6 +178,7 @@ def test_sample_robots_raises_where_sample_robot_does_at_10x10():
                 sample_robots(8, (10, 10), r2, max_tries=600)
         else:
             assert np.array_equal(sample_robots(8, (10, 10), r2, max_tries=600), want)
+        assert r1.random() == r2.random()
         outcomes.add(want is None)
     assert outcomes == {True, False}
 
