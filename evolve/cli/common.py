@@ -6,6 +6,7 @@ from __future__ import annotations
 import argparse
 import io
 import os
+import re
 import sys
 from pathlib import Path
 
@@ -32,9 +33,9 @@ def workers_arg(text: str) -> int | str:
 def parse_shape(text: str, option: str = "--shape") -> tuple[int, int]:
     """A body grid's shape written RxC (rows x columns, e.g. 10x10); SgrError (one line, no usage
     text) otherwise."""
-    rows, sep, cols = str(text).strip().lower().partition("x")
-    if sep and rows.isdigit() and cols.isdigit() and int(rows) > 0 and int(cols) > 0:
-        return int(rows), int(cols)
+    m = re.fullmatch(r"([0-9]+)x([0-9]+)", str(text).strip().lower())  # ASCII: '²'.isdigit() is True
+    if m and int(m[1]) > 0 and int(m[2]) > 0:
+        return int(m[1]), int(m[2])
     raise SgrError(f"{option} {text!r}: give the body's rows x columns as RxC, e.g. 10x10")
 
 

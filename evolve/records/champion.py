@@ -60,6 +60,8 @@ def read_champion(run_dir: str | Path,
     ValueError naming the file and the key when it is not a champion that runs (checked with one
     forward pass of the controller). `cell` (a map-elites run's; (i, j) or "i,j"): the record of
     that cell's elite in elites.json instead."""
+    if Path(run_dir).is_file():  # champion.json itself: its run's other files are beside it
+        raise SgrError(f"{run_dir} is a file: give its run's folder ({Path(run_dir).parent})")
     f = Path(run_dir) / ("champion.json" if cell is None else ELITES_FILE)
     if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
         run = RunDir(run_dir)
@@ -70,8 +72,14 @@ def read_champion(run_dir: str | Path,
     missing = [k for k in KEYS if k not in champ]
     if missing:
         raise SgrError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
-    if champ["task"] not in TASKS:
+    if not isinstance(champ["task"], str) or champ["task"] not in TASKS:
         raise SgrError(f"{f}: key 'task': unknown task {champ['task']!r}")
+    fitness = champ.get("fitness", 0.0)  # a hand-made record may leave it out
+    if isinstance(fitness, bool) or not isinstance(fitness, int | float):  # as `champion_of` says
+        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+    if not isinstance(champ.get("evaluation", {}), dict | None):
+        raise SgrError(f"{f}: key 'evaluation' must be a mapping (robust, seed, tag), got "
+                       f"{str(champ['evaluation'])[:40]!r}")
     steps = champ["episode_steps"]
     positive = isinstance(steps, int) and not isinstance(steps, bool) and steps > 0
     if not (positive or steps in (None, "evogym")):

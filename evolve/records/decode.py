@@ -17,6 +17,7 @@ one genome of an inner population evolved for one body: it is refused.
 
 from __future__ import annotations
 
+import numbers
 from pathlib import Path
 
 from evolve.config import RunConfig
@@ -34,6 +35,9 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     """The champion.json record of `run_dir`'s champion genome decoded at `shape` (rows, cols);
     SgrError in one line when the method cannot be decoded there, the body does not fit the task's
     world, or the genome draws no valid robot at that size."""
+    if (not isinstance(shape, tuple | list) or len(shape) != 2
+            or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) and v > 0 for v in shape)):
+        raise SgrError(f"shape must be (rows, cols) of positive integers, got {shape!r}")
     run = RunDir(run_dir)
     cfg = RunConfig.of(_imported(run))
     shape = (int(shape[0]), int(shape[1]))

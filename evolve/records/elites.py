@@ -11,6 +11,7 @@ Written by the run's `ArchiveFiles` reporter (evolve/runs/reporters.py, `elites_
 from __future__ import annotations
 
 import json
+import numbers
 from pathlib import Path
 
 from evolve.records.rundir import ELITES_FILE
@@ -88,6 +89,10 @@ def parse_cell(text: str) -> tuple[int, ...]:
 def elite_record(run_dir: str | Path, cell) -> dict:
     """The champion record of the elite in `cell` (a tuple of indices, or "i,j") of a run's archive;
     SgrError naming the cell when it is empty."""
+    if not isinstance(cell, str) and not (isinstance(cell, tuple | list) and all(
+            isinstance(i, numbers.Integral) and not isinstance(i, bool) for i in cell)):
+        # (2.9, 1.7) was cell (2, 1)
+        raise SgrError(f"a cell is a tuple of integer indices or 'i,j', got {cell!r}")
     cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in cell)
     data = read_elites(run_dir)
     for e in data["elites"]:

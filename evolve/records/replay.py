@@ -13,6 +13,8 @@ fitness.
 
 from __future__ import annotations
 
+import math
+import numbers
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -24,7 +26,7 @@ from evolve.records import verdict as verdict_rule
 from evolve.records.champion import episode_steps, precision_of, read_champion
 from evolve.records.elites import parse_cell
 from evolve.rollout.episodes import rollout_policy
-from evolve.rollout.robust import NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
+from evolve.rollout.robust import MAX_EPISODES, NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
 from tasks.env import obs_dim
 from tsim.body import build_body
 from tsim.errors import SgrError
@@ -52,7 +54,7 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     champ, body, ctrl = read_champion(run_dir, cell)
     index = (typical_replay(run_dir, eps, kind, offset, seed, cell=cell)[0] if replay == MEDIAN
              else int(replay))
-    noise = _replay_noise(index + 1, eps, kind, offset, seed).take([index])
+    noise = _replay_noise(index, eps, kind, offset, seed).take([index])
     mp4_beside = out is None and replay == MEDIAN and cell is None
     out = out or Path(run_dir) / (replay_gif_name(replay) if cell is None else elite_gif_name(cell, replay))
     shift = noise.shifts()
@@ -168,7 +170,7 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
     champ, body, ctrl = read_champion(run_dir, cell)
     # every world replays evolution's episode (`rollout_policy`: seed 0, the constructed env's
     # episode), so the perturbed runs differ from it by the perturbation alone
-    return _replay(champ, body, ctrl, _replay_noise(replays + 1, eps, kind, offset, seed))
+    return _replay(champ, body, ctrl, _replay_noise(replays, eps, kind, offset, seed))
 
 
 def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
@@ -178,12 +180,18 @@ def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
     return load_champion(run_dir).verdict(replays, eps)
 
 
-def _replay_noise(n: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
-    """The perturbations of replays 0 (none) to n - 1."""
+def _replay_noise(replays: int, eps: float, kind: str, offset: float, seed: int) -> EpisodeNoise:
+    """The perturbations of replays 0 (none) to `replays`."""
+    if (isinstance(replays, bool) or not isinstance(replays, numbers.Integral)
+            or not 0 <= replays <= MAX_EPISODES):
+        raise SgrError(f"replays must be an integer from 0 to {MAX_EPISODES:,}, got {replays!r}")
+    n = int(replays) + 1
     if kind not in NOISE_KINDS:
         raise SgrError(f"noise kind must be one of {', '.join(NOISE_KINDS)}, got {kind!r}")
-    if not (eps >= 0 and offset >= 0):
-        raise SgrError(f"noise scale and start offset must be >= 0, got {eps} and {offset}")
+    real = all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in (eps, offset))
+    if not (real and math.isfinite(eps) and math.isfinite(offset) and eps >= 0 and offset >= 0):
+        raise SgrError(f"noise scale and start offset must be finite numbers >= 0, got {eps!r} and "
+                       f"{offset!r}")
     tags = [f"replay/{kind}/{eps!r}/{offset!r}/{i}" for i in range(n)]
     return EpisodeNoise(Perturbation(kind, eps, offset), episode_keys(seed, tags, 0), np.arange(n) > 0)
 
@@ -250,7 +258,7 @@ class Champion:
         uniform(+-eps) on every action, against its noise-free return. `verdict().line()` says it
         in words; `verdict().holds` is the rule's answer."""
         returns = _replay(self.record, self.body, self.controller,
-                          _replay_noise(replays + 1, eps, "uniform", 0.0, 0))
+                          _replay_noise(replays, eps, "uniform", 0.0, 0))
         return verdict_rule.from_returns(returns, eps)
 
     def gif(self, out: str | Path, *, width: int = 640, height: int = 320, fps: float = 30.0) -> Path:

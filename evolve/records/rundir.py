@@ -183,7 +183,11 @@ class RunDir:
     def lock(self) -> None:
         """Hold the run for this process (until it exits or `unlock`): two processes advancing one
         run (a sweep resumed while a run of it still goes on, say) would interleave its files."""
-        self.path.mkdir(parents=True, exist_ok=True)
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+        except (FileExistsError, NotADirectoryError):
+            raise SgrError(f"{self.path} is not a folder (a file of that name, or a file on its path): "
+                           "a run needs a folder") from None
         fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)

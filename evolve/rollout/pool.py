@@ -217,12 +217,19 @@ class RolloutPool(BasePool):
         for proc in self._procs:
             try:
                 proc.wait(timeout=5)  # idle workers exit at once; a busy one is killed
-            except subprocess.TimeoutExpired:
+            except self._timeout:
                 proc.kill()
                 proc.wait()
             proc.stdout.close()
         self._procs = []
 
+    # held by the class: at interpreter exit `__del__` may run after the module's globals are gone
+    _timeout = subprocess.TimeoutExpired
+
     def __del__(self) -> None:
+        """An Experiment left open at exit: its workers are stopped, with no traceback printed."""
         if getattr(self, "_procs", None):  # (none when __init__ refused its workers)
-            self.close()
+            try:
+                self.close()
+            except Exception:  # noqa: BLE001, S110 - at exit the modules close needs may be gone;
+                pass  # the workers then read the end of their input when this process ends, and exit

@@ -19,6 +19,7 @@ depend on the batch it is simulated in, the worker count, the machine or a resum
 from __future__ import annotations
 
 import hashlib
+import re
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 
@@ -195,8 +196,8 @@ class Robust:
             if isinstance(v, bool) or not isinstance(v, int | float) or not np.isfinite(v) or v < 0:
                 raise ValueError(f"{name}.{key}' must be a number >= 0, got {v!r}")
         s = r.statistic
-        quantile = isinstance(s, str) and 1 < len(s) <= 4 and s[0] == "q" and s[1:].isdigit() \
-            and 0 <= int(s[1:]) <= 100
+        # ASCII digits only: str.isdigit() takes '²', which int() does not, and '٣', which it does
+        quantile = isinstance(s, str) and re.fullmatch(r"q[0-9]{1,3}", s) is not None and int(s[1:]) <= 100
         if s not in STATISTICS[:3] and not quantile:
             raise ValueError(f"{name}.statistic' must be one of {', '.join(STATISTICS)}, got {s!r}")
         for key in ("reevaluate", "accumulate"):

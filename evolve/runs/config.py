@@ -68,7 +68,7 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise SgrError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
                        f"{closest(method, METHODS)}")
     problem = METHODS[method]
@@ -114,7 +114,7 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
     if values["pop_size"] > MAX_POP:
         raise SgrError(f"{source}: key 'pop_size' must be at most {MAX_POP:,}, got {values['pop_size']:,}")
     shape = values["robot_shape"]
-    if len(shape) != 2 or not all(isinstance(v, int) and v > 0 for v in shape):
+    if len(shape) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in shape):
         raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
     if (why := body_fit_problem(values["task"], (shape[0], shape[1]))) is not None:
         raise SgrError(f"{source}: key 'robot_shape' {list(shape)}: {why}")
@@ -178,7 +178,8 @@ def config_from_dict(raw: dict, source: str = "config", base: Path | None = None
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values, "
                        f"got a {type(raw).__name__}")
-    problem = METHODS.get(raw.get("method"))
+    method = raw.get("method")
+    problem = METHODS.get(method) if isinstance(method, str) else None  # else check_config says why
     raw = dict(raw)
     for key in problem.default_files if problem else ():
         if isinstance(raw.get(key), str) and not Path(raw[key]).is_absolute():

@@ -9,6 +9,7 @@ A first Ctrl-C or SIGTERM lets the generation under way end, writes a checkpoint
 
 from __future__ import annotations
 
+import numbers
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -69,6 +70,8 @@ class Experiment:
             exp.run_all(); exp.finish()
     """
 
+    _closed = False  # `close` was called: its workers are stopped and its folder let go
+
     def __init__(self, run: RunDir, cfg: RunConfig | dict, state: dict | None = None, quiet: bool = False,
                  workers: int | str | None = None):
         """`cfg`: the run's config (a run folder's config.yaml as read: `RunConfig.of`); `workers`
@@ -102,7 +105,8 @@ class Experiment:
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
                quiet: bool = False, named_in: Path | None = None) -> Experiment:
-        """A new run in `out` from a YAML config with `overrides` (CLI flags; None values ignored);
+        """A new run in `out` from a YAML config with `overrides` set over its keys (a None value sets
+        null; the CLI leaves out the flags not given);
         `named_in`: the config was read back from a run or sweep folder (`check_config`)."""
         return cls._start(load_config(config_path, overrides, named_in), out, quiet)
 
@@ -151,6 +155,10 @@ class Experiment:
             done = state["generation"]
             run.check_rows()  # a damaged generations.csv is refused before anything changes
             if generations is not None:
+                if (isinstance(generations, bool) or not isinstance(generations, numbers.Integral)
+                        or generations < 1):
+                    raise SgrError(f"generations must be a positive integer, got {generations!r}")
+                generations = int(generations)
                 if generations < done:
                     raise SgrError(f"{out} has already run {done} generations; --generations must be "
                                    f">= {done}")
@@ -191,6 +199,7 @@ class Experiment:
         each generation's row, champion and checkpoint are written (bench/soak.py measures there).
         Ctrl-C (SIGINT) or SIGTERM: the generation under way ends, a checkpoint is written, then
         `Interrupted` (a KeyboardInterrupt); a second one raises it at once."""
+        self._check_open("run_all")
         cfg, search = self.cfg, self.search
         with stop_after_generation() as stop, self.reporters.running(self):
             self._stop = stop
@@ -234,9 +243,19 @@ class Experiment:
                 f"last checkpoint: make room, then {resume}")
 
     def close(self) -> None:
-        """Stop the rollout worker processes and let go of the run directory (again: nothing)."""
+        """Stop the rollout worker processes and let go of the run directory (again: nothing).
+        The object then runs nothing more: another process may have taken the run."""
+        self._closed = True
         self.pool.close()
         self.run.unlock()
+
+    def _check_open(self, what: str) -> None:
+        """SgrError for `what` on a closed Experiment: without the run's lock it would write the
+        folder beside whoever holds it now (generations written twice)."""
+        if self._closed:
+            raise SgrError(f"{what}: this Experiment of {self.run.path} is closed (its workers "
+                           "stopped, its folder let go); continue the run with "
+                           f"Experiment.resume({str(self.run.path)!r})")
 
     def __enter__(self) -> Experiment:
         return self
@@ -248,6 +267,7 @@ class Experiment:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
         written whole or not at all, and a run stopped while writing them (a full disk) writes
         them again on `resume`."""
+        self._check_open("finish")
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:

@@ -20,8 +20,9 @@ from evolve.methods.hyperneat import Expression
 from evolve.nn.cppn import CompiledCPPN
 from tsim.errors import SgrError
 
-# a setting: (the types its value may have, its default, the least value of an int)
-Setting = tuple[tuple[type, ...], Any, int]
+# a setting: (the types its value may have, its default, the least and the most value of an int;
+# the most keeps a typo's extra zeros from hanging a run)
+Setting = tuple[tuple[type, ...], Any, int, int]
 Settings = tuple[tuple[str, Any], ...]  # resolved settings, sorted by name (hashable, frozen)
 
 
@@ -50,12 +51,12 @@ class BodyDecoder:
                 raise SgrError(f"{key}: unknown setting {name!r} for body decoder {cls.name!r}; its "
                                f"settings: {known}")
         out = {}
-        for name, (types, default, least) in cls.settings.items():
+        for name, (types, default, least, most) in cls.settings.items():
             value = raw.get(name, default)
             names = " or ".join("null" if t is type(None) else t.__name__ for t in types)
             if (not isinstance(value, types) or isinstance(value, bool)
-                    or isinstance(value, int) and value < least):
+                    or isinstance(value, int) and not least <= value <= most):
                 raise SgrError(f"{key}: setting {name!r} of body decoder {cls.name!r} must be {names}"
-                               f"{f' >= {least}' if int in types else ''}, got {value!r}")
+                               f"{f' from {least} to {most:,}' if int in types else ''}, got {value!r}")
             out[name] = value
         return tuple(sorted(out.items()))

@@ -48,7 +48,7 @@ def features(shape: tuple[int, int], frequencies: int) -> np.ndarray:
 class FourierDecoder(BodyDecoder):
     """Argmax of a (2 + 4F)-hidden-5 body network of each cell's Fourier features."""
     name = "fourier"
-    settings = {"frequencies": ((int,), 2, 1), "hidden": ((int,), 6, 1)}
+    settings = {"frequencies": ((int,), 2, 1, 64), "hidden": ((int,), 6, 1, 1024)}
 
     def body(self, cppn, shape: tuple[int, int], expression: Expression,
              settings: Mapping[str, Any]) -> np.ndarray:

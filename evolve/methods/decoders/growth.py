@@ -87,7 +87,7 @@ def grow(W1: np.ndarray, b1: np.ndarray, W2: np.ndarray, b2: np.ndarray, shape: 
 class GrowthDecoder(BodyDecoder):
     """K steps of a cell-local rule from the centre cell; a body that is always connected."""
     name = "growth"
-    settings = {"steps": ((int, type(None)), None, 1)}
+    settings = {"steps": ((int, type(None)), None, 1, 10_000)}
 
     def body(self, cppn, shape: tuple[int, int], expression: Expression,
              settings: Mapping[str, Any]) -> np.ndarray:

@@ -224,6 +224,13 @@ def test_a_champion_of_the_papers_substrate_is_recorded_as_before_and_reads_as_i
                                  "got 'spiral'"),
     ({"body_decoder": 3}, "key 'body_decoder' must be str"),
     ({"body_decoder": "growth", "body_decoder_settings": {"steps": 0}}, "setting 'steps' of body decoder"),
+    # a typo's extra zeros hung the run (growth steps, fourier's features and queries)
+    ({"body_decoder": "growth", "body_decoder_settings": {"steps": 10**9}},
+     "setting 'steps' of body decoder 'growth' must be int or null from 1 to 10,000, got 1000000000"),
+    ({"body_decoder": "fourier", "body_decoder_settings": {"frequencies": 10**6}},
+     "setting 'frequencies' of body decoder 'fourier' must be int from 1 to 64"),
+    ({"body_decoder": "fourier", "body_decoder_settings": {"hidden": 10**6}},
+     "setting 'hidden' of body decoder 'fourier' must be int from 1 to 1,024"),
     ({"body_decoder": "fourier", "body_decoder_settings": {"steps": 3}}, "unknown setting 'steps' for body "
                                                                          "decoder 'fourier'"),
     ({"body_decoder_settings": {"hidden": 2}}, "unknown setting 'hidden' for body decoder 'substrate'"),

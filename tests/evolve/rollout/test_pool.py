@@ -140,3 +140,21 @@ def test_runs_give_the_same_results_with_one_or_two_worker_processes(tmp_path, s
         rows[workers] = [(r["best"], r["mean"], r["median"], r["n_valid"]) for r in exp.run.rows()]
     assert rows[1] == rows[2]
     assert len(rows[1]) == 2
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_an_experiment_left_open_at_exit_stops_its_workers_without_a_traceback(tmp_path):
+    """At interpreter exit `RolloutPool.__del__` ran after subprocess's globals were gone and printed
+    'Exception ignored ... TypeError: catching classes that do not inherit from BaseException'."""
+    import subprocess
+    import sys
+
+    script = ("from evolve import Experiment\n"
+              "cfg = {'method': 'sgr', 'task': 'Walker-v0', 'generations': 1, 'pop_size': 4,\n"
+              "       'episode_steps': 5, 'workers': 2, 'render_champion': False}\n"
+              f"exp = Experiment.from_config(cfg, {str(tmp_path / 'r')!r}, quiet=True)\n"
+              "exp.run_all()\n")
+    run = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert "Exception ignored" not in run.stderr and "Traceback" not in run.stderr, run.stderr[-2000:]

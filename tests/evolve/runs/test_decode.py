@@ -83,3 +83,13 @@ def test_nested_is_refused_in_one_line(tmp_path, capsys):
     assert main(["decode", str(d), "--shape", "5x5", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "nested" in err, err
+
+
+@pytest.mark.parametrize("shape", [(2.7, 5), (True, 5), "55", (5,), (5, 5, 5), None, (0, 5), (-5, 5)])
+def test_a_shape_that_is_not_two_positive_integers_is_refused_before_decoding(sgr_run, shape):
+    """(2.7, 5) decoded at 2x5, "55" at 5x5; (5,) was an IndexError, (0, 5) 'no valid robot'."""
+    from evolve.records.decode import decoded_champion
+    from tsim.errors import SgrError
+
+    with pytest.raises(SgrError, match=r"shape must be \(rows, cols\) of positive integers"):
+        decoded_champion(sgr_run, shape)

@@ -44,3 +44,14 @@ def test_a_damaged_archive_is_one_line_naming_its_key(tmp_path, capsys, change, 
     assert main(["render", str(run), "--cell", "0,0", "--exact"]) == 2
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and named in err, err
+
+
+@pytest.mark.parametrize("cell", [(0.9, 0.2), (True, False), None])
+def test_a_cell_that_is_not_integer_indices_is_refused(tmp_path, cell):
+    """(0.9, 0.2) silently gave cell (0, 0)'s elite."""
+    from tsim.errors import SgrError
+
+    run = run_with(tmp_path, GOOD)
+    assert elite_record(run, [0, 0]) == elite_record(run, "0,0") == GOOD_ELITE["champion"]
+    with pytest.raises(SgrError, match="a cell is a tuple of integer indices"):
+        elite_record(run, cell)

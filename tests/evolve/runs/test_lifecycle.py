@@ -52,3 +52,35 @@ def test_a_run_that_cannot_be_resumed_lets_go_of_its_directory(tmp_path, repo_ro
     with pytest.raises(ValueError, match="is finished"):
         Experiment.resume(tmp_path / "r")
     RunDir(tmp_path / "r").lock()
+
+
+def test_a_closed_experiment_runs_nothing_more(tmp_path, repo_root):
+    """close() let go of the run, yet run_all() went on: another process resumed it meanwhile, and
+    generations.csv held each generation twice."""
+    from tsim.errors import SgrError
+
+    exp = Experiment.from_config(tiny(repo_root), tmp_path / "r", quiet=True)
+    exp.close()
+    other = Experiment.resume(tmp_path / "r")
+    for call in (exp.run_all, exp.finish):
+        with pytest.raises(SgrError, match=r"is closed .* continue the run with Experiment.resume"):
+            call()
+    other.run_all()
+    other.close()
+    rows = RunDir(tmp_path / "r").check_rows()  # each generation once, in order
+    assert [int(r["generation"]) for r in rows] == list(range(1, other.cfg.generations + 1))
+
+
+@pytest.mark.parametrize("generations", [2.5, True, "5", 0])
+def test_resume_with_generations_that_are_not_a_positive_integer_changes_nothing(tmp_path, repo_root,
+                                                                                   generations):
+    """2.5 ran 3 generations and wrote 2.5 into config.yaml; True was written before the error."""
+    from tsim.errors import SgrError
+
+    with Experiment.from_config(tiny(repo_root), tmp_path / "r", quiet=True) as exp:
+        exp.run_all()
+    before = (tmp_path / "r" / "config.yaml").read_bytes()
+    with pytest.raises(SgrError, match="generations must be a positive integer"):
+        Experiment.resume(tmp_path / "r", generations=generations)
+    assert (tmp_path / "r" / "config.yaml").read_bytes() == before
+    RunDir(tmp_path / "r").lock()  # let go of

@@ -132,3 +132,35 @@ def test_from_config_without_robust_keys_writes_the_honest_evaluation_in_full(tm
     assert back.robust == Robust.from_config(quick["robust"]) and back.final_selection is not None
     older = {k: v for k, v in written.items() if k not in ("robust", "final_selection")}
     assert (RunConfig.of(older).robust, RunConfig.of(older).final_selection) == (None, None)
+
+
+@pytest.mark.parametrize("changes, words", [
+    ({"method": ["sgr"]}, "key 'method' must be one of"),         # unhashable type: 'list'
+    ({"method": {"sgr": 1}}, "key 'method' must be one of"),
+    ({"robot_shape": [True, 5]}, "key 'robot_shape' must be [rows, cols] of positive ints"),  # crashed later
+])
+def test_a_config_value_of_the_wrong_kind_is_one_line_naming_its_key(changes, words):
+    with pytest.raises(ValueError) as err:
+        config_from_dict({"method": "sgr", "task": "Walker-v0", **changes}, "c.yaml")
+    assert words in str(err.value) and "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("statistic", ["q²", "q٣", "q101", "q-5"])
+def test_a_quantile_statistic_is_q_and_ascii_digits_up_to_100(statistic):
+    """'²' passed str.isdigit() and failed int() with a line naming no key; '٣' was taken."""
+    def config(s: str):
+        return config_from_dict({"method": "sgr", "task": "Walker-v0",
+                                 "robust": {"episodes": 4, "statistic": s}}, "c.yaml")
+    with pytest.raises(ValueError, match="statistic' must be one of"):
+        config(statistic)
+    assert config("q25").robust.statistic == "q25"
+
+
+@pytest.mark.parametrize("out", ["afile", "afile/sub"])
+def test_a_run_folder_that_is_a_file_is_one_line(tmp_path, repo_root, out):
+    """Was a raw FileExistsError / NotADirectoryError."""
+    from tsim.errors import SgrError
+
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(SgrError, match="is not a folder"):
+        Experiment.from_config(tiny(repo_root), tmp_path / out, quiet=True)
