@@ -75,7 +75,8 @@ def read_champion(run_dir: str | Path,
     if not isinstance(champ["task"], str) or champ["task"] not in TASKS:
         raise SgrError(f"{f}: key 'task': unknown task {champ['task']!r}")
     fitness = champ.get("fitness", 0.0)  # a hand-made record may leave it out
-    if isinstance(fitness, bool) or not isinstance(fitness, int | float):  # as `champion_of` says
+    if (isinstance(fitness, bool) or not isinstance(fitness, int | float)  # as `champion_of` says
+            or isinstance(fitness, int) and abs(fitness) > 1e308):  # float() would overflow
         raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
     if not isinstance(champ.get("evaluation", {}), dict | None):
         raise SgrError(f"{f}: key 'evaluation' must be a mapping (robust, seed, tag), got "

@@ -20,6 +20,8 @@ from __future__ import annotations
 import numbers
 from pathlib import Path
 
+import numpy as np
+
 from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.records.champion import champion_record, precision_of, read_champion
@@ -35,6 +37,8 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     """The champion.json record of `run_dir`'s champion genome decoded at `shape` (rows, cols);
     SgrError in one line when the method cannot be decoded there, the body does not fit the task's
     world, or the genome draws no valid robot at that size."""
+    if isinstance(shape, np.ndarray):
+        shape = shape.tolist()
     if (not isinstance(shape, tuple | list) or len(shape) != 2
             or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) and v > 0 for v in shape)):
         raise SgrError(f"shape must be (rows, cols) of positive integers, got {shape!r}")

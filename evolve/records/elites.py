@@ -14,6 +14,8 @@ import json
 import numbers
 from pathlib import Path
 
+import numpy as np
+
 from evolve.records.rundir import ELITES_FILE
 from tsim.errors import SgrError
 
@@ -89,6 +91,8 @@ def parse_cell(text: str) -> tuple[int, ...]:
 def elite_record(run_dir: str | Path, cell) -> dict:
     """The champion record of the elite in `cell` (a tuple of indices, or "i,j") of a run's archive;
     SgrError naming the cell when it is empty."""
+    if isinstance(cell, np.ndarray):
+        cell = cell.tolist()
     if not isinstance(cell, str) and not (isinstance(cell, tuple | list) and all(
             isinstance(i, numbers.Integral) and not isinstance(i, bool) for i in cell)):
         # (2.9, 1.7) was cell (2, 1)

@@ -250,8 +250,8 @@ class Experiment:
         self.run.unlock()
 
     def _check_open(self, what: str) -> None:
-        """SgrError for `what` on a closed Experiment: without the run's lock it would write the
-        folder beside whoever holds it now (generations written twice)."""
+        """SgrError for `what` on a closed Experiment: without the run's lock it would advance the
+        run beside whoever holds it now (generations written twice)."""
         if self._closed:
             raise SgrError(f"{what}: this Experiment of {self.run.path} is closed (its workers "
                            "stopped, its folder let go); continue the run with "
@@ -266,8 +266,7 @@ class Experiment:
     def finish(self) -> None:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
         written whole or not at all, and a run stopped while writing them (a full disk) writes
-        them again on `resume`."""
-        self._check_open("finish")
+        them again on `resume`. After `close` too (a `with` block's end): it writes files only."""
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:

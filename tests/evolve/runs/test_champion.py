@@ -66,6 +66,7 @@ def _hand_made(folder, **changes) -> None:
     ({"fitness": None}, "key 'fitness' must be a number"),      # was float()'s TypeError
     ({"fitness": "high"}, "key 'fitness' must be a number"),    # a ValueError naming nothing
     ({"fitness": True}, "key 'fitness' must be a number"),      # was 1.0
+    ({"fitness": 10**400}, "key 'fitness' must be a number"),   # an OverflowError
     ({"task": ["Walker-v0"]}, "key 'task': unknown task"),      # unhashable type
     ({"evaluation": "x"}, "key 'evaluation' must be a mapping"),  # an AttributeError when rescored
 ])

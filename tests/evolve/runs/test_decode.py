@@ -93,3 +93,4 @@ def test_a_shape_that_is_not_two_positive_integers_is_refused_before_decoding(sg
 
     with pytest.raises(SgrError, match=r"shape must be \(rows, cols\) of positive integers"):
         decoded_champion(sgr_run, shape)
+    assert decoded_champion(sgr_run, np.array([5, 5]))["body"] == decoded_champion(sgr_run, (5, 5))["body"]

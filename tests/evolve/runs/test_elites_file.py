@@ -53,5 +53,6 @@ def test_a_cell_that_is_not_integer_indices_is_refused(tmp_path, cell):
 
     run = run_with(tmp_path, GOOD)
     assert elite_record(run, [0, 0]) == elite_record(run, "0,0") == GOOD_ELITE["champion"]
+    assert elite_record(run, __import__("numpy").array([0, 0])) == GOOD_ELITE["champion"]
     with pytest.raises(SgrError, match="a cell is a tuple of integer indices"):
         elite_record(run, cell)

@@ -62,13 +62,20 @@ def test_a_closed_experiment_runs_nothing_more(tmp_path, repo_root):
     exp = Experiment.from_config(tiny(repo_root), tmp_path / "r", quiet=True)
     exp.close()
     other = Experiment.resume(tmp_path / "r")
-    for call in (exp.run_all, exp.finish):
-        with pytest.raises(SgrError, match=r"is closed .* continue the run with Experiment.resume"):
-            call()
+    with pytest.raises(SgrError, match=r"is closed .* continue the run with Experiment.resume"):
+        exp.run_all()
     other.run_all()
     other.close()
     rows = RunDir(tmp_path / "r").check_rows()  # each generation once, in order
     assert [int(r["generation"]) for r in rows] == list(range(1, other.cfg.generations + 1))
+
+
+def test_finish_after_a_with_block_writes_the_end_files(tmp_path, repo_root):
+    """A with block closes the Experiment; finish() after it only writes files, and does."""
+    with Experiment.from_config(tiny(repo_root), tmp_path / "r", quiet=True) as exp:
+        exp.run_all()
+    exp.finish()
+    assert (tmp_path / "r" / "fitness.png").stat().st_size > 0
 
 
 @pytest.mark.parametrize("generations", [2.5, True, "5", 0])
