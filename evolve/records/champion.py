@@ -14,7 +14,7 @@ from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
 from evolve.records.elites import elite_record
-from evolve.records.rundir import ELITES_FILE, RunDir
+from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
 from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
@@ -74,10 +74,7 @@ def read_champion(run_dir: str | Path,
         raise SgrError(f"{f}: missing key{'s' if len(missing) > 1 else ''} {', '.join(missing)}")
     if not isinstance(champ["task"], str) or champ["task"] not in TASKS:
         raise SgrError(f"{f}: key 'task': unknown task {champ['task']!r}")
-    fitness = champ.get("fitness", 0.0)  # a hand-made record may leave it out
-    if (isinstance(fitness, bool) or not isinstance(fitness, int | float)  # as `champion_of` says
-            or isinstance(fitness, int) and abs(fitness) > 1e308):  # float() would overflow
-        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+    check_fitness(champ.get("fitness", 0.0), f)  # a hand-made record may leave it out
     if not isinstance(champ.get("evaluation", {}), dict | None):
         raise SgrError(f"{f}: key 'evaluation' must be a mapping (robust, seed, tag), got "
                        f"{str(champ['evaluation'])[:40]!r}")

@@ -87,6 +87,14 @@ def check_generation_numbers(rows: list[dict], lines: list[int], path: Path) -> 
     return start
 
 
+def check_fitness(fitness: object, f: Path) -> None:
+    """SgrError naming champion record `f` unless `fitness` is a number a float holds (the one rule
+    of `champion_of` and `read_champion`: `sgr report` and `load_champion` judge a file alike)."""
+    if (isinstance(fitness, bool) or not isinstance(fitness, int | float)
+            or isinstance(fitness, int) and abs(fitness) > 1e308):  # float() would overflow
+        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+
+
 def champion_of(run_dir: str | Path) -> dict | None:
     """A run's champion.json as read, None where the run has none yet; SgrError naming the file where
     it is not a champion's record (a fitness that is not a number, a body that is not one), so that a
@@ -98,9 +106,7 @@ def champion_of(run_dir: str | Path) -> dict | None:
     if not f.exists() and not f.is_symlink():
         return None
     champ = RunDir(run_dir).champion()
-    fitness = champ.get("fitness")
-    if isinstance(fitness, bool) or not isinstance(fitness, int | float):
-        raise SgrError(f"{f}: key 'fitness' must be a number, got {str(fitness)[:40]!r}")
+    check_fitness(champ.get("fitness"), f)
     try:
         if "body" in champ:
             check_robot(champ["body"])

@@ -142,45 +142,28 @@ def test_a_lone_filled_cell_is_found_only_in_bodies_that_are_not_connected(shape
         assert lone.any() and (connected | lone).sum() < len(filled)  # the flood fill still has work
 
 
-def test_sample_robots_raises_where_sample_robot_runs_out_of_tries():
-    """With a tiny max_tries the batch raises exactly when one of the repeated calls would."""
+@pytest.mark.parametrize("shape, n, max_tries, seeds", [((5, 5), 3, 4, 25), ((10, 10), 8, 600, 16)])
+def test_sample_robots_raises_where_sample_robot_runs_out_of_tries(shape, n, max_tries, seeds):
+    """The batch raises exactly when one of the repeated calls would, and leaves the generator where
+    they leave it, raising or not. 5x5: a tiny max_tries. 10x10 (~1 draw in 230 accepted): chunks of
+    draws hold no body or several, and a run of failures spans chunks (seed 12 once raised where the
+    calls do not: a chunk's trailing failures were added to the run before its first body; and a
+    chunk with no body at all was an IndexError)."""
     outcomes = set()
-    for seed in range(25):
+    for seed in range(seeds):
         r1, r2 = np.random.default_rng(seed), np.random.default_rng(seed)
         try:
-            want = np.stack([sample_robot((5, 5), r1, max_tries=4) for _ in range(3)])
+            want = np.stack([sample_robot(shape, r1, max_tries=max_tries) for _ in range(n)])
         except RuntimeError:
             want = None
         if want is None:
             with pytest.raises(RuntimeError, match="no valid robot"):
-                sample_robots(3, (5, 5), r2, max_tries=4)
+                sample_robots(n, shape, r2, max_tries=max_tries)
         else:
-            assert np.array_equal(sample_robots(3, (5, 5), r2, max_tries=4), want)
+            assert np.array_equal(sample_robots(n, shape, r2, max_tries=max_tries), want)
         assert r1.random() == r2.random()  # where the calls left the generator, raising or not
         outcomes.add(want is None)
     assert outcomes == {True, False}  # both cases were met
-
-
-def test_sample_robots_raises_where_sample_robot_does_at_10x10():
-    """At 10x10 (~1 draw in 230 accepted) chunks of draws hold no body or several, and a run of
-    failures spans chunks: the batch still raises exactly when one of the repeated calls would
-    (seed 12 once raised where they do not: a chunk's trailing failures were added to the run
-    before its first body; and a chunk with no body at all was an IndexError)."""
-    outcomes = set()
-    for seed in range(16):
-        r1, r2 = np.random.default_rng(seed), np.random.default_rng(seed)
-        try:
-            want = np.stack([sample_robot((10, 10), r1, max_tries=600) for _ in range(8)])
-        except RuntimeError:
-            want = None
-        if want is None:
-            with pytest.raises(RuntimeError, match="no valid robot"):
-                sample_robots(8, (10, 10), r2, max_tries=600)
-        else:
-            assert np.array_equal(sample_robots(8, (10, 10), r2, max_tries=600), want)
-        assert r1.random() == r2.random()
-        outcomes.add(want is None)
-    assert outcomes == {True, False}
 
 
 LAYOUT = ("edge_i", "edge_f", "vox_i", "lists", "_pos0_f64", "_rest_f64")
