@@ -90,7 +90,7 @@ def compact_file(path: str | Path) -> tuple[int, int]:
         raise AssertionError(f"{path}: the rewrite changed a key it must keep")
     if "controller" in record and not same_controller(controller_of(record), controller_of(again)):
         raise AssertionError(f"{path}: the rewritten controller differs")
-    atomic_write(path, new.encode())
+    atomic_write(path, new.encode(), inside=path.parent)
     return len(text.encode()), len(new.encode())
 
 

@@ -36,6 +36,7 @@ import yaml
 from evolve.config import RunConfig
 from evolve.records.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError
+from tsim.files import make_folder, open_no_follow, refuse_links
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
@@ -194,16 +195,35 @@ class RunDir:
         except (FileExistsError, NotADirectoryError):
             raise SgrError(f"{self.path} is not a folder (a file of that name, or a file on its path): "
                            "a run needs a folder") from None
-        fd = os.open(self.path / ".lock", os.O_RDWR | os.O_CREAT, 0o666)
+        fd = open_no_follow(self.path / ".lock", os.O_RDWR | os.O_CREAT)  # a planted link: one line
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
             holder = os.pread(fd, 32, 0).decode(errors="replace").strip() or "?"
             os.close(fd)
             raise SgrError(f"{self.path} is being run by another process (pid {holder})") from None
+        try:
+            self.refuse_links()
+        except SgrError:
+            os.close(fd)
+            raise
         os.ftruncate(fd, 0)
         os.pwrite(fd, str(os.getpid()).encode(), 0)
         self._lock_fd = fd
+
+    def refuse_links(self) -> None:
+        """SgrError naming the first symbolic link among the run's files and in checkpoints/ (the
+        run folder itself may be one: the user named it). A run writes only into its own folder,
+        and a planted link (a .lock or generations.csv linked to a file elsewhere, checkpoints/
+        linked to another folder) would make it write there instead."""
+        for folder in (self.path, self.ckpt_dir):
+            if folder is not self.path and not folder.is_dir():
+                continue
+            refuse_links(folder, self.path)
+            with os.scandir(folder) as entries:
+                for entry in sorted(entries, key=lambda e: e.name):
+                    if entry.is_symlink():
+                        refuse_links(Path(entry.path), self.path)
 
     def unlock(self) -> None:
         """Release the lock taken by `lock`; nothing happens when it is not held."""
@@ -230,13 +250,13 @@ class RunDir:
         if (self.path / "generations.csv").exists():
             raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                            "or another --out")
-        self.ckpt_dir.mkdir(parents=True, exist_ok=True)
+        make_folder(self.ckpt_dir, self.path)
         # the arch is not the config's: segments.json records where each part of the run ran
-        atomic_write(self.path / "config.yaml", yaml.safe_dump({k: v for k, v in cfg.to_yaml().items()
-                                                                if k != "arch"}, sort_keys=False).encode())
-        atomic_write(self.path / "neat.ini", neat_ini.encode())
+        config = yaml.safe_dump({k: v for k, v in cfg.to_yaml().items() if k != "arch"}, sort_keys=False)
+        atomic_write(self.path / "config.yaml", config.encode(), inside=self.path)
+        atomic_write(self.path / "neat.ini", neat_ini.encode(), inside=self.path)
         for name, text in (extra_files or {}).items():
-            atomic_write(self.path / name, text.encode())
+            atomic_write(self.path / name, text.encode(), inside=self.path)
         self._write_rows([])
 
     def config(self) -> dict:
@@ -255,7 +275,8 @@ class RunDir:
         that the run renders, reports and resumes in another process that registers it."""
         from tasks.registry import TASK_FILE
 
-        atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode())
+        atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode(),
+                     inside=self.path)
 
     def load_task(self, raw: dict) -> None:
         """Register the run's own task in this process, unless it is sgr's or registered already:
@@ -286,7 +307,8 @@ class RunDir:
 
     def update_config(self, raw: dict) -> None:
         """Replace config.yaml atomically with `raw` (a resume that extends `generations` does)."""
-        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(raw), sort_keys=False).encode())
+        atomic_write(self.path / "config.yaml", yaml.safe_dump(dict(raw), sort_keys=False).encode(),
+                     inside=self.path)
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
@@ -314,7 +336,7 @@ class RunDir:
         w.writeheader()
         for r in rows:
             w.writerow({k: r.get(k, "") for k in columns})  # a column a run's older rows lack: empty
-        atomic_write(self.path / "generations.csv", buf.getvalue().encode())
+        atomic_write(self.path / "generations.csv", buf.getvalue().encode(), inside=self.path)
         self._header = ",".join(columns)
 
     def _header_is_ours(self, path: Path, columns: list[str] = COLUMNS) -> bool:
@@ -339,7 +361,8 @@ class RunDir:
         csv.DictWriter(buf, fieldnames=columns, lineterminator="\n").writerow({k: row.get(k, "") for k in
                                                                                 columns})
         try:
-            with path.open("ab") as f:
+            with os.fdopen(open_no_follow(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT, self.path),
+                           "ab") as f:
                 f.write(buf.getvalue().encode())
                 f.flush()
                 os.fsync(f.fileno())
@@ -361,7 +384,7 @@ class RunDir:
         """Mark that the end files (fitness.png, champion.gif) are being written: until
         `end_files_written`, a finished run is not done, and `sgr evolve --resume` writes them again
         (a full disk or a kill while writing them)."""
-        atomic_write(self.path / ENDING, b"")
+        atomic_write(self.path / ENDING, b"", inside=self.path)
 
     def end_files_written(self) -> None:
         """The end files are all written whole."""
@@ -374,11 +397,11 @@ class RunDir:
     # ------------------------------------------------------------------ champion, checkpoints
     def write_champion(self, champion: dict) -> None:
         """Replace champion.json atomically (laid out by `record_json`)."""
-        atomic_write(self.path / "champion.json", record_json(champion).encode())
+        atomic_write(self.path / "champion.json", record_json(champion).encode(), inside=self.path)
 
     def write_elites(self, elites: dict) -> None:
         """Replace elites.json (a map-elites run's archive, evolve/records/elites.py) atomically."""
-        atomic_write(self.path / ELITES_FILE, record_json(elites).encode())
+        atomic_write(self.path / ELITES_FILE, record_json(elites).encode(), inside=self.path)
 
     def champion(self) -> dict:
         """champion.json as a dict; SgrError naming the file when there is none yet, or it is not a
@@ -402,9 +425,9 @@ class RunDir:
         """Write `data` (JSON-able: numbers, strings, lists, dicts) atomically as
         checkpoints/gen-<generation>.json.gz and delete all but the newest KEEP_CHECKPOINTS of
         ours; returns its path."""
-        self.ckpt_dir.mkdir(parents=True, exist_ok=True)
+        make_folder(self.ckpt_dir, self.path)
         path = self.ckpt_dir / f"gen-{generation:05d}.json.gz"
-        atomic_write(path, checkpoint_bytes({"generation": generation, **data}))
+        atomic_write(path, checkpoint_bytes({"generation": generation, **data}), inside=self.path)
         for old in self.checkpoints()[KEEP_CHECKPOINTS:]:
             old.unlink()
         return path

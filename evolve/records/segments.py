@@ -55,12 +55,12 @@ def record_segment(run: str | Path, after_generation: int, backend: dict, worker
     if backend.get("asked") not in (None, backend["arch"]):
         entry["asked"] = backend["asked"]  # e.g. "gpu"
     found.append(entry)
-    atomic_write(run / SEGMENTS_FILE, (json.dumps(found, indent=1) + "\n").encode())
+    atomic_write(run / SEGMENTS_FILE, (json.dumps(found, indent=1) + "\n").encode(), inside=run)
     cfg_file = run / "config.yaml"
     raw = load_yaml(cfg_file.read_text())
     if isinstance(raw, dict) and "arch" in raw:  # recorded above now, where it stays true
         atomic_write(cfg_file, yaml.safe_dump({k: v for k, v in raw.items() if k != "arch"},
-                                              sort_keys=False).encode())
+                                              sort_keys=False).encode(), inside=run)
     return found
 
 

@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from evolve.records.elites import read_elites
 from evolve.report.gallery import body_image
 from evolve.report.plots import save_png
+from tsim.files import make_folder
 
 
 def archive_grid(data: dict) -> tuple[np.ndarray, dict[tuple[int, int], dict]]:
@@ -91,7 +92,7 @@ def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict
     for name, run in runs.items():
         if not (Path(run) / ELITES_FILE).is_file():
             continue
-        folder.mkdir(parents=True, exist_ok=True)
+        make_folder(folder, folder.parent)  # a planted link named archives/ is refused, not followed
         safe = str(name).replace("/", "-")
         png = plot_archive(run, folder / f"{safe}-archive.png")
         shown = []
@@ -99,7 +100,7 @@ def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict
             cell = "-".join(map(str, e["cell"]))
             body = folder / f"{safe}-elite-{cell}.png"
             atomic_write(body, iio.imwrite("<bytes>", body_image(np.asarray(e["champion"]["body"])),
-                                           extension=".png"))
+                                           extension=".png"), inside=folder)
             shown.append({"cell": e["cell"], "fitness": float(e["champion"]["fitness"]),
                           "measures": e["measures"], "body": body})
         out.append({"name": str(name), "archive": png, "elites": shown})

@@ -64,8 +64,9 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
     from evolve.records.champion import read_champion
     from evolve.records.files import atomic_write
     from evolve.records.replay import champion_gif
+    from tsim.files import make_folder
 
-    folder.mkdir(parents=True, exist_ok=True)
+    make_folder(folder, folder.parent)  # a planted link named gallery/ is refused, not followed
     out = []
     for e in entries:
         name = str(e["row"].get("run") or e["run"].name).replace("/", "-")  # unique among the report's runs
@@ -73,7 +74,8 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, he
                            every=every)
         _, body, _ = read_champion(e["run"])
         png = folder / f"{name}-body.png"
-        atomic_write(png, iio.imwrite("<bytes>", body_image(body), extension=".png"))  # whole or not at all
+        atomic_write(png, iio.imwrite("<bytes>", body_image(body), extension=".png"),  # whole or not at all
+                     inside=folder)
         out.append({**e, "gif": gif, "body": png})
     return out
 

@@ -185,7 +185,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
                   "episodes": simulated},
         "best_ever": {"key": best["key"], "fitness": best["fitness"], "file": BEST_EVER_FILE},
         "candidates": rows}
-    atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode())
+    atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode(), inside=exp.run.path)
     exp.run.write_champion(champ)
     return champ
 
