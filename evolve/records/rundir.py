@@ -261,7 +261,7 @@ class RunDir:
 
     def config(self) -> dict:
         """config.yaml as written (resolved); ValueError when missing, not YAML or not a run config."""
-        f = self.path / "config.yaml"
+        f = refuse_links(self.path / "config.yaml", self.path)
         if not f.is_file():
             raise SgrError(f"{self.path} is not a run directory (no config.yaml)")
         raw = read_yaml(f)
