@@ -176,12 +176,26 @@ class SgrVectorEnv(VectorEnv):
         return self._env
 
 
+def register_id(env_id: str, **kwargs: Any) -> None:
+    """`gym.register(env_id, **kwargs)`, the id a task of its own rather than a version of another.
+
+    evogym's ids end in -v0, -v1, ... but Carrier-v0 and Carrier-v1 are different tasks, not
+    versions of one: gymnasium would warn on `gym.make("sgr/Carrier-v0")` that it "is out of date"
+    and suggest v1. Each id's spec is named with its version (`Carrier-v0`), so gymnasium finds no
+    other version of it.
+    """
+    gym.register(env_id, **kwargs)
+    spec = gym.registry[env_id]
+    if spec.version is not None:
+        spec.name = f"{spec.name}-v{spec.version}"
+
+
 def register_envs() -> None:
     """Register `sgr/<task>` ids (idempotent); `import tasks` does this."""
     for name, spec in TASKS.items():
         env_id = f"sgr/{name}"
         if env_id in gym.registry:
             continue
-        gym.register(env_id, entry_point="tasks.gym_env:SgrEnv",
-                     vector_entry_point="tasks.gym_env:SgrVectorEnv", kwargs={"task": name},
-                     max_episode_steps=spec.paper_steps)
+        register_id(env_id, entry_point="tasks.gym_env:SgrEnv",
+                    vector_entry_point="tasks.gym_env:SgrVectorEnv", kwargs={"task": name},
+                    max_episode_steps=spec.paper_steps)

@@ -63,8 +63,10 @@ def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
     env_id = f"sgr/{spec.name}"
     if env_id in gym.registry:
         del gym.registry[env_id]
-    gym.register(env_id, entry_point="tasks.gym_env:SgrEnv", vector_entry_point="tasks.gym_env:SgrVectorEnv",
-                 kwargs={"task": spec.name}, max_episode_steps=spec.paper_steps)
+    from tasks.gym_env import register_id
+
+    register_id(env_id, entry_point="tasks.gym_env:SgrEnv", vector_entry_point="tasks.gym_env:SgrVectorEnv",
+                kwargs={"task": spec.name}, max_episode_steps=spec.paper_steps)
     return spec
 
 

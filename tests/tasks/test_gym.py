@@ -27,6 +27,22 @@ def test_check_env_passes_with_evogym_spaces(task):
     assert env.spec.max_episode_steps == TASKS[task].paper_steps
 
 
+@pytest.mark.parametrize("env_id", ["sgr/Carrier-v0", "sgr/Walker-v0", "Carrier-v0", "BridgeWalker-v0"])
+def test_a_task_whose_name_has_a_later_version_is_made_without_an_out_of_date_warning(env_id):
+    """Carrier-v0 and Carrier-v1 are two tasks, not two versions of one: gymnasium must not warn
+    that sgr/Carrier-v0 "is out of date" and suggest v1 (sgr ids and sgr.evogym's bare ids)."""
+    import warnings
+
+    import sgr.evogym.envs  # noqa: F401 - registers the bare ids
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        env = gym.make(env_id, body=BODY)
+        env.reset(seed=0)
+    assert not [w for w in caught if "out of date" in str(w.message)], [str(w.message) for w in caught]
+    assert env.spec.id == env_id
+
+
 def test_time_limit_truncates_at_the_paper_length_and_is_overridable():
     env = gym.make("sgr/Thrower-v0", body=BODY, max_episode_steps=5)
     env.reset(seed=0)

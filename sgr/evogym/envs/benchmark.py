@@ -16,7 +16,7 @@ import numpy as np
 
 from sgr.evogym.envs.base import RENDER_MODES, check_render_mode, render_with
 from sgr.evogym.viewer import EvoViewer
-from tasks.gym_env import SgrEnv, SgrVectorEnv
+from tasks.gym_env import SgrEnv, SgrVectorEnv, register_id
 from tasks.specs import TASKS
 from tsim.body import build_body
 
@@ -139,9 +139,9 @@ def register_bare_ids() -> None:
     for name, spec in TASKS.items():
         if name in gym.registry:
             continue
-        gym.register(name, entry_point="sgr.evogym.envs.benchmark:TaskEnv",
-                     vector_entry_point="sgr.evogym.envs.benchmark:TaskVectorEnv",
-                     kwargs={"task": name}, max_episode_steps=spec.evogym_steps)
+        register_id(name, entry_point="sgr.evogym.envs.benchmark:TaskEnv",
+                    vector_entry_point="sgr.evogym.envs.benchmark:TaskVectorEnv",
+                    kwargs={"task": name}, max_episode_steps=spec.evogym_steps)
 
 
 def task_classes() -> dict[str, type]:
