@@ -195,22 +195,30 @@ def _bench(args: argparse.Namespace) -> int:
 def register_task_commands(sub) -> None:
     """Add demo, validate and bench to an argparse subparsers object."""
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
-    d.add_argument("--task", default="Walker-v0")
-    d.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=32)
-    d.add_argument("--steps", type=positive(int, MAX_STEPS), default=300)
-    d.add_argument("--seed", type=nonnegative(int), default=0)
-    d.add_argument("--out", default="runs/demo")
+    d.add_argument("--task", default="Walker-v0",
+                   help="the task (default Walker-v0; sgr's 32: docs/TASKS.md)")
+    d.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=32,
+                   help="random bodies simulated together in one batch (default 32)")
+    d.add_argument("--steps", type=positive(int, MAX_STEPS), default=300,
+                   help="steps simulated (default 300)")
+    d.add_argument("--seed", type=nonnegative(int), default=0,
+                   help="the seed of the bodies and their gaits (default 0)")
+    d.add_argument("--out", default="runs/demo", help="folder for the demo's GIF and results.json "
+                                                       "(default runs/demo)")
     d.set_defaults(fn=_demo)
     v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
-    v.add_argument("dir")
-    v.add_argument("--json", action="store_true")
+    v.add_argument("dir", help="a folder of evogym reference data (index.json and its .npz files), "
+                               "e.g. tests/data/traces or tests/data/evogym32")
+    v.add_argument("--json", action="store_true", help="print the comparison as JSON")
     v.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
     v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
-    b.add_argument("--task", default="Walker-v0")
-    b.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=128)
-    b.add_argument("--steps", type=positive(int, MAX_STEPS), default=100)
-    b.add_argument("--json", action="store_true")
+    b.add_argument("--task", default="Walker-v0", help="the task (default Walker-v0)")
+    b.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=128,
+                   help="random bodies simulated together in one batch (default 128)")
+    b.add_argument("--steps", type=positive(int, MAX_STEPS), default=100,
+                   help="steps timed after the compile (default 100)")
+    b.add_argument("--json", action="store_true", help="print the figures as JSON")
     b.add_argument("--record", metavar="PATH", help="also write the figures as a record (JSON with the "
                    "machine, commit, date and command; docs/records/ holds those the docs quote)")
     b.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)

@@ -25,7 +25,8 @@ def build_parser() -> argparse.ArgumentParser:
     """The `sgr` parser with every command."""
     p = argparse.ArgumentParser(prog="sgr", description="Batched evogym-faithful soft-robot toolkit")
     p.add_argument("--debug", action="store_true", help="show the traceback of every error")
-    sub = p.add_subparsers(dest="cmd", required=True)
+    sub = p.add_subparsers(dest="cmd", required=True, metavar="COMMAND",
+                           help="one of the commands below; sgr COMMAND --help says what it takes")
     e = evolve_cmd.register(sub)
     sw = sweep.register(sub)
     rp = report.register(sub)

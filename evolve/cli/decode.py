@@ -10,7 +10,7 @@ from evolve.cli.common import output_path, parse_shape
 def register(sub) -> argparse.ArgumentParser:
     """Add `decode` to the dispatcher's subparsers."""
     d = sub.add_parser("decode", help="a run's champion genome decoded at another body size (sgr runs)")
-    d.add_argument("run_dir", metavar="RUN")
+    d.add_argument("run_dir", metavar="RUN", help="a finished sgr run folder")
     d.add_argument("--shape", required=True, metavar="RxC", help="the body grid, rows x columns (e.g. 10x10)")
     d.add_argument("--out", help="the folder to write champion.json in (default: RUN-RxC beside RUN); "
                                  "load_champion, sgr render and sgr's replays read it as any run's")

@@ -10,6 +10,7 @@ from pathlib import Path
 
 from evolve.cli.common import add_workers, output_path, parse_shape, positive, resume_dir
 from tasks.cli import PRECISIONS
+from tasks.specs import MAX_STEPS
 from tsim.errors import SgrError
 
 
@@ -31,9 +32,14 @@ def register(sub) -> argparse.ArgumentParser:
                    help="a new run that starts from RUN's population (its newest checkpoint), with "
                         "RUN's config (sgr; with --shape: at another size; --generations counts from "
                         "RUN's start, default twice RUN's generations so far)")
-    e.add_argument("--generations", type=positive(int))
-    e.add_argument("--pop", type=positive(int))
-    e.add_argument("--seed", type=int)
+    e.add_argument("--generations", type=positive(int),
+                   help="generations to run (config key generations); with --resume: extend the run to N")
+    e.add_argument("--pop", type=positive(int), help="genomes per generation (config key pop_size)")
+    e.add_argument("--seed", type=int, help="the run's seed (config key seed): the same seed, config and "
+                                            "sgr give the same run")
+    e.add_argument("--episode-steps", type=positive(int, MAX_STEPS), metavar="N",
+                   help="steps of each episode (config key episode_steps; default: the config's, else the "
+                        "task's paper length): shorter episodes for a quick try")
     e.add_argument("--out", help="run directory (default runs/<method>-<config>-seed<S>-<time>)")
     add_workers(e, None, "rollout processes: a number, 'auto' (all CPUs) or 'ray' (the actors of a Ray "
                          "cluster); default: the config's")
@@ -46,7 +52,7 @@ def register(sub) -> argparse.ArgumentParser:
                    help="TensorBoard events of each generation's scalars in RUN/tensorboard (config key "
                         "tensorboard: true; needs pip install 'sgr[tensorboard]'); with --resume: for "
                         "this resumed part of the run")
-    e.add_argument("--quiet", action="store_true")
+    e.add_argument("--quiet", action="store_true", help="no line per generation")
     e.set_defaults(fn=run)
     return e
 
@@ -97,7 +103,8 @@ def run(args: argparse.Namespace) -> int:
     shape = parse_shape(args.shape) if args.shape is not None else None
     if args.resume:
         if (args.config or args.pop or args.seed is not None or args.out or args.task or args.method
-                or args.precision or args.shape is not None or args.start_from or args.body_decoder):
+                or args.precision or args.shape is not None or args.start_from or args.body_decoder
+                or args.episode_steps):
             raise SgrError("--resume continues a run with its own config; only --generations "
                            "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
@@ -111,7 +118,8 @@ def run(args: argparse.Namespace) -> int:
     else:
         flags = {"generations": args.generations, "pop_size": args.pop, "seed": args.seed,
                  "workers": args.workers, "precision": args.precision, "tensorboard": args.tensorboard,
-                 "robot_shape": list(shape) if shape else None, "body_decoder": args.body_decoder}
+                 "robot_shape": list(shape) if shape else None, "body_decoder": args.body_decoder,
+                 "episode_steps": args.episode_steps}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
         if args.start_from:
             config, name = continuation(args, overrides)

@@ -19,8 +19,9 @@ from tsim.errors import SgrError
 def register(sub) -> argparse.ArgumentParser:
     """Add `render` to the dispatcher's subparsers."""
     r = sub.add_parser("render", help="GIF of a run's champion, or of any body with an open-loop gait")
-    r.add_argument("run_dir", nargs="?", metavar="RUN_DIR")
-    r.add_argument("--task")
+    r.add_argument("run_dir", nargs="?", metavar="RUN_DIR",
+                   help="a run folder: its champion's GIF (leave out with --body)")
+    r.add_argument("--task", help="with --body: the task the body is shown in (default Walker-v0)")
     r.add_argument("--body", help="rows of digits separated by commas, or a .json/.npy matrix file")
     r.add_argument("--steps", type=positive(int, MAX_STEPS),
                    help="with --body: the episode's length (default: the task's paper length)")
@@ -28,9 +29,11 @@ def register(sub) -> argparse.ArgumentParser:
                                  "RUN_DIR/champion.gif (and champion.mp4 beside it with that extra), with "
                                  "--exact RUN_DIR/champion-exact.gif, with --replay I "
                                  "RUN_DIR/champion-replayI.gif; with --body robot.gif")
-    r.add_argument("--width", type=positive(int, MAX_PIXELS), default=640)
-    r.add_argument("--height", type=positive(int, MAX_PIXELS), default=320)
-    r.add_argument("--fps", type=positive(float, 1000), default=30.0)
+    r.add_argument("--width", type=positive(int, MAX_PIXELS), default=640,
+                   help="the picture's width in pixels (default 640)")
+    r.add_argument("--height", type=positive(int, MAX_PIXELS), default=320,
+                   help="the picture's height in pixels (default 320)")
+    r.add_argument("--fps", type=positive(float, 1000), default=30.0, help="frames per second (default 30)")
     r.add_argument("--replay", type=nonnegative(int, MAX_EPISODES), metavar="I",
                    help="the champion's perturbed replay I (as sgr report replays it; 0: the exact "
                         "episode; default: the replay whose return is the median of the verdict's 20)")

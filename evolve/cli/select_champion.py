@@ -12,7 +12,7 @@ def register(sub) -> argparse.ArgumentParser:
     sc = sub.add_parser("select-champion",
                         help="choose a finished run's champion afresh among its final elites by many "
                              "perturbed episodes (the final_selection config key, after the fact)")
-    sc.add_argument("run_dir", metavar="RUN_DIR")
+    sc.add_argument("run_dir", metavar="RUN_DIR", help="a finished run folder")
     sc.add_argument("--candidates", type=positive(int), help="top final elites scored, besides the "
                                                                 "best-ever genome (default: the run's, "
                                                                 "else auto: sized by the run's length)")
