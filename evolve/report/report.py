@@ -204,11 +204,21 @@ def _levels(rows: list[dict]) -> list[float]:
 
 
 def _ms(values: list[float]) -> str:
+    """Mean ± sample sd of the finite values, "(n=k)" where some were not; one value alone has no sd."""
     v = [x for x in values if math.isfinite(x)]
     if not v:
         return "-"
-    sd = statistics.stdev(v) if len(v) > 1 else 0.0
-    return f"{statistics.fmean(v):.2f} ± {sd:.2f}" + (f" (n={len(v)})" if len(v) != len(values) else "")
+    if len(v) == 1:  # "± 0.00" would read as a measured spread
+        return f"{v[0]:.2f}" + (" (n=1)" if len(values) != 1 else "")
+    return (f"{statistics.fmean(v):.2f} ± {statistics.stdev(v):.2f}"
+            + (f" (n={len(v)})" if len(v) != len(values) else ""))
+
+
+def _runs_and_seeds(rs: list[dict]) -> str:
+    """The runs of a row and their seeds: "1 (seed 0)", "3 (seeds 0, 1, 2)" (a bare "0" read as
+    zero seeds)."""
+    seeds = ", ".join(str(r["seed"]) for r in rs)
+    return f"{len(rs)} (seed{'s' if len(rs) != 1 else ''} {seeds})"
 
 
 def _fmt(x: float | str | None) -> str:
@@ -239,9 +249,13 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
     out.write("\n\n")
     judged = verdict_rule.EPS in levels  # the verdict's column: how many champions hold
     noise_head = "".join(f" ±{e:g} | worst ±{e:g} |" for e in levels) + (" hold |" if judged else "")
-    out.write("| method | task | seeds | generations | gen 1 | gen 30 | gen 100 | end | authors (1 / 30 / "
-              f"100 / end) | champion | nominal |{noise_head}\n")
-    out.write("|---" * (11 + 2 * len(levels) + judged) + "|\n")
+    # a generation's column where some run reached it; the authors' only beside the paper's tasks
+    gen_cols = [g for g in CHECKPOINTS if g == 1 or any(int(r["generations"]) >= g for r in rows)]
+    with_authors = any(AUTHORS.get((rs[0].get("classic", m), t)) for (m, t), rs in groups.items())
+    out.write("| method | task | runs (seeds) | generations | " + "".join(f"gen {g} | " for g in gen_cols)
+              + "end | " + ("authors (1 / 30 / 100 / end) | " if with_authors else "")
+              + f"champion | nominal |{noise_head}\n")
+    out.write("|---" * (7 + len(gen_cols) + with_authors + 2 * len(levels) + judged) + "|\n")
     for (method, task), rs in sorted(groups.items()):
         gens = sorted({r["generations"] for r in rs})
         authors = AUTHORS.get((rs[0].get("classic", method), task))
@@ -262,10 +276,11 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
         if judged:
             have = [r for r in rob if noise_column(verdict_rule.EPS, "mean") in r]
             cells.append(f"{sum(_verdict(r).holds for r in have)} of {len(have)}" if have else "-")
-        out.write(f"| {method} | {task} | {', '.join(str(r['seed']) for r in rs)} | "
+        out.write(f"| {method} | {task} | {_runs_and_seeds(rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
-                  + " | ".join(_ms([r[f"best_gen{g}"] for r in rs]) for g in CHECKPOINTS)
-                  + f" | {_ms([r['best_final'] for r in rs])} | {a} | " + " | ".join(cells) + " |\n")
+                  + "".join(_ms([r[f"best_gen{g}"] for r in rs]) + " | " for g in gen_cols)
+                  + f"{_ms([r['best_final'] for r in rs])} | " + (f"{a} | " if with_authors else "")
+                  + " | ".join(cells) + " |\n")
     off = [r for r in rows if "replay" in r and abs(r["replay"] - r["champion_fitness"]) > 1e-9]
     if off:  # champion.json alone must reproduce the fitness; say plainly where it does not
         out.write(f"\n**{len(off)} of {sum('replay' in r for r in rows)} champions do not replay to "

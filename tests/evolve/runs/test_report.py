@@ -95,7 +95,7 @@ def test_report_md_cells_are_means_and_sample_sds_over_seeds(report):
     line = next(x for x in text.splitlines() if x.startswith("| sgr | Walker-v0 |"))
     cells = [c.strip() for c in line.strip("|").split("|")]
     # gen 1: 0.2, 1.0 -> mean 0.6, sd 0.8 / sqrt 2; gen 30: 5, 1 -> 3, 4 / sqrt 2; gen 100: 5, 3 -> 4, sqrt 2
-    assert cells[2:8] == ["0, 1", "100", "0.60 ± 0.57", "3.00 ± 2.83", "4.00 ± 1.41", "4.00 ± 1.41"]
+    assert cells[2:8] == ["2 (seeds 0, 1)", "100", "0.60 ± 0.57", "3.00 ± 2.83", "4.00 ± 1.41", "4.00 ± 1.41"]
     # champion 5, 3; nominal 2, 4; +-1e-9 means 2, 4 (worst 1); +-1e-3 means 1, 4 (worst 0.5)
     assert cells[-7:-1] == ["4.00 ± 1.41", "3.00 ± 1.41", "3.00 ± 1.41", "1.00", "2.50 ± 2.12", "0.50"]
     # the verdict (>= 90 % of the nominal return at ±1e-3): s0 keeps 1 of 2, s1 4 of 4

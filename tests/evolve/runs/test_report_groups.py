@@ -37,11 +37,13 @@ def make_run(path: Path, method: str = "sgr", task: str = "Walker-v0", seed: int
     return path
 
 
-def table_rows(text: str) -> dict[str, list[str]]:
-    """The cells of report.md's first table by its first two cells ("method / task")."""
-    table = text[text.index("| method | task | seeds"):].split("\n\n")[0].splitlines()[2:]
-    rows = [[c.strip() for c in line.strip().strip("|").split("|")] for line in table]
-    return {f"{r[0]} / {r[1]}": r for r in rows}
+def table_rows(text: str) -> dict[str, dict[str, str]]:
+    """The cells of report.md's first table by its first two cells ("method / task"), each row's
+    cells by their column's heading."""
+    table = text[text.index("| method | task |"):].split("\n\n")[0].splitlines()
+    head = [c.strip() for c in table[0].strip().strip("|").split("|")]
+    rows = [[c.strip() for c in line.strip().strip("|").split("|")] for line in table[2:]]
+    return {f"{r[0]} / {r[1]}": dict(zip(head, r, strict=True)) for r in rows}
 
 
 def report(folder, **kw) -> tuple[str, list[str]]:
@@ -61,9 +63,10 @@ def test_runs_of_different_populations_precisions_or_arches_are_separate_rows(tm
     text, lines = report(runs)
     rows = table_rows(text)
     assert set(rows) == {"sgr (pop 8) / Walker-v0", "sgr (pop 16) / Walker-v0"}
-    assert rows["sgr (pop 8) / Walker-v0"][2:4] == ["0, 1", "1"]
-    assert rows["sgr (pop 8) / Walker-v0"][7] == "2.00 ± 1.41"  # end: 1 and 3
-    assert rows["sgr (pop 16) / Walker-v0"][7] == "15.00 ± 7.07"  # 10 and 20
+    assert [rows["sgr (pop 8) / Walker-v0"][k] for k in ("runs (seeds)", "generations")] == ["2 (seeds 0, 1)",
+                                                                                            "1"]
+    assert rows["sgr (pop 8) / Walker-v0"]["end"] == "2.00 ± 1.41"  # end: 1 and 3
+    assert rows["sgr (pop 16) / Walker-v0"]["end"] == "15.00 ± 7.07"  # 10 and 20
     assert "differ in pop (`--pool pop` averages them)" in text
     assert "| sgr (pop 16) | Walker-v0 | 5x5 | 16 | 1 |" in text  # the groups table: settings and runs
     assert any(line.startswith("  sgr (pop 16) / Walker-v0: 2 runs (big-0, big-1)") for line in lines)
@@ -73,7 +76,7 @@ def test_runs_of_different_populations_precisions_or_arches_are_separate_rows(tm
 
     pooled, _ = report(runs, pool=("pop",))
     assert list(table_rows(pooled)) == ["sgr / Walker-v0"]
-    assert table_rows(pooled)["sgr / Walker-v0"][7] == "8.50 ± 8.58"  # 1, 3, 10, 20: sd sqrt(221 / 3)
+    assert table_rows(pooled)["sgr / Walker-v0"]["end"] == "8.50 ± 8.58"  # 1, 3, 10, 20: sd sqrt(221 / 3)
     assert "| 16 / 8 (pooled) |" in pooled
 
     shutil.rmtree(runs)
@@ -102,7 +105,8 @@ def test_runs_at_depth_two_and_more_are_reported_and_what_is_not_a_run_is_named(
     out = write_report([tmp_path / "study", tmp_path / "notes.txt"], tmp_path / "r" / "report.md",
                        robustness=False, gallery=False, say=lines.append)
     text = out.read_text()
-    assert table_rows(text)["sgr / Walker-v0"][2] == "1, 0"  # in the order found: other/ before sweep/
+    assert table_rows(text)["sgr / Walker-v0"]["runs (seeds)"] == "2 (seeds 1, 0)"  # in the order found:
+    # other/ before sweep/
     assert "| other/sgr-Walker-v0-s1, sweep/runs/sgr-Walker-v0-s0 |" in text  # named below study/
     skipped = text[text.index("## Skipped"):]
     expect = {"decoded": "a champion.json alone", "half": "config.yaml but no generations.csv",
@@ -257,3 +261,29 @@ def test_a_run_resumed_on_another_arch_is_grouped_by_the_arches_its_segments_rec
             [{"after_generation": g, "arch": a, "precision": "f64"} for g, a in enumerate(arches)]))
     rows = table_rows(report(runs)[0])
     assert set(rows) == {"sgr (arch cpu) / Walker-v0", "sgr (arch cuda, then cpu) / Walker-v0"}, rows
+
+
+def test_one_run_says_one_run_and_its_seed_and_shows_no_spread(tmp_path):
+    """A lone run with seed 0 reads "1 (seed 0)", not "0" (read as zero seeds), and its figures
+    carry no "± 0.00" (a spread no one measured)."""
+    make_run(tmp_path / "runs" / "only", seed=0, best=(1.0, 2.5))
+    text, _ = report(tmp_path / "runs")
+    row = table_rows(text)["sgr / Walker-v0"]
+    assert row["runs (seeds)"] == "1 (seed 0)"
+    assert row["end"] == "2.50"
+    assert "± 0.00" not in text
+
+
+def test_a_task_outside_the_paper_gets_no_authors_column_and_no_generation_it_never_reached(tmp_path):
+    """Carrier-v0 runs of 5 generations: no "authors" column (the paper has no figures for it) and no
+    "gen 30" / "gen 100" columns (always empty); a Walker-v0 run of 40 beside them brings the
+    authors' column and gen 30, not gen 100."""
+    for seed in (0, 1):
+        make_run(tmp_path / "a" / f"carrier-{seed}", task="Carrier-v0", seed=seed, best=(1.0,) * 5)
+    head = next(iter(table_rows(report(tmp_path / "a")[0]).values()))
+    assert list(head) == ["method", "task", "runs (seeds)", "generations", "gen 1", "end", "champion",
+                          "nominal"]
+    make_run(tmp_path / "a" / "walker", seed=0, best=(1.0,) * 40)
+    rows = table_rows(report(tmp_path / "a")[0])
+    assert list(rows["sgr / Walker-v0"])[4:8] == ["gen 1", "gen 30", "end", "authors (1 / 30 / 100 / end)"]
+    assert rows["sgr / Carrier-v0"]["authors (1 / 30 / 100 / end)"] == "-"
