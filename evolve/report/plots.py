@@ -214,11 +214,12 @@ def plot_runs(run_dirs: Sequence[str | Path], out: str | Path, per_run: bool = F
         for j, column in enumerate(extra):
             side = fig.add_subplot(len(tasks), 1 + len(extra), i * (1 + len(extra)) + 2 + j)
             if per_run:
-                draw_runs(side, mine, column, pool, colors)
+                draw_runs(side, mine, column, pool, colors, legend=False)
             else:
                 draw_curves(side, {k: c for k, c in side_curves[column].items() if k[1] == task},
                             colors=colors)
-            _style(side, f"{task}: {DIVERSITY[column].splitlines()[0]}", DIVERSITY[column])
+            # the groups' colours are the fitness panel's: a legend here would only cover lines
+            _style(side, f"{task}: {DIVERSITY[column].splitlines()[0]}", DIVERSITY[column], legend=False)
         if first is None:
             first = (ax, f"Best fitness per generation: {task}")
         else:
@@ -233,23 +234,53 @@ def _group_colors(curves: dict[tuple[str, str], Curve]) -> dict[str, str]:
 
 
 def draw_runs(ax: Axes, run_dirs: Sequence[str | Path], column: str = "best", pool: Sequence[str] = (),
-              colors: dict[str, str] | None = None) -> None:
-    """One line per run (`column` per generation), one colour per group."""
+              colors: dict[str, str] | None = None, legend: bool = True) -> None:
+    """One line per run (`column` per generation), each run in its own shade of its group's colour,
+    and (with `legend`) one legend entry per group.
+
+    Args:
+        ax: the panel.
+        run_dirs: the runs.
+        column: the generations.csv column drawn.
+        pool: settings whose differences do not split groups (evolve/report/groups.py).
+        colors: a colour per group label; groups not in it take the next of matplotlib's cycle.
+        legend: draw the legend, one entry per group.
+    """
+    from matplotlib.lines import Line2D
+
     from evolve.report.groups import group_of_each_run
 
     group_of = group_of_each_run([Path(d) for d in run_dirs], pool)
     colors = dict(colors or {})
     cycle = iter(matplotlib_colors())
-    for d in run_dirs:
-        cols = read_generations(d)
-        if not cols or column not in cols or "generation" not in cols:
-            continue
-        g = group_of[Path(d)]
+    drawn = [(Path(d), cols) for d in run_dirs
+             if (cols := read_generations(d)) and column in cols and "generation" in cols]
+    members: dict[str, list[Path]] = {}
+    for d, _ in drawn:
+        members.setdefault(group_of[d].label, []).append(d)
+    for d, cols in drawn:
+        g = group_of[d]
         if g.label not in colors:
             colors[g.label] = next(cycle)
+        shade = run_shade(colors[g.label], members[g.label].index(d), len(members[g.label]))
         values = np.where(np.isfinite(cols[column]), cols[column], np.nan)
-        ax.plot(cols["generation"], values, color=colors[g.label], alpha=0.85,
-                label=f"{g.label} / {g.task}: {Path(d).name}")
+        ax.plot(cols["generation"], values, color=shade, alpha=0.9,
+                label=f"_{g.label} / {g.task}: {d.name}")  # "_": no legend entry of its own
+    if legend and members:
+        ax.legend(handles=[Line2D([], [], color=colors[label], label=f"{label} ({len(runs)} run"
+                                  f"{'s' if len(runs) != 1 else ''}, a shade each)")
+                           for label, runs in members.items()], fontsize="small")
+
+
+def run_shade(color: str, i: int, n: int) -> tuple[float, float, float]:
+    """The `i`-th of `n` shades of `color`, from darker to lighter, `color` itself in the middle:
+    the runs of one group told apart, the group still one hue."""
+    from matplotlib.colors import to_rgb
+
+    rgb = np.array(to_rgb(color))
+    t = 0.0 if n == 1 else -0.45 + 0.9 * i / (n - 1)  # -0.45: towards black, +0.45: towards white
+    mixed = rgb * (1 + t) if t < 0 else rgb + (1 - rgb) * t
+    return tuple(float(x) for x in np.clip(mixed, 0, 1))
 
 
 def matplotlib_colors() -> list[str]:
@@ -310,13 +341,13 @@ def _champion(run_dir: str | Path) -> tuple[int, float] | None:
     return gen, float(champ["fitness"])
 
 
-def _style(ax: Axes, title: str, ylabel: str) -> None:
+def _style(ax: Axes, title: str, ylabel: str, legend: bool = True) -> None:
     ax.set_title(title)
     ax.set_xlabel("generation")
     ax.xaxis.set_major_locator(MaxNLocator(integer=True))  # whole generations, never 2.5
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
-    if any(not line.get_label().startswith("_") for line in ax.get_lines()):
+    if legend and any(not line.get_label().startswith("_") for line in ax.get_lines()):
         ax.legend(fontsize="small")
 
 

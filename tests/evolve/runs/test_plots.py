@@ -221,3 +221,20 @@ def test_a_figure_is_written_with_a_palette_and_looks_as_drawn(tmp_path):
     a = np.asarray(Image.open(true).convert("RGB"), dtype=float)
     b = np.asarray(written.convert("RGB"), dtype=float)
     assert a.shape == b.shape and np.abs(a - b).mean() < 0.5  # 0.19 measured
+
+
+def test_per_run_gives_each_run_its_own_colour_and_each_group_one_legend_entry(tmp_path, saved):
+    """`sgr plot --per-run`: three seeds of sgr and two of direct are five colours (the seeds of a
+    group in shades of its colour), and the legend has one entry per group; the diversity panels
+    beside carry no legend of their own (it covered their lines)."""
+    from matplotlib.colors import to_hex
+
+    runs = [_run(tmp_path / f"s{i}", [1.0 + i, 2.0 + i], "sgr") for i in range(3)]
+    runs += [_run(tmp_path / f"d{i}", [0.5, 1.0 + i], "direct") for i in range(2)]
+    plot_runs(runs, tmp_path / "per-run.png", per_run=True)
+    main, *side = saved[-1].axes
+    colours = [to_hex(line.get_color()) for line in main.get_lines()]
+    assert len(colours) == 5 and len(set(colours)) == 5, colours
+    assert sorted(t.get_text() for t in main.get_legend().get_texts()) == [
+        "direct (2 runs, a shade each)", "sgr (3 runs, a shade each)"]
+    assert side and all(ax.get_legend() is None for ax in side)
