@@ -39,6 +39,10 @@ class BatchEnv:
     pass "evogym" for evogym's registered limit. Everything task-specific comes from the task's
     spec (`tasks/spec.py`)."""
 
+    def __repr__(self) -> str:
+        return (f"BatchEnv({self.task!r}, {self.n_worlds} robot{'s' if self.n_worlds != 1 else ''}, "
+                f"episode_steps={self.episode_steps}, {np.dtype(self.dtype).name})")
+
     def __init__(self, task: str, bodies: Sequence[Body | object],
                  episode_steps: int | str | None = None, *, arch: str | None = None,
                  precision: str | None = None, passive_ok: bool = False,

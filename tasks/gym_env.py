@@ -39,6 +39,11 @@ def _action_space(n: int) -> gym.spaces.Box:
 class SgrEnv(gym.Env):
     """One evogym task with one robot. `body` is the 5x5 (or any) voxel matrix."""
 
+    def __repr__(self) -> str:
+        from tsim.body import describe_body
+
+        return f"SgrEnv({self.task!r}, {describe_body(self._env.sim.bodies[0].matrix)})"
+
     metadata = {"render_modes": ["rgb_array", "img"], "render_fps": 50}
 
     def __init__(self, task: str, body: Any, episode_steps: int | None = None,

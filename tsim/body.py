@@ -427,3 +427,13 @@ def _build(m: np.ndarray, connections: np.ndarray) -> Body:  # noqa: C901 - mirr
         actuator_flat=(rc[act_vox, 0] * w + rc[act_vox, 1]) if len(act_vox) else act_vox,
         edge_drivers=drivers,
     )
+
+
+def describe_body(body: object) -> str:
+    """A body in a few words: "5x5 body, 21 voxels, 9 actuators" (for reprs and messages)."""
+    m = np.asarray(body)
+    if m.ndim != 2:
+        return f"body of shape {m.shape}"
+    filled = int(np.count_nonzero(m))
+    actuators = int(np.count_nonzero((m == 3) | (m == 4)))
+    return f"{m.shape[0]}x{m.shape[1]} body, {filled} voxels, {actuators} actuators"

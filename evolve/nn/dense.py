@@ -29,6 +29,11 @@ class DenseController:
     input_size: int
     action_cells: np.ndarray  # flat body-cell index of each actuator, evogym's action order
 
+    def __repr__(self) -> str:
+        sizes = " -> ".join([str(self.input_size), *(str(w.shape[1]) for w in self.weights)])
+        return (f"DenseController({sizes}, {len(self.action_cells)} actuators, "
+                f"activations {'/'.join(self.activations)})")
+
     def outputs(self, obs: np.ndarray) -> np.ndarray:
         """The last layer's values (one per body cell) for one robot's unpadded observation (length
         `input_size`)."""

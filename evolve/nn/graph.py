@@ -45,6 +45,11 @@ class GraphController:
     # action is output[output_offset]
     cell_inputs: np.ndarray | None = None
 
+    def __repr__(self) -> str:
+        links = sum(len(n.get("links", ())) for n in self.nodes)
+        return (f"GraphController({len(self.input_keys)} inputs, {len(self.output_keys)} outputs, "
+                f"{len(self.nodes)} nodes, {links} connections, {len(self.action_cells)} actuators)")
+
     def __post_init__(self) -> None:
         # each node's links sorted by their source's slot in `NetworkBatch` (inputs, then nodes in
         # evaluation order: by depth, then key), the order its inputs are summed in; sorted once

@@ -207,6 +207,7 @@ class Champion:
     episode_steps: int
     fitness: float
     record: dict = field(repr=False)  # champion.json as read
+    cell: tuple[int, ...] | None = None  # a map-elites run's elite: its cell of the archive
 
     @property
     def nominal(self) -> float | None:
@@ -218,6 +219,15 @@ class Champion:
             return self.fitness
         selection = self.record.get("selection")
         return None if selection is None else float(selection["nominal"])
+
+    def __repr__(self) -> str:
+        from tsim.body import describe_body
+
+        nominal = self.nominal
+        return (f"Champion(task={self.task!r}, {describe_body(self.body)}, {self.controller!r}, "
+                f"episode_steps={self.episode_steps}, fitness={self.fitness:.6g}"
+                + (f", nominal={nominal:.6g}" if nominal is not None else "")
+                + (f", cell={self.cell}" if self.cell is not None else "") + ")")
 
     def policy(self, obs: np.ndarray) -> np.ndarray:
         """Actions (n_actuators,) for one observation, computed as in evolution (bit for bit)."""
@@ -276,6 +286,8 @@ def load_champion(run_dir: str | Path, cell=None) -> Champion:
     file and the key otherwise. `cell` ((i, j) or "i,j"): a map-elites run's elite of that cell of
     its archive (elites.json) instead."""
     record, body, ctrl = read_champion(run_dir, cell)
+    if cell is not None:
+        cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in np.asarray(cell).ravel())
     return Champion(task=record["task"], body=body, controller=ctrl,
                     episode_steps=episode_steps(record["task"], record["episode_steps"]),
-                    fitness=float(record.get("fitness", float("nan"))), record=record)
+                    fitness=float(record.get("fitness", float("nan"))), record=record, cell=cell)

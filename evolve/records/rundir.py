@@ -186,6 +186,9 @@ class RunDir:
         self.path = Path(path)
         self.ckpt_dir = self.path / "checkpoints"
 
+    def __repr__(self) -> str:
+        return f"RunDir({str(self.path)!r})"
+
     # ------------------------------------------------------------------ one process at a time
     def lock(self) -> None:
         """Hold the run for this process (until it exits or `unlock`): two processes advancing one

@@ -72,6 +72,12 @@ class Experiment:
 
     _closed = False  # `close` was called: its workers are stopped and its folder let go
 
+    def __repr__(self) -> str:
+        search = getattr(self, "search", None)
+        done = getattr(search, "generation", "?")
+        return (f"Experiment({self.cfg.method} on {self.cfg.task}, {str(self.run.path)!r}, generation "
+                f"{done} of {self.cfg.generations}{', closed' if self._closed else ''})")
+
     def __init__(self, run: RunDir, cfg: RunConfig | dict, state: dict | None = None, quiet: bool = False,
                  workers: int | str | None = None):
         """`cfg`: the run's config (a run folder's config.yaml as read: `RunConfig.of`); `workers`
