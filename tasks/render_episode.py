@@ -10,6 +10,7 @@ import numpy as np
 from tasks.env import BatchEnv
 from tsim.body import Body
 from tsim.render import Renderer
+from tsim.render import caption as write_caption
 
 FRAME_BYTES = 2 << 30  # the most an episode's frames may hold (the GIF writer copies them once more)
 
@@ -23,7 +24,7 @@ def frame_stride(steps: int, width: int, height: int, indexed: bool) -> int:
 def render_episode(task: str, body: Body | object, policy: Callable[[int, np.ndarray], np.ndarray],
                    steps: int | None = None, width: int = 640, height: int = 320, *, every: int = 1,
                    indexed: bool = False, start_shift: float = 0.0, precision: str | None = None,
-                   **renderer_kw) -> list[np.ndarray]:
+                   caption: Callable[[int, float], str] | None = None, **renderer_kw) -> list[np.ndarray]:
     """Simulate one robot on `task` for `steps` env steps (task default if None) with actions
     `policy(t, obs)` and return frames: the reset state, then every `every`-th step (and the last).
     An episode whose frames would hold more than FRAME_BYTES keeps every k-th step's instead, k the
@@ -33,7 +34,8 @@ def render_episode(task: str, body: Body | object, policy: Callable[[int, np.nda
     Frames are RGB (H, W, 3), or `PALETTE` indices (H, W) with `indexed` (faster, same GIF). Stops
     early when the episode terminates (goal reached or unstable). `start_shift` starts the robot
     that much right of its placement (`BatchEnv`'s robot_shift). `precision`: the real type to
-    simulate in (None: the process's). `renderer_kw` go to `Renderer`.
+    simulate in (None: the process's). `caption(t, running_return)`: a line written on each frame
+    (the steps done and the return so far; `tsim.render.caption`). `renderer_kw` go to `Renderer`.
     """
     if every < 1:
         raise ValueError(f"every must be >= 1, got {every}")
@@ -44,17 +46,21 @@ def render_episode(task: str, body: Body | object, policy: Callable[[int, np.nda
     names = [o.name for o in env.sim.free_objects]
     draw = renderer.frame_indexed if indexed else renderer.frame
 
-    def snap() -> np.ndarray:
-        return draw(env.sim.robot_pos(0), {n: env.sim.object_pos(0, n) for n in names})
+    total = 0.0
 
-    frames = [snap()]
+    def snap(t: int) -> np.ndarray:
+        frame = draw(env.sim.robot_pos(0), {n: env.sim.object_pos(0, n) for n in names})
+        return frame if caption is None else write_caption(frame, caption(t, total))
+
+    frames = [snap(0)]
     obs = env.robot_obs(0)
     for t in range(env.episode_steps):
         action = np.asarray(policy(t, obs), dtype=np.float64).reshape(-1)
-        _, _, term, _, _ = env.step([action])
+        _, reward, term, _, _ = env.step([action])
+        total += float(reward[0])
         obs = env.robot_obs(0)
         if (t + 1) % every == 0 or term[0] or t + 1 == env.episode_steps:
-            frames.append(snap())
+            frames.append(snap(t + 1))
         if term[0]:
             break
     return frames

@@ -416,6 +416,45 @@ def _frames(frames: Iterable[np.ndarray], fps: float) -> list[np.ndarray]:
     return frames
 
 
+@cache
+def _caption_font(size: int):  # noqa: ANN202 (PIL's font type)
+    from PIL import ImageFont
+
+    return ImageFont.load_default(size=size)
+
+
+def caption(frame: np.ndarray, text: str) -> np.ndarray:
+    """`frame` with `text` written in its top-left corner, in the outline colour, on a band of the
+    background colour (so the text reads over the grid and a passing robot).
+
+    Args:
+        frame: an RGB frame (H, W, 3) uint8, or `PALETTE` indices (H, W) as `Renderer.frame_indexed`
+            draws them.
+        text: one line.
+
+    Returns:
+        A new frame of the same kind and shape.
+    """
+    from PIL import Image, ImageDraw
+
+    h, w = frame.shape[:2]
+    size = max(9, min(h // 14, 28))
+    font = _caption_font(size)
+    mask = Image.new("L", (w, h), 0)
+    draw = ImageDraw.Draw(mask)
+    left, top, right, bottom = draw.textbbox((0, 0), text, font=font)
+    pad = max(2, size // 4)
+    draw.rectangle((0, 0, min(w, right + 2 * pad), min(h, bottom + 2 * pad)), fill=1)
+    draw.text((pad - left, pad), text, fill=2, font=font)
+    m = np.asarray(mask)
+    out = frame.copy()
+    if frame.ndim == 2:
+        out[m == 1], out[m == 2] = I_BACKGROUND, I_OUTLINE
+    else:
+        out[m == 1], out[m == 2] = PALETTE[I_BACKGROUND], PALETTE[I_OUTLINE]
+    return out
+
+
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
     """Write frames as a looping GIF; returns the path.
 

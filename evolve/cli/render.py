@@ -37,6 +37,8 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--replay", type=nonnegative(int, MAX_EPISODES), metavar="I",
                    help="the champion's perturbed replay I (as sgr report replays it; 0: the exact "
                         "episode; default: the replay whose return is the median of the verdict's 20)")
+    r.add_argument("--no-overlay", dest="overlay", action="store_false",
+                   help="the robot alone: no line with the task, the step and the return so far")
     r.add_argument("--exact", action="store_true",
                    help="the champion's exact (noise-free) episode, to RUN_DIR/champion-exact.gif")
     add_noise(r, several=False, default=1e-3, help="the replays' action noise scale (default 1e-3)")
@@ -74,7 +76,7 @@ def run(args: argparse.Namespace) -> int:
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=replay, eps=args.noise, kind=args.noise_kind, offset=args.offset,
-                           cell=args.cell)
+                           cell=args.cell, overlay=args.overlay)
         line = replay_line(args.run_dir, replay, args.noise, args.noise_kind, args.offset, cell=args.cell)
         mp4 = out.with_suffix(".mp4")
         also = (f" and {mp4}" if args.out is None and replay == MEDIAN and args.cell is None and mp4.is_file()
@@ -92,8 +94,11 @@ def run(args: argparse.Namespace) -> int:
                            "champion: give RUN_DIR")
         body = check_robot(parse_body(args.body))
         n_act = int(np.count_nonzero((body == 3) | (body == 4)))
+        def line(t: int, total: float) -> str:
+            return f"{args.task}   step {t}   return {total:.3f}"
+
         frames = render_episode(args.task, body, lambda t, obs: sinusoid(t, n_act), args.steps,
-                                args.width, args.height, indexed=True)
+                                args.width, args.height, indexed=True, caption=line if args.overlay else None)
         out = write_animation(frames, args.out or "robot.gif", fps=args.fps)
     print(f"wrote {out}")
     return 0

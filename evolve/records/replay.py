@@ -37,7 +37,7 @@ MEDIAN = "median"  # champion_gif's default replay: the verdict's typical pertur
 def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: int = 640,
                  height: int = 320, fps: float = 30.0, replay: int | str = MEDIAN,
                  eps: float = verdict_rule.EPS, kind: str = "uniform", offset: float = 0.0, seed: int = 0,
-                 every: int = 1, cell=None) -> Path:
+                 every: int = 1, cell=None, overlay: bool = True) -> Path:
     """Render one of the champion's episodes in its task (same episode length as its evaluation; a
     frame every `every` steps): by default ("median") its typical perturbed episode, the replay
     whose return is the median of the verdict's `verdict.REPLAYS` replays under `kind` noise of
@@ -47,7 +47,8 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
     the run's champion.gif for the median, else its own file (`replay_gif_name`); champion.gif gets an
     MP4 of the same frames beside it where imageio's ffmpeg plugin is installed (champion.mp4), and an
     `out` ending in .mp4 is an MP4. `cell` (a map-elites run's, (i, j) or "i,j"): that cell's elite
-    instead (elites.json), default `out` RUN/elite-I-J.gif (`elite_gif_name`)."""
+    instead (elites.json), default `out` RUN/elite-I-J.gif (`elite_gif_name`). `overlay`: each frame
+    says the task, the step and the return so far (False: the robot alone)."""
     from tasks.render_episode import render_episode
     from tsim.render import write_animation
 
@@ -64,9 +65,14 @@ def champion_gif(run_dir: str | Path, out: str | Path | None = None, *, width: i
         extra = noise.actions(t, len(a))
         return a if extra is None else a + extra[0]
 
+    steps = episode_steps(champ["task"], champ["episode_steps"])
+
+    def line(t: int, total: float) -> str:
+        return f"{champ['task']}   step {t} of {steps}   return {total:.3f}"
+
     frames = render_episode(champ["task"], body, policy, champ["episode_steps"], width, height,
                             every=every, indexed=True, start_shift=0.0 if shift is None else float(shift[0]),
-                            precision=precision_of(champ))
+                            precision=precision_of(champ), caption=line if overlay else None)
     return write_animation(frames, out, fps=fps, mp4_beside=mp4_beside)
 
 

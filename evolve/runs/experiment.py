@@ -292,9 +292,9 @@ class Experiment:
                 print(f"champion body: {describe(measures(np.asarray(best['body'])))}")
             verdict = judge(self.run.path)
             if (self.run.path / "champion.gif").exists():
-                print(f"champion.gif: its typical episode, replay {verdict.median_replay} of "
-                      f"{verdict.replays} (the median, return {verdict.median:.3f}); the exact "
-                      f"episode: sgr render {self.run.path} --exact")
+                print(f"champion.gif: its typical episode, the median of {verdict.replays} perturbed "
+                      f"replays (replay number {verdict.median_replay}, return {verdict.median:.3f}); "
+                      f"the exact episode: sgr render {self.run.path} --exact")
             print(f"champion {verdict.line()}", flush=True)
 
 

@@ -61,3 +61,38 @@ def test_an_episode_too_long_to_keep_every_frame_keeps_every_kth_and_fits(monkey
     strided = render_episode("Thrower-v0", body, policy, 20, 96, 48, every=4, indexed=True)
     assert all(np.array_equal(a, b) for a, b in zip(frames, strided, strict=True))
     assert module.frame_stride(1_000_000, 640, 320, True) == 96  # ~2 GiB of a 1,000,000-step episode
+
+
+def test_a_caption_says_the_step_and_the_return_so_far_and_covers_only_its_band():
+    """`caption(t, running_return)` is asked for every frame with the steps done and the sum of the
+    rewards so far (checked against the env's own rewards); the captioned frames equal the plain
+    ones outside a band in the top-left corner, and stay `PALETTE` indices."""
+    from tasks.env import BatchEnv
+    from tsim.render import I_BACKGROUND, I_OUTLINE
+
+    body = build_body(BODY)
+    n = body.n_actuators
+
+    def policy(t, obs):
+        return np.full(n, 1.0 + 0.3 * (t % 2))
+
+    asked = []
+
+    def line(t, total):
+        asked.append((t, total))
+        return f"Thrower-v0 step {t} return {total:.3f}"
+
+    plain = render_episode("Thrower-v0", body, policy, 6, 160, 80, every=2, indexed=True)
+    shown = render_episode("Thrower-v0", body, policy, 6, 160, 80, every=2, indexed=True, caption=line)
+    env = BatchEnv("Thrower-v0", [body], episode_steps=6)
+    totals = [0.0]
+    for t in range(6):
+        _, reward, _, _, _ = env.step([policy(t, None)])
+        totals.append(totals[-1] + float(reward[0]))
+    assert [t for t, _ in asked] == [0, 2, 4, 6]
+    assert [total for _, total in asked] == [totals[t] for t in (0, 2, 4, 6)]
+    for a, b in zip(plain, shown, strict=True):
+        rows, cols = np.nonzero(a != b)
+        assert len(rows) > 20 and rows.max() < 80 // 3 and cols.min() < 10  # the band, top left
+        assert set(np.unique(b[a != b])) <= {I_BACKGROUND, I_OUTLINE}
+        assert np.any(b == I_OUTLINE)

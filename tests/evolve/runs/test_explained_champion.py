@@ -144,7 +144,8 @@ def test_champion_gif_shows_the_median_replay_and_the_exact_episode_is_one_flag_
     i = int(np.flatnonzero(noisy == sorted(noisy)[(len(noisy) - 1) // 2])[0]) + 1
     median = champion_gif(run, run / "median.gif", replay=i)
     assert (run / "champion.gif").read_bytes() == median.read_bytes()  # the run's own GIF
-    assert f"champion.gif: its typical episode, replay {i} of 20 (the median" in console
+    assert f"champion.gif: its typical episode, the median of 20 perturbed replays (replay number {i}," \
+        in console
     assert main(["render", str(run), "--exact"]) == 0
     assert f"wrote {run / 'champion-exact.gif'}: the exact episode" in capsys.readouterr().out
     exact = champion_gif(run, run / "exact.gif", replay=0)

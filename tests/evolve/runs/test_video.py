@@ -79,3 +79,15 @@ def test_without_the_ffmpeg_plugin_the_gif_alone_and_an_mp4_asked_for_is_one_lin
     assert err == [f"sgr: error: --out {tmp_path / 'c.mp4'}: writing an MP4 needs imageio's ffmpeg plugin: "
                    "pip install 'sgr[video]' (or: pip install imageio-ffmpeg)"]
     assert not (tmp_path / "c.mp4").exists()
+
+
+def test_champion_gif_names_the_task_step_and_return_unless_asked_not_to(sgr_run, tmp_path, capsys):
+    """champion.gif's frames carry a line (task, step, running return) in their top-left band;
+    `overlay=False` (`sgr render RUN --no-overlay`) draws the robot alone; elsewhere they agree."""
+    shown = iio.imread(champion_gif(sgr_run, tmp_path / "a.gif", width=160, height=80, replay=0))
+    assert main(["render", str(sgr_run), "--exact", "--no-overlay", "--width", "160", "--height", "80",
+                 "--out", str(tmp_path / "b.gif")]) == 0, capsys.readouterr().err
+    plain = iio.imread(tmp_path / "b.gif")
+    assert shown.shape == plain.shape
+    rows = np.nonzero(np.any(shown != plain, axis=(0, 2, 3)))[0]
+    assert len(rows) and rows.max() < 80 // 3
