@@ -166,17 +166,27 @@ class ConsoleProgress:
     """The console's line per generation (nothing for a quiet run): fitness, species, valid bodies,
     seconds per generation by phase (decode: the genomes decoded into bodies and controllers,
     generations.csv's build_s; sim; neat: selection, breeding and speciation), the population's body
-    diversity, and the seconds since the loop started."""
+    diversity, and the run's seconds so far: those of the generations before a resume (their
+    generations.csv total_s) and those since, so the column goes on where it stopped."""
 
     def start(self, exp: Any) -> None:
-        """The clock of the line's last column."""
+        """The clock of the line's last column, from the seconds of the generations already done."""
         self.t_start = time.perf_counter()
+        self.before = 0.0
+        run = getattr(exp, "run", None)  # (a stand-in experiment may have no folder)
+        for r in run.rows() if run is not None else ():
+            try:
+                seconds = float(r.get("total_s") or 0.0)
+            except ValueError:  # an older or hand-edited row: it counts no time
+                continue
+            if math.isfinite(seconds) and seconds > 0:
+                self.before += seconds
 
     def generation(self, exp: Any, row: dict) -> None:
         """One line on stdout, flushed."""
         if exp.quiet:
             return
-        elapsed = time.perf_counter() - self.t_start
+        elapsed = getattr(self, "before", 0.0) + time.perf_counter() - self.t_start
         best = exp.search.best["fitness"] if exp.search.best else math.nan
         if "coverage" in row:  # an archive (map-elites)
             print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "

@@ -261,3 +261,26 @@ def test_tensorboard_has_the_body_diversity_where_the_method_has_bodies():
     assert tensorboard_scalars(exp, row)["population/body_diversity"] == 0.375
     without = tensorboard_scalars(exp, {**row, "body_diversity": float("nan")})
     assert "population/body_diversity" not in without
+
+
+def test_the_consoles_seconds_go_on_after_a_resume(tmp_path, capsys):
+    """The console line's last column counts the run's seconds, those before a resume included
+    (the generations' total_s in generations.csv): it restarted from 0 on every resume."""
+    import csv
+
+    from tests.evolve.runs.conftest import TINY as TWO_GENERATIONS
+
+    with Experiment.from_config({"method": "direct", **TWO_GENERATIONS}, tmp_path / "run", quiet=True) as exp:
+        exp.run_all()
+    rows = list(csv.DictReader((tmp_path / "run" / "generations.csv").open()))
+    for r in rows:  # as if each generation had taken a thousand seconds
+        r["total_s"] = "1000.0"
+    with (tmp_path / "run" / "generations.csv").open("w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+    capsys.readouterr()
+    with Experiment.resume(RunDir(tmp_path / "run").path, generations=3) as exp:
+        exp.run_all()
+    line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("gen    3/3"))
+    assert 2000 <= float(line.split()[-2]) < 2100, line
