@@ -54,7 +54,7 @@ def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Pa
     return [{"row": best[k], "run": by_name[best[k]["run"]]} for k in sorted(best)]
 
 
-def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 240, height: int = 120,
+def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 480, height: int = 240,
                   every: int = 10, fps: float = 8.0) -> list[dict]:
     """Write <run>.gif (every `every`-th step of the champion's typical episode, the median of the
     verdict's replays: `champion_gif`) and <run>-body.png into
@@ -122,17 +122,20 @@ def markdown_html(text: str) -> str:
     return "\n".join(out)
 
 
-STYLE = """body{font-family:system-ui,sans-serif;margin:2em auto;max-width:1200px;color:#222}
-table{border-collapse:collapse;font-size:13px;margin:1em 0}th,td{border:1px solid #ccc;padding:3px 6px}
+STYLE = """body{font-family:system-ui,sans-serif;font-size:16px;line-height:1.45;margin:2em auto;
+max-width:1200px;padding:0 1em;color:#222}
+table{border-collapse:collapse;font-size:15px;margin:1em 0}th,td{border:1px solid #ccc;padding:4px 8px}
 th{background:#f2f2f2}td{text-align:right}td:first-child,td:nth-child(2){text-align:left}
-.gallery{display:flex;flex-wrap:wrap;gap:16px}figure{margin:0;border:1px solid #ddd;padding:8px}
-figcaption{font-size:13px}#images{color:#888;font-size:12px}"""
+.gallery{display:flex;flex-wrap:wrap;gap:20px}figure{margin:0;border:1px solid #ddd;padding:10px}
+figure img{display:block;margin-bottom:6px}img.body{width:200px;image-rendering:pixelated}figcaption{font-size:15px;max-width:480px}
+#images{color:#cf222e;font-size:14px}"""
 
-# after loading, the page says whether each of its images decoded (read by people and by the test)
+# after loading, the page checks that each of its images decoded (its data-ok and data-total, read by
+# the test); it says so on the page only where one did not (a line in red), never when all did
 CHECK = """<script>window.addEventListener('load',function(){var im=document.images,ok=0;
 for(var i=0;i<im.length;i++){if(im[i].complete&&im[i].naturalWidth>0){ok++;}}
 var s=document.getElementById('images');s.textContent=ok+' of '+im.length+' images loaded';
-s.dataset.ok=ok;s.dataset.total=im.length;s.style.color=ok==im.length?'#1a7f37':'#cf222e';});</script>"""
+s.dataset.ok=ok;s.dataset.total=im.length;s.hidden=ok==im.length;});</script>"""
 
 
 def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Sequence[str] = (),
@@ -151,13 +154,13 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Seq
             r, name = e["row"], html.escape(e["run"].name)
             parts.append(
                 f"<figure><img alt='{name} episode' src='{_data_uri(e['gif'], 'image/gif')}'>"
-                f"<img alt='{name} body' src='{_data_uri(e['body'], 'image/png')}'>"
+                f"<img alt='{name} body' class='body' src='{_data_uri(e['body'], 'image/png')}'>"
                 f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
                 f"{r['seed']} · fitness {r['champion_fitness']:.3f}{_verdict_caption(r)}"
                 f"{_body_caption(r)}</figcaption></figure>")
         parts.append("</div>")
     parts += list(extra)
-    parts += ["<p id='images'>images not checked (scripts off)</p>", CHECK, "</body></html>"]
+    parts += ["<p id='images' hidden></p>", CHECK, "</body></html>"]
     return "\n".join(parts)
 
 

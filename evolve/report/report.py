@@ -516,7 +516,25 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
     atomic_write(path, buf.getvalue().encode())
 
 
+PAGE_PX = 1200  # report.html's width: the curves are shown that wide
+CURVES_DPI = 110
+CURVES_FONT_PT = 10  # the size the curves' text should have on the page
+
+
 def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
+    """`_plot_curves` with its text sized for report.html: a row of three panels is drawn 1,980
+    pixels wide and shown 1,200 wide, so matplotlib's 10-point text would read as 6-point there."""
+    from matplotlib import rc_context
+
+    from evolve.report.plots import diversity_columns
+
+    width_px = 6 * (1 + len(diversity_columns(runs))) * CURVES_DPI
+    scale = max(1.0, width_px / PAGE_PX)
+    with rc_context({"font.size": CURVES_FONT_PT * scale, "lines.linewidth": 1.5 * scale}):
+        return _plot_curves(runs, path, pool)
+
+
+def _plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
     """One row of panels per task (tasks never share a y axis): mean best-so-far fitness per group
     (evolve/report/groups.py) with a ± sd band over seeds, over the runs' generations, and the
     authors' SGR figures as markers at the generations the runs reached, only where the runs used
@@ -585,7 +603,7 @@ def plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path:
             if a.get_lines():
                 a.legend(fontsize="small")
     fig.tight_layout()
-    return save_png(fig, path, dpi=110)
+    return save_png(fig, path, dpi=CURVES_DPI)
 
 
 def _band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
