@@ -64,8 +64,9 @@ def read_champion(run_dir: str | Path,
         raise SgrError(f"{run_dir} is a file: give its run's folder ({Path(run_dir).parent})")
     f = Path(run_dir) / ("champion.json" if cell is None else ELITES_FILE)
     if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
-        run = RunDir(run_dir)
-        run.load_task(run.config())
+        from evolve.records.run_config import read_run_config
+
+        read_run_config(RunDir(run_dir))  # its task registered, every value of config.yaml checked
     champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)  # SgrError: not JSON
     if not isinstance(champ, dict):
         raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
