@@ -15,7 +15,7 @@ from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
 from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
-from evolve.search.genome_record import genome_json
+from evolve.search.genome_record import genome_json, record_size_problem
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
 from tsim import runtime
@@ -94,6 +94,8 @@ def read_champion(run_dir: str | Path,
     except ValueError as exc:
         raise SgrError(f"{f}: key 'body': {exc}") from None
     b = build_body(body)
+    if (why := record_size_problem(champ.get("genome"))) is not None:  # before anything compiles it
+        raise SgrError(f"{f}: key 'genome': {why}")
     try:
         ctrl = controller_of(champ)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))
