@@ -25,6 +25,7 @@ from types import MappingProxyType
 from typing import Any
 
 from evolve.rollout.robust import MAX_EPISODES, STATISTICS, Robust, config_dataclass
+from evolve.search.genome_record import MAX_POP  # noqa: F401 (the config's bound, kept with the INI's)
 from tasks.specs import MAX_STEPS, TASKS
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
@@ -43,7 +44,6 @@ ABSENT_BEFORE = {"robust": None, "final_selection": None}
 RANKS = ("min", "score", "pooled")
 AUTO = "auto"
 MAX_EPISODE_STEPS = MAX_STEPS  # a longer episode in a config or a record is a typo or a planted value
-MAX_POP = 1_000_000  # a larger population is a typo (neat-python would fill memory making it)
 SHARE = 0.2  # the most the selection may simulate, as a share of the episodes the run asks for
 MAXIMA = {"candidates": 16, "episodes": 32, "confirm": 32}  # an `auto` count's value on a long run
 FLOORS = {"candidates": 2, "episodes": 8, "confirm": 8}  # ... and the least it shrinks to
@@ -116,6 +116,13 @@ class FinalSelection:
         if sel.rank not in RANKS:
             raise SgrError(f"{name}.rank' must be one of {', '.join(RANKS)}, got {sel.rank!r}")
         return cls(sel.candidates, sel.episodes, sel.statistic, float(h), sel.rank, sel.confirm, sel.holdout)
+
+
+def not_for(method: str) -> str:
+    """Why a method whose evaluation changes state (`Problem.reevaluate_elites`) has no final
+    selection."""
+    return (f"does not apply to method {method!r}: its evaluation evolves each body's controllers "
+            "again, so a candidate has no fixed robot to score")
 
 
 def selection_episodes(counts: dict) -> int:

@@ -15,7 +15,7 @@ from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
 from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
-from evolve.search.genome_record import genome_json
+from evolve.search.genome_record import genome_json, record_size_problem
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
 from tsim import runtime
@@ -64,8 +64,9 @@ def read_champion(run_dir: str | Path,
         raise SgrError(f"{run_dir} is a file: give its run's folder ({Path(run_dir).parent})")
     f = Path(run_dir) / ("champion.json" if cell is None else ELITES_FILE)
     if (Path(run_dir) / "config.yaml").is_file():  # a task of the user's: its imports, or a script's
-        run = RunDir(run_dir)
-        run.load_task(run.config())
+        from evolve.records.run_config import read_run_config
+
+        read_run_config(RunDir(run_dir))  # its task registered, every value of config.yaml checked
     champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)  # SgrError: not JSON
     if not isinstance(champ, dict):
         raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
@@ -93,6 +94,8 @@ def read_champion(run_dir: str | Path,
     except ValueError as exc:
         raise SgrError(f"{f}: key 'body': {exc}") from None
     b = build_body(body)
+    if (why := record_size_problem(champ.get("genome"))) is not None:  # before anything compiles it
+        raise SgrError(f"{f}: key 'genome': {why}")
     try:
         ctrl = controller_of(champ)
         actions = ctrl.act(np.zeros(obs_dim(champ["task"], b.n_points)))

@@ -22,9 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.config import RunConfig
 from evolve.methods import METHODS
 from evolve.records.champion import champion_record, precision_of, read_champion
+from evolve.records.run_config import read_run_config
 from evolve.records.rundir import RunDir
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
@@ -43,7 +43,7 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
             or not all(isinstance(v, numbers.Integral) and not isinstance(v, bool) and v > 0 for v in shape)):
         raise SgrError(f"shape must be (rows, cols) of positive integers, got {shape!r}")
     run = RunDir(run_dir)
-    cfg = RunConfig.of(_imported(run))
+    _, cfg = read_run_config(run, running=True)  # its task registered, config.yaml and neat.ini checked
     shape = (int(shape[0]), int(shape[1]))
     own = shape == cfg.robot_shape
     size = f"{shape[0]}x{shape[1]}"
@@ -86,14 +86,6 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
         problem.pool.close()
     champ["decoded"] = origin
     return champ
-
-
-def _imported(run: RunDir) -> dict:
-    """The run's config.yaml, its own task registered (`RunDir.load_task`: by its imports or its
-    script only after --trust-imports)."""
-    cfg = run.config()
-    run.load_task(cfg)
-    return cfg
 
 
 def write_decoded(run_dir: str | Path, shape: tuple[int, int], out: str | Path | None = None) -> Path:

@@ -37,12 +37,17 @@ from tsim.errors import SgrError
 PolicyFactory = Callable[[BatchEnv, Sequence], BatchPolicy]
 
 
+MAX_WORKERS = 4096  # more rollout processes on one machine is a typo (or a planted value)
+
+
 def workers_problem(workers: object) -> str | None:
     """What is wrong with a `workers` value (the config key, --workers, `RolloutPool`), or None: a
-    positive int, 'auto' or 'ray'. The one place the rule is written."""
-    if workers in ("auto", "ray") or type(workers) is int and workers >= 1:
+    positive int (at most MAX_WORKERS), 'auto' or 'ray'. The one place the rule is written."""
+    if workers in ("auto", "ray") or type(workers) is int and 1 <= workers <= MAX_WORKERS:
         return None
-    return f"must be a positive int, 'auto' or 'ray', got {workers!r}"
+    if type(workers) is int and workers > MAX_WORKERS:
+        return f"must be at most {MAX_WORKERS:,} processes, got {workers:,}"
+    return f"must be a positive int, 'auto' or 'ray', got {repr(workers)[:80]}"
 
 
 def resolve_workers(workers: int | str) -> int:

@@ -15,6 +15,7 @@ from collections.abc import Mapping
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
+from evolve.records.run_config import read_run_config
 from evolve.records.rundir import RunDir
 from evolve.search.neat_ini import load_neat_config
 from evolve.search.state_codec import StateError
@@ -44,6 +45,6 @@ def decode_checkpoint(data: dict, cfg: RunConfig | Mapping, neat_config) -> dict
 def load_checkpoint(run: RunDir, cfg: RunConfig | None = None) -> dict | None:
     """The newest usable checkpoint of `run`, decoded (RunDir.latest_checkpoint: damaged ones are
     skipped with one warning line); None when there is none."""
-    cfg = RunConfig.of(run.config()) if cfg is None else cfg
+    cfg = read_run_config(run, running=True)[1] if cfg is None else cfg
     neat_config = load_neat_config(run.path / "neat.ini")
     return run.latest_checkpoint(lambda data: decode_checkpoint(data, cfg, neat_config))

@@ -21,28 +21,30 @@ null is the paper's nominal one.
 
 from __future__ import annotations
 
-import math
 import sys
 from pathlib import Path
 
-from evolve.config import COMMON, MAX_EPISODE_STEPS, MAX_POP, FinalSelection, RunConfig, default
+from evolve.config import COMMON, RunConfig, default
 from evolve.methods import METHODS
 from evolve.records.files import read_yaml
-from evolve.rollout.pool import workers_problem
-from evolve.rollout.robust import Robust
-from evolve.runs.final_selection import not_for
+from evolve.records.run_config import (  # the checks a run folder's config.yaml shares (short_repr: sweeps)
+    check_imports,
+    check_run_config,
+    check_run_neat_ini,
+    check_values,
+    read_run_config,
+    short_repr,
+    typed,
+)
 from tasks.registry import import_tasks
-from tasks.specs import TASKS, body_fit_problem, closest, unknown_task
+from tasks.specs import TASKS, closest, unknown_task
 from tsim import runtime
 from tsim.errors import SgrError
 
+__all__ = ["check_config", "check_run_config", "check_run_neat_ini", "config_from_dict", "configs_dir",
+           "find_config", "load_config", "packaged_config", "read_run_config", "short_repr"]
+
 REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
-
-
-def short_repr(value: object, most: int = 80) -> str:
-    """`repr(value)` for an error line, cut at `most` characters (a YAML value may be huge)."""
-    text = repr(value)
-    return text if len(text) <= most else text[:most] + " ..."
 
 
 def configs_dir() -> Path:
@@ -51,11 +53,6 @@ def configs_dir() -> Path:
     if REPO_CONFIGS.is_dir():
         return REPO_CONFIGS
     return Path(__file__).resolve().parents[1] / "configs"
-
-
-def _type_name(t) -> str:
-    ts = t if isinstance(t, tuple) else (t,)
-    return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
 
 def check_config(raw: dict, source: str = "config", named_in: Path | None = None) -> RunConfig:
@@ -87,20 +84,9 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
                 raise SgrError(f"{source}: missing required key {key!r}")
             values[key] = default(key, problem.reevaluate_elites) if key in COMMON else fallback
             continue
-        val = raw[key]
-        if typ is float and isinstance(val, int) and not isinstance(val, bool):
-            val = float(val)
-        types = typ if isinstance(typ, tuple) else (typ,)
-        ok = isinstance(val, typ) and not (isinstance(val, bool) and bool not in types)
-        if not ok:
-            raise SgrError(f"{source}: key {key!r} must be {_type_name(typ)}, got {short_repr(val)}")
-        if isinstance(val, float) and not math.isfinite(val):
-            raise SgrError(f"{source}: key {key!r} must be a finite number, got {val!r}")
-        values[key] = val
+        values[key] = typed(key, raw[key], typ, source)
     imports = values["imports"]
-    if not all(isinstance(m, str) for m in imports):
-        raise SgrError(f"{source}: key 'imports' must be a list of module names or .py files, "
-                       f"got {imports!r}")
+    check_imports(imports, source)
     for ref in imports if named_in is None or values["task"] not in TASKS else ():  # the user's tasks
         try:
             import_tasks(ref, named_in=named_in)
@@ -108,42 +94,11 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
             raise SgrError(f"{source}: key 'imports': {exc}") from None
     if values["task"] not in TASKS:
         raise SgrError(f"{source}: key 'task': {unknown_task(values['task'])}")
-    for key in ("generations", "pop_size", "checkpoint_every"):
-        if values[key] < 1:
-            raise SgrError(f"{source}: key {key!r} must be >= 1, got {values[key]}")
-    if values["pop_size"] > MAX_POP:
-        raise SgrError(f"{source}: key 'pop_size' must be at most {MAX_POP:,}, got {values['pop_size']:,}")
-    shape = values["robot_shape"]
-    if len(shape) != 2 or not all(isinstance(v, int) and not isinstance(v, bool) and v > 0 for v in shape):
-        raise SgrError(f"{source}: key 'robot_shape' must be [rows, cols] of positive ints, got {shape}")
-    if (why := body_fit_problem(values["task"], (shape[0], shape[1]))) is not None:
-        raise SgrError(f"{source}: key 'robot_shape' {list(shape)}: {why}")
-    steps = values["episode_steps"]
-    if isinstance(steps, str) and steps != "evogym" or isinstance(steps, int) and steps < 1:
-        raise SgrError(f"{source}: key 'episode_steps' must be a positive int, 'evogym' or null, "
-                       f"got {steps!r}")
-    if isinstance(steps, int) and steps > MAX_EPISODE_STEPS:
-        raise SgrError(f"{source}: key 'episode_steps' must be at most {MAX_EPISODE_STEPS:,}, got {steps:,}")
-    # the run records the episode length it uses, not a rule for it
-    values["episode_steps"] = TASKS[values["task"]].episode_length(steps)
-    if (why := workers_problem(values["workers"])) is not None:
-        raise SgrError(f"{source}: key 'workers' {why}")
-    try:  # robust.py raises ValueError naming the key: the user's to fix
-        robust = Robust.from_config(values["robust"], source)
-    except SgrError:
-        raise
-    except ValueError as exc:
-        raise SgrError(str(exc)) from None
-    if robust is not None and robust.accumulate and problem.reevaluate_elites:
-        raise SgrError(f"{source}: key 'robust.accumulate' is not for method {method!r}: its fitness "
-                       "(the best of a search run for each body) is not a score to average")
+    robust, selection = check_values(values, method, source)
     try:  # the run records the precision it simulates in; a resumed run keeps it
         precision = runtime.requested_precision(asked_precision)
     except ValueError as exc:
         raise SgrError(f"{source}: key 'precision': {exc}") from None
-    selection = FinalSelection.from_config(values["final_selection"], source)
-    if selection is not None and problem.reevaluate_elites:
-        raise SgrError(f"{source}: key 'final_selection' {not_for(method)}")
     for key, name in problem.default_files.items():
         if values[key] is None:
             values[key] = str(configs_dir() / "neat" / name)

@@ -20,7 +20,7 @@ from evolve.records.rundir import ELITES_FILE, RunDir
 from evolve.records.segments import record_segment
 from evolve.rollout.pool import BasePool, RolloutPool, resolve_workers
 from evolve.runs.checkpoint import checkpoint_data, load_checkpoint
-from evolve.runs.config import config_from_dict, load_config
+from evolve.runs.config import config_from_dict, load_config, read_run_config
 from evolve.runs.continuation import continued_state
 from evolve.runs.final_selection import FinalSelection, describe, explain, select_champion
 from evolve.runs.reporters import (
@@ -150,9 +150,9 @@ class Experiment:
         """Continue a run from its newest usable checkpoint; `generations` extends a run (finished
         or not) to that many generations, exactly as if it had been asked for from the start."""
         run = RunDir(out)
-        raw = run.config()
-        run.load_task(raw)  # the run's own task: its imports, or the one a script registered
-        cfg = RunConfig.of(raw)
+        # the run's own task (its imports, or the one a script registered), then every value of its
+        # config.yaml and neat.ini checked as a new run's are: the folder may be a stranger's
+        raw, cfg = read_run_config(run, running=True)
         here = start_backend(cfg.precision)  # the run's; the arch: this process's
         with run.locked_unless_it_fails():
             state = load_checkpoint(run, cfg)
@@ -323,9 +323,7 @@ def select_finished_run(run_dir: str | Path, overrides: dict | None = None,
     select-champion`): the run's own `final_selection` (else the defaults) with `overrides`; then
     the files drawn from the champion (champion.gif, fitness.png) are drawn again."""
     run = RunDir(run_dir)
-    raw = run.config()
-    run.load_task(raw)  # the run's own task: its imports, or the one a script registered
-    cfg = RunConfig.of(raw)
+    _, cfg = read_run_config(run, running=True)  # its task registered, its files checked
     state = load_checkpoint(run, cfg)
     if state is None:
         raise SgrError(f"{run_dir} has no checkpoint")

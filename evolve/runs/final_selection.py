@@ -73,6 +73,7 @@ from evolve.config import (
     COUNTS,
     SHARE,
     FinalSelection,
+    not_for,
     run_episodes,
 )
 from evolve.records.champion import best_ever_record, champion_record
@@ -81,13 +82,6 @@ from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"
 TAG = "final"
-
-
-def not_for(method: str) -> str:
-    """Why a method whose evaluation changes state (`Problem.reevaluate_elites`) has no final
-    selection."""
-    return (f"does not apply to method {method!r}: its evaluation evolves each body's controllers "
-            "again, so a candidate has no fixed robot to score")
 
 
 def candidates(search, n: int) -> list[tuple[int, object]]:

@@ -15,6 +15,12 @@ from neat.genes import DefaultConnectionGene, DefaultNodeGene
 
 from tsim.errors import SgrError
 
+# the most genes sgr reads back of one genome (a checkpoint's, a champion record's), checked before
+# anything is built from it: the largest genome of results/ has 106 nodes and 1,293 connections
+# (direct, Walker-v0 10x10); a 64x64 direct body's network has 4,101 outputs and ~10^6 initial links
+MAX_GENOME_NODES = 20_000
+MAX_POP = 1_000_000  # a larger population is a typo (neat-python would fill memory making it)
+MAX_GENOME_CONNECTIONS = 4_000_000
 NODE_COLUMNS = ("key", "bias", "response", "activation", "aggregation")
 CONNECTION_COLUMNS = ("in", "out", "weight", "enabled")
 
@@ -72,10 +78,37 @@ class GenomeKeys:
         return list(range(self.num_outputs))
 
 
+def genome_size_problem(n_nodes: int, n_connections: int) -> str | None:
+    """What is wrong with a genome of this many node and connection genes (over MAX_GENOME_NODES
+    or MAX_GENOME_CONNECTIONS), or None."""
+    if n_nodes > MAX_GENOME_NODES:
+        return f"{n_nodes:,} nodes, over the {MAX_GENOME_NODES:,} sgr reads of one genome"
+    if n_connections > MAX_GENOME_CONNECTIONS:
+        return f"{n_connections:,} connections, over the {MAX_GENOME_CONNECTIONS:,} sgr reads of one genome"
+    return None
+
+
+def record_size_problem(record: object) -> str | None:
+    """`genome_size_problem` of a genome record (either layout), counted before anything is built;
+    None for anything that is not a record (reading it says why)."""
+    if not isinstance(record, dict):
+        return None
+    counts = []
+    for table, first in (("nodes", "key"), ("connections", "in")):
+        t = record.get(table)
+        if isinstance(t, dict):
+            t = t.get(first)
+        counts.append(len(t) if isinstance(t, list) else 0)
+    return genome_size_problem(*counts)
+
+
 def genome_from_record(record: dict, genome_config) -> neat.DefaultGenome:
     """`genome_json`'s record (or an older one: an object per gene) as a neat-python genome, genes in
     their stored order (a compiled network's evaluation order follows it); `genome_config` gives the
-    gene types (a run's, or `GenomeKeys`). SgrError when it is not a genome record."""
+    gene types (a run's, or `GenomeKeys`). SgrError when it is not a genome record, or a genome
+    larger than sgr reads (`genome_size_problem`)."""
+    if (why := record_size_problem(record)) is not None:
+        raise SgrError(f"champion.json: key 'genome': {why}")
     try:
         g = neat.DefaultGenome(int(record["key"]))
         for n in genes(record["nodes"], NODE_COLUMNS):

@@ -13,6 +13,7 @@ from pathlib import Path
 import neat
 
 from evolve.search.genome import BodyAwareGenome, FlexibleReproduction
+from evolve.search.genome_record import MAX_GENOME_NODES, MAX_POP
 from tsim.errors import SgrError
 
 SECTIONS = {"DefaultGenome": BodyAwareGenome.__name__,
@@ -62,13 +63,61 @@ def neat_ini_text(path: str, pop_size: int, overrides: dict) -> str:
 
 
 def load_neat_config(ini_path: Path, source: str | Path | None = None) -> neat.Config:
-    """neat-python's Config of an INI file; errors name `source` (default: the file)."""
+    """neat-python's Config of an INI file, its sizes checked (`check_sizes`); errors name
+    `source` (default: the file)."""
+    _check_numbers(ini_path, source or ini_path)
     try:
-        return neat.Config(BodyAwareGenome, FlexibleReproduction, neat.DefaultSpeciesSet,
-                           neat.DefaultStagnation, str(ini_path))
+        config = neat.Config(BodyAwareGenome, FlexibleReproduction, neat.DefaultSpeciesSet,
+                             neat.DefaultStagnation, str(ini_path))
     except Exception as exc:  # neat-python raises RuntimeError/KeyError for bad INI keys
         what = " ".join(str(exc).split())  # one line
         raise SgrError(f"{source or ini_path}: bad neat-python config: {what}") from None
+    check_sizes(config, source or ini_path)
+    return config
+
+
+# the INI's numbers that size what neat-python builds: each named when it is not a number
+NUMBER_KEYS = {"NEAT": {"pop_size": int, "fitness_threshold": float},
+               BodyAwareGenome.__name__: {"num_inputs": int, "num_outputs": int, "num_hidden": int}}
+
+
+def _check_numbers(ini_path: Path, source: str | Path) -> None:
+    """SgrError naming `source` and the key when one of NUMBER_KEYS is not a number of its type
+    (neat-python's own error names the value only); anything else is left to neat-python."""
+    cp = configparser.ConfigParser()
+    try:
+        cp.read(ini_path)
+    except (configparser.Error, UnicodeDecodeError):
+        return  # neat-python says why, below
+    for section, keys in NUMBER_KEYS.items():
+        for key, kind in keys.items():
+            text = cp[section].get(key) if section in cp else None
+            if text is None:
+                continue
+            try:
+                kind(text)
+            except ValueError:
+                raise SgrError(f"{source}: key {key!r} must be {'an int' if kind is int else 'a number'}, "
+                               f"got {text[:40]!r}") from None
+
+
+def check_sizes(config: neat.Config, source: str | Path) -> None:
+    """SgrError naming `source` and the key unless the INI's population and genome sizes are in
+    bounds: pop_size 1..MAX_POP (as the YAML config's), the pins and initial hidden nodes of a
+    genome within what sgr reads back of one (evolve/search/genome_record.py), fitness_threshold
+    a number. A new run's INI and a run folder's neat.ini (a stranger's) are checked alike."""
+    gc = config.genome_config
+    bounds = (("pop_size", config.pop_size, 1, MAX_POP),
+              ("num_inputs", gc.num_inputs, 1, MAX_GENOME_NODES),
+              ("num_outputs", gc.num_outputs, 1, MAX_GENOME_NODES),
+              ("num_hidden", gc.num_hidden, 0, MAX_GENOME_NODES - gc.num_outputs))
+    for key, value, least, most in bounds:
+        if not isinstance(value, int) or not least <= value <= max(least, most):
+            raise SgrError(f"{source}: key {key!r} must be an int from {least:,} to {max(least, most):,}, "
+                           f"got {value!r}")
+    threshold = config.fitness_threshold
+    if not isinstance(threshold, float) or threshold != threshold:
+        raise SgrError(f"{source}: key 'fitness_threshold' must be a number, got {threshold!r}")
 
 
 def neat_config_from_text(ini: str, source: str | Path | None = None) -> neat.Config:

@@ -23,6 +23,7 @@ from operator import attrgetter
 import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, NEAT_AGGREGATIONS
+from evolve.search.genome_record import genome_size_problem
 from tsim.errors import SgrError
 
 GENOME_ATTRS = {"key", "nodes", "connections", "fitness"}
@@ -238,6 +239,9 @@ def decode_genomes(d, path: str, genome_type, gc) -> list:
     n_conns = [check(k, f"{path}.n_connections", "int") for k in cols["n_connections"]]
     if min(n_nodes + n_conns, default=0) < 0:
         raise _fail(path, "negative gene count")
+    for key, nn, nc in zip(keys, n_nodes, n_conns, strict=True):  # before any gene is read
+        if (why := genome_size_problem(nn, nc)) is not None:
+            raise _fail(path, f"genome {key} has {why}")
     names = [check(x, f"{path}.names", "str") for x in get(d, "names", path, "list")]
     for x in names:
         if x not in NEAT_ACTIVATIONS and x not in NEAT_AGGREGATIONS:
