@@ -155,6 +155,8 @@ def read_run_config(run, running: bool = False) -> tuple[dict, RunConfig]:
     Raises:
         SgrError: one line naming the file and the key.
     """
+    if running:  # it will write into the folder: a link in it is refused before anything is read
+        run.refuse_links()
     raw = run.config()
     cfg = check_run_config(raw, run.path / "config.yaml", load_task=run.load_task, running=running)
     if running:

@@ -127,7 +127,8 @@ max-width:1200px;padding:0 1em;color:#222}
 table{border-collapse:collapse;font-size:15px;margin:1em 0}th,td{border:1px solid #ccc;padding:4px 8px}
 th{background:#f2f2f2}td{text-align:right}td:first-child,td:nth-child(2){text-align:left}
 .gallery{display:flex;flex-wrap:wrap;gap:20px}figure{margin:0;border:1px solid #ddd;padding:10px}
-figure img{display:block;margin-bottom:6px}img.body{width:200px;image-rendering:pixelated}figcaption{font-size:15px;max-width:480px}
+figure img{display:block;margin-bottom:6px}img.body{width:200px;image-rendering:pixelated}
+figcaption{font-size:15px;max-width:480px}
 #images{color:#cf222e;font-size:14px}"""
 
 # after loading, the page checks that each of its images decoded (its data-ok and data-total, read by

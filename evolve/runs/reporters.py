@@ -174,7 +174,7 @@ class ConsoleProgress:
         self.t_start = time.perf_counter()
         self.before = 0.0
         run = getattr(exp, "run", None)  # (a stand-in experiment may have no folder)
-        for r in run.rows() if run is not None else ():
+        for r in run.rows() if run is not None and not exp.quiet else ():  # (quiet: no line to time)
             try:
                 seconds = float(r.get("total_s") or 0.0)
             except ValueError:  # an older or hand-edited row: it counts no time
