@@ -102,24 +102,43 @@ def stop_after_generation() -> Iterator[StopRequest]:
     try:
         yield stop
     finally:
+        _outwait(stop.first_at if stop.counted else None)
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def _outwait(first_at: float | None) -> None:
+    """Wait, with our handlers still set, until `SAME_REQUEST_S` has passed since the first stop
+    (time.monotonic), so that its copy sent to the process group lands on them, not on the default
+    handler, which would kill the process while it closes (exit -15, its last lines lost)."""
+    if first_at is not None:
+        left = first_at + SAME_REQUEST_S - time.monotonic()
+        if left > 0:
+            time.sleep(left)
 
 
 @contextmanager
 def sigterm_interrupts() -> Iterator[None]:
     """While inside: SIGTERM raises `Interrupted` as Ctrl-C raises KeyboardInterrupt (a process
-    with nothing of its own to checkpoint, such as a sweep that then stops its runs). Outside the
+    with nothing of its own to checkpoint, such as a sweep that then stops its runs); another
+    within `SAME_REQUEST_S` of the first is the same request and changes nothing. Outside the
     main thread: nothing changes."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
 
+    first: list[float] = []  # when the first SIGTERM came
+
     def handler(signum, frame):
+        now = time.monotonic()
+        if first and now - first[0] < SAME_REQUEST_S:
+            return  # the same request, sent to the process group as well
+        first.append(now)
         raise Interrupted(signum)
 
     old = signal.signal(signal.SIGTERM, handler)
     try:
         yield
     finally:
+        _outwait(first[0] if first else None)
         signal.signal(signal.SIGTERM, old)
