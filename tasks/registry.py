@@ -25,6 +25,8 @@ import importlib
 import importlib.machinery
 import importlib.util
 import json
+import os
+import stat
 import sys
 from pathlib import Path
 
@@ -41,6 +43,8 @@ OLD_TASK_FILE = "task.pkl"  # an older sgr's: that task's pickled spec, never lo
 TASK_FORMAT, TASK_VERSION = "sgr-task-reference", 1
 HOW_TO_TRUST = "if you trust it, add --trust-imports (in Python: tasks.registry.trust_imports())"
 _SOURCES: dict[str, Path | None] = {}  # task name -> the file whose code registered it
+_NAMED: tuple[Path, ...] = ()  # --import FILE: script files the user names, trusted alone
+MAX_SCRIPT_BYTES = 16 << 20  # a task script larger than this is no script (read no further)
 
 
 def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
@@ -91,6 +95,21 @@ def trust_imports(on: bool = True) -> None:
     file that registered a script's task)."""
     global _TRUST_ALL
     _TRUST_ALL = on
+
+
+def name_imports(files: list[str | Path] | tuple = ()) -> tuple[Path, ...]:
+    """`--import FILE`: trust these script files (and no other) to register the task a run
+    folder's task.json refers to, each imported only while its sha256 is the one recorded. Returns
+    the files named before (to restore them); SgrError when one is not a file."""
+    global _NAMED
+    paths = []
+    for f in files:
+        path = Path(f).expanduser()
+        if not path.is_file():
+            raise SgrError(f"--import {f}: {'not a regular file' if path.exists() else 'file not found'}")
+        paths.append(path.resolve())
+    was, _NAMED = _NAMED, tuple(paths)
+    return was
 
 
 def imports_trusted() -> bool:
@@ -157,46 +176,110 @@ def _exec_file(path: Path, data: bytes) -> None:
 
 def task_reference(name: str, source: Path | None = None) -> dict:
     """What a run folder keeps of a task registered in a script (`TASK_FILE`): its name, the file
-    whose code registered it (or `source`) and that file's sha256 (source null when there is no
-    file: a task registered in a notebook is known only where it is registered again)."""
+    whose code registered it (or `source`): its file name ("file", looked up beside the run folder
+    and inside it, where a copy of the run finds it) and its absolute path where the run was made
+    ("source", a hint), and that file's sha256 (all null when there is no file: a task registered
+    in a notebook is known only where it is registered again)."""
     source = source or _SOURCES.get(name)
-    ref = {"format": TASK_FORMAT, "version": TASK_VERSION, "task": name, "source": None, "sha256": None}
+    ref = {"format": TASK_FORMAT, "version": TASK_VERSION, "task": name, "file": None, "source": None,
+           "sha256": None}
     if source is not None and source.is_file():
-        ref.update(source=str(source), sha256=hashlib.sha256(source.read_bytes()).hexdigest())
+        ref.update(file=source.name, source=str(source),
+                   sha256=hashlib.sha256(source.read_bytes()).hexdigest())
     return ref
+
+
+def _script_bytes(path: Path) -> bytes | None:
+    """The bytes of `path` when it is a regular file of at most MAX_SCRIPT_BYTES (links followed),
+    else None: a FIFO or a device found where a script is looked for is never read (a read would
+    block or never end)."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    except OSError:
+        return None
+    try:
+        st = os.fstat(fd)
+        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_SCRIPT_BYTES:
+            return None
+        with os.fdopen(os.dup(fd), "rb") as f:
+            data = f.read(MAX_SCRIPT_BYTES + 1)
+        return data if len(data) <= MAX_SCRIPT_BYTES else None
+    finally:
+        os.close(fd)
+
+
+def _script_name(ref: dict) -> str | None:
+    """The script's file name a reference gives ("file"; an older sgr's reference: its source's
+    name), when it is a plain .py file name (no folder: it is looked up beside the run only)."""
+    name = ref.get("file")
+    if name is None and isinstance(ref.get("source"), str):
+        name = Path(ref["source"]).name  # an older sgr's reference: the absolute path only
+    if (isinstance(name, str) and name.endswith(".py") and name == Path(name).name
+            and "\0" not in name and name not in (".", "..")):
+        return name
+    return None
 
 
 def load_task_reference(path: Path) -> str:
     """The task a run folder refers to (`TASK_FILE`, JSON, read as data), registered in this process
-    unless it is already; returns its name. Its source file is imported only after
-    `trust_imports()`, and only while its sha256 is the one recorded; otherwise SgrError in one
-    line naming the file and what to do."""
+    unless it is already; returns its name. Its script is imported only after `trust_imports()`
+    (looked up by its file name in the run folder and beside it, then at its recorded path), or when
+    the user named it (`name_imports`, --import FILE), and only while its sha256 is the one
+    recorded; otherwise SgrError in one line naming the file and what to do."""
     path = Path(path)
     try:
         ref = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as exc:
-        raise SgrError(f"{path}: not a task reference ({exc})") from None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
+        raise SgrError(f"{path}: not a task reference ({' '.join(str(exc).split())[:200]})") from None
     if not (isinstance(ref, dict) and ref.get("format") == TASK_FORMAT and isinstance(ref.get("task"), str)):
         raise SgrError(f"{path}: not a task reference (no format {TASK_FORMAT!r} and task name)")
     name, source, digest = ref["task"], ref.get("source"), ref.get("sha256")
     if name in TASKS:  # registered by this process itself
         return name
-    if not isinstance(source, str) or not isinstance(digest, str):
+    file = _script_name(ref)
+    if file is None or not isinstance(digest, str):
         raise SgrError(f"{path}: task {name!r} was registered by code with no file (a notebook?): register "
                        "it in your process first")
+    shown = f"{file} ({source} where the run was made)" if isinstance(source, str) else file
+    named = [f for f in _NAMED if _script_bytes(f) is not None]
+    if named:  # --import FILE: the user's own copy, trusted alone
+        for f in named:
+            data = _script_bytes(f)
+            if data is not None and hashlib.sha256(data).hexdigest() == digest:
+                return _import_script(path, name, f, data)
+        raise SgrError(f"{path}: --import {', '.join(str(f) for f in named)}: not the script the run was "
+                       f"made with ({shown}: its sha256 differs from the one recorded), so it is not "
+                       "imported: register the task in your process first (import it) to use it as it is now")
     if not _TRUST_ALL:
-        raise SgrError(f"{path}: task {name!r} is registered by {source}, which sgr does not run for "
-                       f"reading a folder: import it in your process first, or {HOW_TO_TRUST}")
-    src = Path(source)
-    if not src.is_file():
-        raise SgrError(f"{path}: task {name!r} is registered by {source}, which is not there: register "
-                       "the task in your process first (import your copy of it)")
-    data = src.read_bytes()
-    if hashlib.sha256(data).hexdigest() != digest:
-        raise SgrError(f"{path}: {source} has changed since the run was made (its sha256 differs from the "
-                       "one recorded), so it is not imported: register the task in your process first "
-                       "(import it) to use it as it is now")
-    _exec_file(src.resolve(), data)
+        raise SgrError(f"{path}: task {name!r} is registered by {shown}, which sgr does not run for reading "
+                       f"a folder: import it in your process first, or, if you trust it, add --trust-imports "
+                       f"with {file} beside the run folder, or --import YOUR_COPY_OF_{file} (in Python: "
+                       "tasks.registry.trust_imports())")
+    run = path.parent
+    places = [run / file, run.parent / file]
+    if isinstance(source, str) and Path(source).is_absolute():
+        places.append(Path(source))
+    found = []
+    for f in places:
+        data = _script_bytes(f)
+        if data is None:
+            continue
+        if hashlib.sha256(data).hexdigest() == digest:
+            return _import_script(path, name, f, data)
+        found.append(str(f))
+    if found:
+        raise SgrError(f"{path}: {', '.join(found)} has changed since the run was made (its sha256 differs "
+                       "from the one recorded), so it is not imported: register the task in your process "
+                       "first (import it) to use it as it is now")
+    raise SgrError(f"{path}: task {name!r} is registered by {shown}, which is not there (nor {file} beside "
+                   f"the run folder or in it): copy it beside the run folder, name your copy with --import "
+                   "FILE, or register the task in your process first (import your copy of it)")
+
+
+def _import_script(ref_file: Path, name: str, script: Path, data: bytes) -> str:
+    """Import `data`, the text of `script` whose digest was checked; returns `name`, SgrError
+    naming `ref_file` when the script did not register that task."""
+    _exec_file(script.resolve(), data)
     if name not in TASKS:
-        raise SgrError(f"{path}: {source} was imported but did not register task {name!r}")
+        raise SgrError(f"{ref_file}: {script} was imported but did not register task {name!r}")
     return name

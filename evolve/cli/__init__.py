@@ -14,7 +14,13 @@ import time
 import traceback
 
 from evolve.cli import decode, evolve_cmd, migrate, plot, render, report, select_champion, sweep
-from evolve.cli.common import ClosedStdoutTolerant, add_trust_imports, parse_body, workers_arg
+from evolve.cli.common import (
+    ClosedStdoutTolerant,
+    add_import_file,
+    add_trust_imports,
+    parse_body,
+    workers_arg,
+)
 from tasks.cli import register_task_commands
 from tsim.errors import SgrError
 
@@ -37,6 +43,8 @@ def build_parser() -> argparse.ArgumentParser:
     dc = decode.register(sub)
     for parser in (e, sw, rp, r, sc, dc):
         add_trust_imports(parser)
+    for parser in (e, rp, r, sc, dc):  # the commands that read one run's task.json
+        add_import_file(parser)
     register_task_commands(sub)
     for parser in sub.choices.values():  # `sgr evolve ... --debug` as well as `sgr --debug evolve ...`
         parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
@@ -61,8 +69,14 @@ def main(argv: list[str] | None = None) -> int:
 
         trusted = imports_trusted()
         trust_imports()
+    named = None  # --import FILE: for this command only too
     stdout, sys.stdout = sys.stdout, ClosedStdoutTolerant(sys.stdout)  # `sgr ... | head` is no error
     try:
+        if getattr(args, "import_files", None):
+            from tasks.registry import name_imports
+
+            named = name_imports(())  # (what was named before: restored below)
+            name_imports(args.import_files)
         return args.fn(args)
     except SgrError as exc:
         if args.debug:
@@ -84,6 +98,10 @@ def main(argv: list[str] | None = None) -> int:
         return 1
     finally:
         sys.stdout = stdout
+        if named is not None:
+            from tasks.registry import name_imports
+
+            name_imports(named)
         if trusted is not None:
             from tasks.registry import trust_imports
 

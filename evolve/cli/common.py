@@ -13,8 +13,9 @@ from pathlib import Path
 from tasks.cli import nonnegative, output_path, parse_body, positive
 from tsim.errors import SgrError
 
-__all__ = ["add_noise", "add_trust_imports", "add_workers", "nonnegative", "noise_level", "output_path",
-           "parse_body", "parse_shape", "positive", "resume_dir", "workers_arg", "ClosedStdoutTolerant"]
+__all__ = ["add_import_file", "add_noise", "add_trust_imports", "add_workers", "nonnegative", "noise_level",
+           "output_path", "parse_body", "parse_shape", "positive", "resume_dir", "workers_arg",
+           "ClosedStdoutTolerant"]
 
 
 def workers_arg(text: str) -> int | str:
@@ -62,6 +63,17 @@ TRUST_HELP = ("import the code that a run or sweep folder names (its config's im
 def add_trust_imports(parser: argparse.ArgumentParser) -> None:
     """--trust-imports, for every command that reads a run or sweep folder."""
     parser.add_argument("--trust-imports", action="store_true", help=TRUST_HELP)
+
+
+IMPORT_HELP = ("a copy of the script that registered the run's task (task.json): imported, as if trusted, "
+               "when its sha256 is the one recorded, and no other code (repeat for more files)")
+
+
+def add_import_file(parser: argparse.ArgumentParser) -> None:
+    """--import FILE, for every command that reads a run folder: the user names the script a run's
+    task.json refers to (tasks/registry.py, `name_imports`)."""
+    parser.add_argument("--import", dest="import_files", action="append", metavar="FILE", default=None,
+                        help=IMPORT_HELP)
 
 
 def resume_dir(path: str) -> str:

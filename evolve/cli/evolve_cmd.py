@@ -106,7 +106,8 @@ def run(args: argparse.Namespace) -> int:
                 or args.precision or args.shape is not None or args.start_from or args.body_decoder
                 or args.episode_steps):
             raise SgrError("--resume continues a run with its own config; only --generations "
-                           "(to extend it), --workers, --trust-imports, --tensorboard and --quiet go with it")
+                           "(to extend it), --workers, --trust-imports, --import, --tensorboard and --quiet "
+                           "go with it")
         exp = Experiment.resume(resume_dir(args.resume), quiet=args.quiet, workers=args.workers,
                                 generations=args.generations)
         print(runtime.describe())  # the backend it started (it records it: segments.json)
@@ -183,7 +184,10 @@ def run_experiment(exp) -> int:
     except KeyboardInterrupt as exc:
         done, want = exp.search.generation, exp.cfg.generations
         ckpt = exp.run.last_checkpoint_generation()
-        where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done else
+        if getattr(exc, "at_once", False) and ckpt is not None:  # a second signal: the generation after
+            done = ckpt  # the checkpoint (of the last finished one) was cut short
+        where = (f"stopped after generation {done} of {want}, with a checkpoint" if ckpt == done
+                 and not getattr(exc, "at_once", False) else
                  f"stopped during generation {done + 1} of {want}; its last checkpoint is after "
                  f"generation {ckpt}")
         code = exit_code(exc)

@@ -4,11 +4,13 @@ Generations are counted from 1 everywhere a person reads them: generations.csv, 
 console and the messages of a stop ("after generation 3" = 3 generations evaluated, the state of
 checkpoint gen-00003). The NEAT search counts from 0 inside (neat-python's numbering).
 A first Ctrl-C or SIGTERM lets the generation under way end, writes a checkpoint and stops
-(`Interrupted`, a KeyboardInterrupt); a second stops at once, at the last checkpoint (evolve/runs/stops.py).
+(`Interrupted`, a KeyboardInterrupt); a second stops at once, with a checkpoint of the last finished
+generation (evolve/runs/stops.py).
 """
 
 from __future__ import annotations
 
+import json
 import numbers
 import time
 from collections.abc import Callable
@@ -71,6 +73,9 @@ class Experiment:
     """
 
     _closed = False  # `close` was called: its workers are stopped and its folder let go
+    _marked_end = False  # run_all marked the run's end files due (RunDir.begin_end_files)
+    _ran_to_end = False  # run_all returned (no stop, no failure)
+    _finishing = False  # finish was called: it writes the end files
 
     def __repr__(self) -> str:
         search = getattr(self, "search", None)
@@ -204,14 +209,22 @@ class Experiment:
         """Run to the configured number of generations; `after_generation(self)` is called once
         each generation's row, champion and checkpoint are written (bench/soak.py measures there).
         Ctrl-C (SIGINT) or SIGTERM: the generation under way ends, a checkpoint is written, then
-        `Interrupted` (a KeyboardInterrupt); a second one raises it at once."""
+        `Interrupted` (a KeyboardInterrupt); a second one raises it at once, after a checkpoint of
+        the last finished generation where the newest is older."""
         self._check_open("run_all")
         cfg, search = self.cfg, self.search
         with stop_after_generation() as stop, self.reporters.running(self):
             self._stop = stop
+            finished = None  # (generation, state) of the last finished generation while it has no checkpoint
             try:
                 while search.generation < cfg.generations:
+                    finished = self._unsaved_state()
                     row = search.step()
+                    if search.generation == cfg.generations:  # the last: its end files are due from here
+                        # on, marked before its row and checkpoint make the run look finished, so a
+                        # kill at any point after this makes `resume` write them (`finish`)
+                        self.run.begin_end_files()
+                        self._marked_end = True
                     final = self.selection is not None and search.generation == cfg.generations
                     if final:  # before the row: a run killed while choosing runs its last generation again
                         chosen = self._select_champion()
@@ -224,8 +237,30 @@ class Experiment:
                         after_generation(self)
                     if stop.is_set() and search.generation < cfg.generations:
                         raise Interrupted(stop.signum)
+                self._ran_to_end = True
+            except Interrupted as exc:
+                if exc.at_once and finished is not None:
+                    self._save_finished(*finished)
+                raise
             finally:
                 self._stop = None
+
+    def _unsaved_state(self) -> tuple[int, str] | None:
+        """The state after the last finished generation, as JSON text (a copy the next generation
+        cannot change), when its checkpoint was not written (the schedule skipped it): what a
+        second signal's stop, which cuts the next generation short, saves (`_save_finished`).
+        None when the newest checkpoint is of that generation."""
+        if self.run.last_checkpoint_generation() == self.search.generation:
+            return None
+        return self.search.generation, json.dumps(self.state())
+
+    def _save_finished(self, generation: int, state: str) -> None:
+        """Write the checkpoint of finished `generation` (its state, as `_unsaved_state` took it)
+        unless one as new is there: a run stopped at once resumes after its last finished
+        generation, exactly as the run would have gone on."""
+        newest = self.run.last_checkpoint_generation()
+        if newest is None or newest < generation:
+            self.run.save_checkpoint(generation, json.loads(state))
 
     def _select_champion(self) -> str:
         """The run's end with `final_selection`: the champion chosen afresh among the final elites
@@ -241,7 +276,9 @@ class Experiment:
         the command that completes it. Every file is still whole (written whole or not at all)."""
         what = f"cannot write {exc.filename or 'a file'}: {exc.strerror or exc}"
         resume = f"sgr evolve --resume {self.run.path}"
-        if self.run.end_files_pending():
+        done = self.search.generation
+        if (self.run.end_files_pending() and done == self.cfg.generations
+                and self.run.last_checkpoint_generation() == done):
             return (f"{what}; the run's {self.search.generation} generations are done and checkpointed, "
                     f"its end files (fitness.png, champion.gif) are not: make room, then {resume} "
                     "writes them")
@@ -253,6 +290,11 @@ class Experiment:
         The object then runs nothing more: another process may have taken the run."""
         self._closed = True
         self.pool.close()
+        if self._marked_end and self._ran_to_end and not self._finishing:
+            # run_all ended and `finish` was not asked for (a script that wants no plot): the run is
+            # as finished as it was before the mark
+            self.run.end_files_written()
+            self._marked_end = False
         self.run.unlock()
 
     def _check_open(self, what: str) -> None:
@@ -273,6 +315,7 @@ class Experiment:
         """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
         written whole or not at all, and a run stopped while writing them (a full disk) writes
         them again on `resume`. After `close` too (a `with` block's end): it writes files only."""
+        self._finishing = True
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:

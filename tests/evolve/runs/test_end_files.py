@@ -72,3 +72,49 @@ def test_a_full_disk_at_the_run_end_cuts_no_gif_and_resume_writes_the_end_files(
     assert whole_image(run / "champion.gif") == 61  # the reset state and 60 steps
     assert main(["evolve", "--resume", str(run), "--quiet"]) == 2  # and now the run is done
     assert "is finished (2 of 2 generations)" in capsys.readouterr().err
+
+
+def test_a_kill_after_the_last_checkpoint_before_the_end_files_leaves_a_run_that_resume_finishes(tmp_path,
+                                                                                               capsys):
+    """A process killed just after its last generation's row, champion and checkpoint, before its
+    end files began (simulated: a reporter that runs after the checkpoint raises SystemExit, which
+    passes every handler as a kill would): `sgr evolve --resume` writes fitness.png and champion.gif,
+    and only then calls the run finished. (Before: the marker was written when the end files began,
+    so the run looked finished, without its plot and GIF.)"""
+    from evolve.cli import main
+
+    class Killed:
+        def generation(self, exp, row):
+            if exp.search.generation == exp.cfg.generations:
+                raise SystemExit("killed")
+
+    cfg = {"method": "sgr", "task": "Walker-v0", "generations": 2, "pop_size": 8, "episode_steps": 20,
+           "workers": 1, "render_champion": True, "robust": None, "final_selection": None}
+    run = tmp_path / "run"
+    with pytest.raises(SystemExit), Experiment.from_config(cfg, run, quiet=True) as exp:
+        exp.add_reporter(Killed())
+        exp.run_all()
+    from evolve.records.rundir import RunDir
+    assert RunDir(run).last_checkpoint_generation() == 2 and len(RunDir(run).rows()) == 2
+    assert not (run / "fitness.png").exists() and not (run / "champion.gif").exists()
+    assert main(["evolve", "--resume", str(run), "--quiet"]) == 0, capsys.readouterr().err
+    whole_image(run / "fitness.png")
+    assert whole_image(run / "champion.gif") == 21  # the reset state and 20 steps
+    assert len(RunDir(run).rows()) == 2  # nothing ran again
+    assert main(["evolve", "--resume", str(run), "--quiet"]) == 2
+    assert "is finished (2 of 2 generations)" in capsys.readouterr().err
+
+
+def test_a_run_ended_without_finish_is_finished_as_before(tmp_path):
+    """run_all without finish (a script that wants no plot), then the with block's end: the run is
+    finished (no end files marked due), as it was before the mark moved."""
+    from evolve.records.rundir import RunDir
+    from tsim.errors import SgrError
+
+    cfg = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 8, "episode_steps": 20,
+           "workers": 1, "render_champion": False, "robust": None, "final_selection": None}
+    with Experiment.from_config(cfg, tmp_path / "run", quiet=True) as exp:
+        exp.run_all()
+    assert not RunDir(tmp_path / "run").end_files_pending()
+    with pytest.raises(SgrError, match="is finished"):
+        Experiment.resume(tmp_path / "run")

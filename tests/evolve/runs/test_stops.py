@@ -87,9 +87,10 @@ def test_sigterm_checkpoints_the_generation_under_way_and_the_resumed_run_equals
 
 def test_a_second_signal_stops_at_once_at_the_last_checkpoint(tmp_path, repo_root):
     """SIGTERM, then SIGTERM again before the generation under way ends: the run stops at once,
-    without finishing that generation (no row, no checkpoint for it), exits 143 and names the last
-    checkpoint to resume from. Generations here take seconds (long episodes), the signals come
-    0.3 s apart, half a second into generation 2."""
+    without finishing that generation (no row, no checkpoint for it), having written the checkpoint
+    of the last finished generation (none was due), exits 143 and names it to resume from.
+    Generations here take seconds (long episodes), the signals come 0.3 s apart, half a second into
+    generation 2."""
     cfg = write_config(tmp_path, repo_root, episode_steps=2000, pop_size=24)
     run = RunDir(tmp_path / "run")
     proc = start("evolve", "--config", str(cfg), "--out", str(run.path), cwd=tmp_path)
@@ -102,9 +103,9 @@ def test_a_second_signal_stops_at_once_at_the_last_checkpoint(tmp_path, repo_roo
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 143, err
     assert len(run.rows()) == 1  # generation 2 was under way and was not finished
-    assert run.last_checkpoint_generation() == 0
+    assert run.last_checkpoint_generation() == 1  # issue 57: the last finished generation's, written first
     assert (f"SIGTERM: stopped during generation 2 of {GENERATIONS}; its last checkpoint is after "
-            "generation 0") in err
+            "generation 1") in err
     assert "Traceback" not in err
 
 
