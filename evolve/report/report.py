@@ -578,7 +578,8 @@ def _plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path
         sides = [fig.add_subplot(len(tasks), n_cols, i * n_cols + 2 + j) for j in range(len(extra))]
         for method, series in sorted(by_task[task].items()):
             curves = series["best"]
-            _band(ax, curves, color[method], f"{method} ({len(curves)} seeds)")
+            seeds = f"{len(curves)} seed{'s' if len(curves) != 1 else ''}"
+            _band(ax, curves, color[method], f"{method} ({seeds})")
             for side, column in zip(sides, extra, strict=True):
                 if series[column]:
                     _band(side, series[column], color[method], method)
