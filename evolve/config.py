@@ -241,6 +241,36 @@ class RunConfig:
 
 
 # key: (type or tuple of types, default), from RunConfig's fields: the one place they are listed
+# what each common key does, in a sentence (docs/reference/config.md, `sgr evolve --help`)
+KEY_DOCS: dict[str, str] = {
+    "method": "How bodies and controllers are evolved: sgr, direct, nested or map-elites (docs/EVOLVE.md).",
+    "task": "The task robots are scored on: one of sgr's 32 (docs/TASKS.md) or one you register "
+            "(imports:).",
+    "generations": "How many generations the run evolves.",
+    "pop_size": "Genomes per generation (neat-python's pop_size, written into the run's neat.ini).",
+    "seed": "The run's seed: the same config, seed and sgr give the same run, bit for bit in f64.",
+    "robot_shape": "The body grid, [rows, columns] (the paper's: [5, 5]).",
+    "episode_steps": "Steps of each episode: a number, null for the task's paper length, or \"evogym\" "
+                     "for evogym's registered length.",
+    "neat_config": "The neat-python INI file (relative to this YAML); null: the method's own in "
+                   "configs/neat/.",
+    "checkpoint_every": "A checkpoint every N generations (and after the last, and at a stop); a "
+                        "killed run resumes from the newest.",
+    "render_champion": "Write champion.gif (its typical episode) and fitness.png when the run ends.",
+    "tensorboard": "TensorBoard events of each generation's scalars in RUN/tensorboard (needs "
+                   "sgr[tensorboard]).",
+    "workers": "Rollout processes: a number, \"auto\" (every CPU) or \"ray\" (the actors of a Ray "
+               "cluster).",
+    "imports": "Python files that register your own tasks, imported when the run starts from this "
+               "config (read back from a folder: only with --trust-imports).",
+    "robust": "Each genome scored by K episodes with noise added to its actions (episodes, "
+              "action_noise, action_scale, statistic, ...); null: one exact episode.",
+    "final_selection": "At the run's end, the champion chosen afresh among the final elites by many "
+                       "perturbed episodes, keeping only those that hold; null: the best-ever genome.",
+    "start_from": "{run: PATH, generation: G}: start from that run's population after generation G "
+                  "(sgr; at another robot_shape too); null: a fresh population.",
+}
+
 COMMON: dict[str, tuple[Any, Any]] = {f.name: (f.metadata["yaml"], f.metadata["default"])
                                       for f in fields(RunConfig) if "yaml" in f.metadata}
 

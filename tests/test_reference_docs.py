@@ -57,3 +57,19 @@ def test_the_config_page_lists_every_common_key_and_every_methods_own_keys():
     for name, problem in METHODS.items():
         section = page.split(f"## `method: {name}`")[1].split("\n## ")[0]
         assert set(problem.config_keys) <= set(re.findall(r"^\| `(\w+)` \|", section, re.M)), name
+
+
+def test_every_config_key_of_every_method_says_what_it_does():
+    """docs/reference/config.md has a sentence for every key (it listed keys without saying what
+    they do): the common keys' (evolve.config.KEY_DOCS) and each method's (`Problem.config_docs`)."""
+    from evolve.config import COMMON, KEY_DOCS
+    from evolve.methods import METHODS
+
+    assert set(KEY_DOCS) == set(COMMON)
+    for name, problem in METHODS.items():
+        assert set(problem.config_docs) == set(problem.config_keys), name
+    for text in [*KEY_DOCS.values(), *(t for p in METHODS.values() for t in p.config_docs.values())]:
+        assert len(text.split()) >= 4 and text.endswith("."), text
+    page = (REFERENCE / "config.md").read_text()
+    assert page.count("| what it does |") == 1 + len(METHODS) - sum(
+        not p.config_keys and not p.default_files for p in METHODS.values())

@@ -83,30 +83,37 @@ def _type(spec: Any) -> str:
     return " or ".join(names.get(k, k.__name__) for k in kinds)
 
 
+def _cell(text: str) -> str:
+    """`text` as a markdown table cell (its pipes escaped)."""
+    return text.replace("|", "\\|")
+
+
 def config_page() -> str:
     """docs/reference/config.md."""
-    from evolve.config import COMMON
+    from evolve.config import COMMON, KEY_DOCS
     from evolve.methods import METHODS
 
     out = [HEADER, "# Run config keys\n\n",
            "A run's config (YAML) holds the common keys below and its method's own keys. "
-           "A key left out takes its default; what each key means is in docs/EVOLVE.md.\n\n",
-           "## Common keys (every method)\n\n", "| key | type | default |\n|---|---|---|\n"]
+           "A key left out takes its default; docs/EVOLVE.md says more of each.\n\n",
+           "## Common keys (every method)\n\n",
+           "| key | type | default | what it does |\n|---|---|---|---|\n"]
     for key, (spec, default) in COMMON.items():
-        out.append(f"| `{key}` | {_type(spec)} | {_default(default)} |\n")
+        out.append(f"| `{key}` | {_type(spec)} | {_default(default)} | {_cell(KEY_DOCS[key])} |\n")
     for name, problem in METHODS.items():
         out.append(f"\n## `method: {name}`\n\n")
         if not problem.config_keys and not problem.default_files:
             out.append("No keys of its own.\n")
             continue
-        out.append("| key | type | default |\n|---|---|---|\n")
+        out.append("| key | type | default | what it does |\n|---|---|---|---|\n")
         files = {k: f"`configs/neat/{f}`" for k, f in problem.default_files.items()}
         for key, (spec, default) in problem.config_keys.items():
             shown = _default(default) or files.get(key, "")
-            out.append(f"| `{key}` | {_type(spec)} | {shown} |\n")
+            out.append(f"| `{key}` | {_type(spec)} | {shown} | {_cell(problem.config_docs[key])} |\n")
         for key, file in files.items():
             if key not in problem.config_keys:
-                out.append(f"| `{key}` | string or null (common key; this method's default) | {file} |\n")
+                out.append(f"| `{key}` | string or null (common key; this method's default) | {file} | "
+                           f"{_cell(KEY_DOCS[key])} |\n")
     return "".join(out)
 
 

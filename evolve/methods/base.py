@@ -39,6 +39,7 @@ class Problem:
     evolve.methods.METHODS."""
     name: ClassVar[str]  # the config's `method`
     config_keys: ClassVar[Schema] = {}  # the method's keys beyond the common ones (evolve/runs/config.py)
+    config_docs: ClassVar[dict[str, str]] = {}  # what each of `config_keys` does, in a sentence
     # keys holding files (relative to the YAML that names them) -> default file in configs/neat/
     default_files: ClassVar[dict[str, str]] = {}
     reevaluate_elites: ClassVar[bool] = False  # True when evaluation changes state (nested's inner search)

@@ -75,6 +75,12 @@ class DirectProblem(Problem):
 
     name = "direct"
     config_keys = {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")}
+    config_docs = {
+        "body_distance_weight": "How much two genomes' bodies count in their speciation distance (0: "
+                                "the genome alone).",
+        "layout": "per_output (the paper's: one network, an output per cell and material) or per_cell "
+                  "(the network queried once per cell with its coordinates).",
+    }
     default_files = {"neat_config": "direct.ini"}
 
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):

@@ -152,6 +152,9 @@ class MapElitesProblem(SgrProblem):
     name = "map-elites"
     config_keys = {**{k: v for k, v in SgrProblem.config_keys.items() if k != "body_distance_weight"},
                    "qd": (dict, {})}
+    config_docs = {**{k: v for k, v in SgrProblem.config_docs.items() if k != "body_distance_weight"},
+                   "qd": "The archive: its descriptors and cells, the batch of children, parent choice "
+                         "and score_offset (docs/EVOLVE.md \"MAP-Elites\")."}
     absent_before = {}
 
     def __init__(self, cfg, neat_config, pool: RolloutPool | None = None):

@@ -85,6 +85,14 @@ class NestedProblem(Problem):
     name = "nested"
     config_keys = {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
                    "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)}
+    config_docs = {
+        "inner_pop_size": "Controllers in each body's inner NEAT population.",
+        "inner_generations": "Inner generations each body's controllers evolve per outer generation.",
+        "inner_keep_generations": "An inner population is forgotten once its body has been absent this "
+                                  "many outer generations (null: never; memory then grows).",
+        "controller_neat_config": "The inner (controller) populations' neat-python INI; null: "
+                                  "configs/neat/nested-controller.ini.",
+    }
     default_files = {"neat_config": "nested-body.ini", "controller_neat_config": "nested-controller.ini"}
     absent_before = {"inner_keep_generations": None}  # an older run never forgot an inner search
     reevaluate_elites = True  # a body's fitness is its inner search's best, which goes on improving

@@ -36,6 +36,18 @@ class SgrProblem(Problem):
     config_keys = {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
                    "body_distance_weight": (float, 0.1), "body_decoder": (str, DEFAULT_DECODER),
                    "body_decoder_settings": (dict, {})}
+    config_docs = {
+        "cppn_outputs": "1 (the paper's): one CPPN output feeds the body and the controller network; 2 "
+                        "(the authors' code): one output each.",
+        "weight_threshold": "A substrate link exists where the CPPN's |w| exceeds this; its weight is "
+                            "sign(w)(|w| - threshold)/(1 - threshold) x max_weight.",
+        "max_weight": "The largest weight of a substrate link.",
+        "body_distance_weight": "How much two genomes' bodies count in their speciation distance, beside "
+                                "neat-python's genomic distance (0: the genome alone).",
+        "body_decoder": "How a genome draws its body: substrate (the paper's), cppn, fourier or growth "
+                        "(docs/EVOLVE.md \"Body decoders\").",
+        "body_decoder_settings": "The body decoder's own settings (docs/EVOLVE.md \"Body decoders\").",
+    }
     default_files = {"neat_config": "sgr.ini"}
     absent_before = {"body_distance_weight": 0.0}  # an older run speciated by the genome alone
 
