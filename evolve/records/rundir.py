@@ -36,7 +36,7 @@ import yaml
 from evolve.config import RunConfig
 from evolve.records.files import atomic_write, read_yaml, record_json
 from tsim.errors import SgrError, printable
-from tsim.files import CHECKPOINT_CAP, RECORD_CAP, read_gzip, read_head, read_text
+from tsim.files import CHECKPOINT_CAP, CONFIG_CAP, RECORD_CAP, read_gzip, read_head, read_text
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
@@ -265,6 +265,18 @@ class RunDir:
         if not isinstance(raw, dict) or "method" not in raw:
             raise SgrError(f"{f}: not a run config (no 'method' key)")
         return raw
+
+    def neat_ini(self) -> Path:
+        """The path of the run's neat.ini, for neat-python to read (it opens the file itself);
+        SgrError naming it unless it is a regular file, not a link (neat-python's open would block
+        on a FIFO for ever), and of at most CONFIG_CAP bytes."""
+        f = self.path / "neat.ini"
+        if not os.path.lexists(f):  # neat-python says so, as ever
+            return f
+        read_head(f, 0)
+        if f.stat().st_size > CONFIG_CAP:
+            raise SgrError(f"{printable(f)}: over {CONFIG_CAP >> 20} MiB, more than sgr reads in such a file")
+        return f
 
     def save_task(self, reference: dict) -> None:
         """Keep the reference to a task registered in a script (no `imports:` names it): its name,

@@ -343,3 +343,15 @@ def test_the_reader_refuses_what_is_not_a_regular_file_in_one_line_naming_it(tmp
     with pytest.raises(SgrError, match=r"real: over 4 bytes, more than sgr reads in such a file$"):
         read_bytes(tmp_path / "real", 4)
     assert json.loads(read_bytes(tmp_path / "real", 5)) == 12345
+
+
+@pytest.mark.parametrize("kind", ["fifo", "outside"])
+def test_a_neat_ini_that_is_a_fifo_or_a_link_is_refused_by_resume_in_one_line(run, tmp_path, capsys, kind):
+    """neat.ini as a FIFO blocked `sgr evolve --resume` (neat-python opens it itself); linked outside
+    the run it was read as the run's own. Both: one line naming it, before anything is read."""
+    attack = Attack(tmp_path)
+    plant(kind, run / "neat.ini", attack, real=run / "neat.ini")
+    with attack.watching(run):
+        r = attack.main("evolve", "--resume", str(run), "--generations", "4", capsys=capsys, timeout=BOUND)
+    what = "not a regular file (a FIFO)" if kind == "fifo" else "a symbolic link, which sgr does not follow"
+    assert r.error_line().startswith(f"sgr: error: {run / 'neat.ini'}: {what}"), r.err
