@@ -327,10 +327,21 @@ def test_validate_refuses_an_index_json_that_is_a_fifo_or_a_device_in_one_line(t
 # ------------------------------------------------------------------ the reader itself
 
 
-def test_the_reader_refuses_what_is_not_a_regular_file_in_one_line_naming_it(tmp_path):
-    """`read_bytes`: a FIFO returns at once (refused), a link inside a folder is refused unless the
-    caller follows links (a file the user names), and a file over the cap is refused."""
+def test_the_reader_refuses_what_is_not_a_regular_file_in_one_line_naming_it(tmp_path, monkeypatch):
+    """`read_bytes`: a FIFO returns at once (refused), so do a socket and a device, a link inside a
+    folder is refused unless the caller follows links (a file the user names), and a file over the
+    cap is refused."""
+    import socket
+
     from tsim.files import read_bytes
+
+    monkeypatch.chdir(tmp_path)  # (a socket's path must be short)
+    with socket.socket(socket.AF_UNIX) as sock:
+        sock.bind("sock")
+        with pytest.raises(SgrError, match=r"sock: not a regular file \(a socket\)$"):
+            read_bytes(tmp_path / "sock", 10)
+    with pytest.raises(SgrError, match=r"^/dev/null: not a regular file \(a character device\)$"):
+        read_bytes("/dev/null", 10, follow=True)
 
     os.mkfifo(tmp_path / "fifo")
     (tmp_path / "real").write_bytes(b"12345")
