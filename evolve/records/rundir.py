@@ -268,8 +268,9 @@ class RunDir:
 
     def neat_ini(self) -> Path:
         """The path of the run's neat.ini, for neat-python to read (it opens the file itself);
-        SgrError naming it unless it is a regular file, not a link (neat-python's open would block
-        on a FIFO for ever), and of at most CONFIG_CAP bytes."""
+        SgrError naming it unless it is a regular file (neat-python calls a FIFO "no such config
+        file"), not a link (one outside the run would be read as the run's own), of at most
+        CONFIG_CAP bytes."""
         f = self.path / "neat.ini"
         if not os.path.lexists(f):  # neat-python says so, as ever
             return f

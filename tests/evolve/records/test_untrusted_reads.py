@@ -358,8 +358,9 @@ def test_the_reader_refuses_what_is_not_a_regular_file_in_one_line_naming_it(tmp
 
 @pytest.mark.parametrize("kind", ["fifo", "outside"])
 def test_a_neat_ini_that_is_a_fifo_or_a_link_is_refused_by_resume_in_one_line(run, tmp_path, capsys, kind):
-    """neat.ini as a FIFO blocked `sgr evolve --resume` (neat-python opens it itself); linked outside
-    the run it was read as the run's own. Both: one line naming it, before anything is read."""
+    """neat.ini as a FIFO was "no such config file" to neat-python (which opens it itself), a file
+    that is there; linked outside the run it was read as the run's own. Both: one line naming it
+    and what it is, before anything is read."""
     attack = Attack(tmp_path)
     plant(kind, run / "neat.ini", attack, real=run / "neat.ini")
     with attack.watching(run):
