@@ -35,6 +35,7 @@ import gymnasium as gym
 from tasks.spec import TaskSpec
 from tasks.specs import BUILTIN, TASKS, forget_worlds
 from tsim.errors import SgrError
+from tsim.files import CONFIG_CAP, read_text
 
 _SGR = ("tasks", "tsim", "evolve")
 _TRUST_ALL = False  # --trust-imports: import the code that run and sweep folders name
@@ -228,7 +229,7 @@ def load_task_reference(path: Path) -> str:
     recorded; otherwise SgrError in one line naming the file and what to do."""
     path = Path(path)
     try:
-        ref = json.loads(path.read_text())
+        ref = json.loads(read_text(path, CONFIG_CAP))  # a regular file, not a link, of a few MiB at most
     except (OSError, UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise SgrError(f"{path}: not a task reference ({' '.join(str(exc).split())[:200]})") from None
     if not (isinstance(ref, dict) and ref.get("format") == TASK_FORMAT and isinstance(ref.get("task"), str)):

@@ -18,16 +18,22 @@ from scipy.stats import spearmanr
 from tasks.env import BatchEnv
 from tsim import backend
 from tsim.errors import SgrError
+from tsim.files import CONFIG_CAP, read_bytes, read_head, read_text
+
+# a data set's files are read through links (git-annex keeps them so), but only regular files, of at
+# most this many bytes: a FIFO or a device named index.json would be read forever
+DATA_CAP = 4096 << 20
 
 
 def _json(path: Path):
     try:
-        return json.loads(path.read_text())
+        return json.loads(read_text(path, CONFIG_CAP, follow=True))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SgrError(f"{path}: not valid JSON ({exc})") from None
 
 
 def _npz(path: Path):
+    read_head(path, 0, follow=True)  # SgrError unless a regular file (is_zipfile would read a FIFO)
     if not zipfile.is_zipfile(path):
         raise SgrError(f"{path}: not a .npz file")
     try:
@@ -78,7 +84,8 @@ def _recorded_file(folder: Path, entry: dict, index: Path) -> Path:
     path = folder / name
     if not path.is_file():
         raise SgrError(f"{path}: not found (named by {index})")
-    if "sha256" in entry and hashlib.sha256(path.read_bytes()).hexdigest() != entry["sha256"]:
+    if "sha256" in entry and hashlib.sha256(read_bytes(path, DATA_CAP, follow=True)).hexdigest() != \
+            entry["sha256"]:
         raise SgrError(f"{path}: its sha256 is not the one {index} records: not the file recorded")
     return path
 

@@ -7,3 +7,19 @@ and keeps its traceback."""
 class SgrError(ValueError):
     """Bad input, described in one line that names the key, flag or file and the problem. A
     ValueError, so code that catches ValueError (and evogym-style callers) still does."""
+
+
+_CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x20), *range(0x7f, 0xa0)]}  # C0, DEL and C1
+
+
+def printable(text: str) -> str:
+    """`text` with every control character (C0, DEL, C1) written as `\\xNN`: a file name from a
+    stranger's folder, printed raw, could move the cursor, retitle the terminal or hide a line.
+
+    Args:
+        text: what is about to be printed (a name, an error line).
+
+    Returns:
+        The same text, but for its control characters, each now four printable ones.
+    """
+    return str(text).translate(_CONTROL)

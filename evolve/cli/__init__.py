@@ -22,7 +22,7 @@ from evolve.cli.common import (
     workers_arg,
 )
 from tasks.cli import register_task_commands
-from tsim.errors import SgrError
+from tsim.errors import SgrError, printable
 
 __all__ = ["build_parser", "main", "parse_body", "workers_arg"]
 
@@ -81,7 +81,7 @@ def main(argv: list[str] | None = None) -> int:
     except SgrError as exc:
         if args.debug:
             raise
-        print(f"sgr: error: {exc}", file=sys.stderr)
+        print(f"sgr: error: {printable(exc)}", file=sys.stderr)
         return 2
     except (ValueError, OSError, RecursionError, MemoryError) as exc:
         if args.debug:
@@ -120,7 +120,7 @@ def _one_line(exc: BaseException, most: int = 300) -> str:
         text = f"not enough memory ({exc or 'the input asks for more than this machine has'})"
     else:
         text = str(exc) or type(exc).__name__
-    text = " ".join(text.split())
+    text = printable(" ".join(text.split()))  # a name from a folder may hold terminal escapes
     return text if len(text) <= most else text[:most] + " ..."
 
 

@@ -78,7 +78,7 @@ def compact_file(path: str | Path) -> tuple[int, int]:
     if not isinstance(record, dict):  # not a champion record: left as it is
         return len(text.encode()), len(text.encode())
     cfg_file = path.parent / "config.yaml"
-    raw = read_yaml(cfg_file) if cfg_file.is_file() else None
+    raw = read_yaml(cfg_file, follow=False) if cfg_file.is_file() else None
     new = record_json(compact_record(record, raw if isinstance(raw, dict) else None))
     if new == text:
         return len(text.encode()), len(text.encode())

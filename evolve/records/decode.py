@@ -60,7 +60,7 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     get_backend(precision=precision_of(record))  # scored in the champion's precision, as its run did
     if "genome" not in record:
         raise SgrError(f"{run.path / 'champion.json'}: no 'genome' record to decode")
-    neat_config = load_neat_config(run.path / "neat.ini")
+    neat_config = load_neat_config(run.neat_ini())  # (a FIFO or a link refused in one line)
     genome = genome_from_record(record["genome"], neat_config.genome_config)
     problem = METHODS[cfg.method](cfg.replace(robot_shape=shape), neat_config)
     try:

@@ -18,6 +18,7 @@ import numpy as np
 
 from evolve.records.rundir import ELITES_FILE
 from tsim.errors import SgrError
+from tsim.files import RECORD_CAP, read_text
 
 FORMAT = "sgr-elites-1"
 
@@ -28,7 +29,7 @@ def read_elites(run_dir: str | Path) -> dict:
     if not f.is_file():
         raise SgrError(f"{run_dir} has no {ELITES_FILE}: only a map-elites run keeps an archive of elites")
     try:
-        data = json.loads(f.read_text())
+        data = json.loads(read_text(f, RECORD_CAP))
     except (json.JSONDecodeError, UnicodeDecodeError) as exc:
         raise SgrError(f"{f}: not valid JSON ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("elites"), list):

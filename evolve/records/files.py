@@ -9,7 +9,7 @@ from pathlib import Path
 import yaml
 
 from tsim.errors import SgrError
-from tsim.files import atomic_write
+from tsim.files import CONFIG_CAP, RECORD_CAP, atomic_write, read_text
 
 __all__ = ["atomic_write", "read_yaml", "record_json", "yaml_problem"]
 
@@ -43,21 +43,22 @@ def load_yaml(text: str) -> object:
         loader.dispose()
 
 
-def read_regular(path: Path) -> str:
-    """A file's text, OSError unless it is a regular file: a FIFO or a device (a champion.json
-    linked to /dev/zero) would never end."""
-    if not Path(path).is_file():
-        raise FileNotFoundError(2, "not a regular file", str(path))
-    return Path(path).read_text()
+def read_regular(path: Path, cap: int = RECORD_CAP) -> str:
+    """A file's text, read from a folder sgr did not make (tsim/files.py `read_text`): SgrError
+    naming it unless it is a regular file, not a link, of at most `cap` bytes; a FIFO or a device
+    (a champion.json linked to /dev/zero) would never end."""
+    return read_text(path, cap)
 
 
-def read_yaml(path: Path, what: str = "file") -> object:
-    """The parsed YAML file; ValueError naming the file when it is missing, not text or not YAML."""
+def read_yaml(path: Path, what: str = "file", *, follow: bool = True, cap: int = CONFIG_CAP) -> object:
+    """The parsed YAML file; SgrError naming the file when it is missing, not a regular file (a FIFO,
+    a device), over `cap` bytes, not text or not YAML. `follow`: read through a symbolic link (a
+    file the user names); False for a file inside a folder, where a link is refused."""
     path = Path(path)
-    if not path.is_file():
+    if not path.exists() and (follow or not path.is_symlink()):
         raise SgrError(f"{what} not found: {path}")
     try:
-        return load_yaml(path.read_text())
+        return load_yaml(read_text(path, cap, follow=follow))
     except UnicodeDecodeError:
         raise SgrError(f"{path}: not a text file") from None
     except yaml.YAMLError as exc:

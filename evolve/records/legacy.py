@@ -17,6 +17,7 @@ from pathlib import Path
 
 from evolve.records.rundir import RunDir
 from tsim.errors import SgrError
+from tsim.files import CHECKPOINT_CAP, CONFIG_CAP, read_bytes
 
 # modules renamed since checkpoints were first written: old checkpoints still load
 MOVED_MODULES = {"evolve.genome": "evolve.search.genome"}
@@ -30,7 +31,7 @@ class _Unpickler(pickle.Unpickler):
 def load_trusted_pickle(path: Path) -> dict:
     """An older sgr's checkpoint state. RUNS ANY CODE THE FILE HOLDS: only for folders the user
     trusts."""
-    state = _Unpickler(io.BytesIO(Path(path).read_bytes())).load()
+    state = _Unpickler(io.BytesIO(read_bytes(path, CHECKPOINT_CAP))).load()
     if not isinstance(state, dict) or "generation" not in state:
         raise SgrError(f"{path}: not an sgr checkpoint")
     return state
@@ -50,7 +51,7 @@ def convert_task(run: RunDir) -> list[str]:
     if not old.is_file():
         return []
     try:
-        spec = pickle.loads(old.read_bytes())
+        spec = pickle.loads(read_bytes(old, CONFIG_CAP))
     except Exception as exc:  # a damaged file, or code that no longer loads (a module gone)
         raise SgrError(f"{old}: cannot convert ({type(exc).__name__}: {exc})") from None
     if not isinstance(spec, TaskSpec):

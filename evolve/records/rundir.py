@@ -25,8 +25,8 @@ import io
 import json
 import os
 import re
+import stat
 import sys
-import zlib
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
@@ -35,8 +35,18 @@ import yaml
 
 from evolve.config import RunConfig
 from evolve.records.files import atomic_write, read_yaml, record_json
-from tsim.errors import SgrError
-from tsim.files import make_folder, open_no_follow, refuse_links
+from tsim.errors import SgrError, printable
+from tsim.files import (
+    CHECKPOINT_CAP,
+    CONFIG_CAP,
+    RECORD_CAP,
+    make_folder,
+    open_no_follow,
+    read_gzip,
+    read_head,
+    read_text,
+    refuse_links,
+)
 
 COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_invalid", "episodes",
            "build_s", "sim_s", "neat_s", "total_s", "body_diversity"]  # last: added later (NeatSearch)
@@ -47,7 +57,8 @@ ELITES_FILE = "elites.json"
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1
-MAX_CHECKPOINT_BYTES = 4 << 30  # uncompressed; the largest seen (1,000 generations, nothing forgotten) ~53 MB
+# gzipped, and again uncompressed (1 GiB): the largest seen (1,000 generations, nothing forgotten) ~53 MB
+MAX_CHECKPOINT_BYTES = CHECKPOINT_CAP
 ENDING = ".writing-end-files"  # present while a run's end files are being written
 PICKLE_PROTOCOL_2_PLUS = b"\x80"  # the first byte of every pickle since protocol 2
 
@@ -63,7 +74,7 @@ def checkpoint_generation(path: Path) -> int | None:
 def generation_rows(path: Path) -> tuple[list[dict], list[int]]:
     """generations.csv's rows (dicts of strings), whole lines only (a last line cut short is no row),
     and each row's line number in the file (the header is line 1; blank lines are skipped)."""
-    text = path.read_text()
+    text = read_text(path, RECORD_CAP)
     reader = csv.DictReader(io.StringIO(text[:text.rfind("\n") + 1]))
     rows, lines = [], []
     for row in reader:
@@ -144,16 +155,10 @@ def checkpoint_bytes(data: dict) -> bytes:
 
 def read_checkpoint_file(path: Path) -> dict:
     """A checkpoint file's JSON data, its format and version checked; never unpickles (ValueError
-    or gzip/JSON errors for anything else)."""
-    inflate = zlib.decompressobj(16 + zlib.MAX_WBITS)  # gzip, one member, as checkpoint_bytes writes
-    try:
-        text = inflate.decompress(Path(path).read_bytes(), MAX_CHECKPOINT_BYTES)
-    except zlib.error as exc:
-        raise SgrError(f"not gzip ({exc})") from None
-    if inflate.unconsumed_tail:  # a small file that would fill the memory
-        raise SgrError(f"over {MAX_CHECKPOINT_BYTES >> 20} MiB once uncompressed")
-    if not inflate.eof:
-        raise EOFError("cut short")
+    or gzip/JSON errors for anything else). Read as a file of a folder sgr did not make
+    (tsim/files.py `read_gzip`): a regular file, not a link, at most MAX_CHECKPOINT_BYTES gzipped
+    and again uncompressed (a small file that would fill the memory is refused)."""
+    text = read_gzip(path, MAX_CHECKPOINT_BYTES)  # gzip, one member, as checkpoint_bytes writes
     data = json.loads(text)
     if not isinstance(data, dict) or data.get("format") != CHECKPOINT_FORMAT:
         raise SgrError("not an sgr checkpoint")
@@ -168,11 +173,32 @@ def is_pickle(path: Path) -> bool:
     """Whether a file looks like a pickle (by its name or first byte; nothing is loaded)."""
     if path.suffix in (".pkl", ".pickle"):
         return True
+    try:  # a FIFO, a device or a link is not read (the first would block)
+        return read_head(path, 1) == PICKLE_PROTOCOL_2_PLUS
+    except (OSError, ValueError):
+        return False
+
+
+def _regular(path: Path) -> bool:
+    """Whether `path` is a regular file itself (not a link, a FIFO, a device)."""
     try:
-        with path.open("rb") as f:
-            return f.read(1) == PICKLE_PROTOCOL_2_PLUS
+        return stat.S_ISREG(path.lstat().st_mode)
     except OSError:
         return False
+
+
+def _not_ours(path: Path) -> str:
+    """Why a file in checkpoints/ that is not named as sgr's checkpoints is skipped, in a few words;
+    only a regular file's first byte is read (a FIFO would block)."""
+    try:
+        mode = path.lstat().st_mode
+    except OSError:
+        return "not a checkpoint"
+    if stat.S_ISLNK(mode):
+        return "a symbolic link, never followed"
+    if not stat.S_ISREG(mode) and not stat.S_ISDIR(mode):
+        return "not a regular file, never read"
+    return "a pickle, never loaded" if is_pickle(path) else "not a checkpoint"
 
 
 class PickledCheckpoints(SgrError):
@@ -265,12 +291,25 @@ class RunDir:
     def config(self) -> dict:
         """config.yaml as written (resolved); ValueError when missing, not YAML or not a run config."""
         f = refuse_links(self.path / "config.yaml", self.path)
-        if not f.is_file():
+        if not f.exists() and not f.is_symlink():
             raise SgrError(f"{self.path} is not a run directory (no config.yaml)")
-        raw = read_yaml(f)
+        raw = read_yaml(f, follow=False)  # a FIFO, a device or a link: refused in one line
         if not isinstance(raw, dict) or "method" not in raw:
             raise SgrError(f"{f}: not a run config (no 'method' key)")
         return raw
+
+    def neat_ini(self) -> Path:
+        """The path of the run's neat.ini, for neat-python to read (it opens the file itself);
+        SgrError naming it unless it is a regular file (neat-python calls a FIFO "no such config
+        file"), not a link (one outside the run would be read as the run's own), of at most
+        CONFIG_CAP bytes."""
+        f = self.path / "neat.ini"
+        if not os.path.lexists(f):  # neat-python says so, as ever
+            return f
+        read_head(f, 0)
+        if f.stat().st_size > CONFIG_CAP:
+            raise SgrError(f"{printable(f)}: over {CONFIG_CAP >> 20} MiB, more than sgr reads in such a file")
+        return f
 
     def save_task(self, reference: dict) -> None:
         """Keep the reference to a task registered in a script (no `imports:` names it): its name,
@@ -318,7 +357,7 @@ class RunDir:
         """generations.csv as dicts of strings, whole lines only (a last line cut short is skipped);
         [] without the file."""
         f = self.path / "generations.csv"
-        if not f.is_file():
+        if not os.path.lexists(f):  # (a FIFO or a link is there: refused by the reader, in one line)
             return []
         return generation_rows(f)[0]
 
@@ -326,7 +365,7 @@ class RunDir:
         """`rows`, read once; SgrError naming the file and the line unless generations.csv holds
         one row per generation, in order (what a resume keeps and appends to)."""
         f = self.path / "generations.csv"
-        if not f.is_file():
+        if not os.path.lexists(f):  # (a FIFO or a link is there: refused by the reader, in one line)
             return []
         rows, lines = generation_rows(f)
         check_generation_numbers(rows, lines, f)
@@ -415,7 +454,7 @@ class RunDir:
         if not f.is_file():
             raise SgrError(f"{self.path} has no champion.json yet")
         try:
-            champ = json.loads(f.read_text())
+            champ = json.loads(read_text(f, RECORD_CAP))
         except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise SgrError(f"{f}: not valid JSON ({str(exc)[:200]})") from None
         except RecursionError:
@@ -426,12 +465,16 @@ class RunDir:
 
     def save_checkpoint(self, generation: int, data: dict) -> Path:
         """Write `data` (JSON-able: numbers, strings, lists, dicts) atomically as
-        checkpoints/gen-<generation>.json.gz and delete all but the newest KEEP_CHECKPOINTS of
-        ours; returns its path."""
+        checkpoints/gen-<generation>.json.gz and delete the older checkpoints but the newest
+        KEEP_CHECKPOINTS up to this one; returns its path. Retention goes by the generation just
+        written, not by the names in the folder: a file named after a later generation (planted, or
+        left by a damaged run) is never deleted and never makes a real checkpoint go, nor is any
+        file that is not a regular one (a FIFO, a link)."""
         make_folder(self.ckpt_dir, self.path)
         path = self.ckpt_dir / f"gen-{generation:05d}.json.gz"
         atomic_write(path, checkpoint_bytes({"generation": generation, **data}), inside=self.path)
-        for old in self.checkpoints()[KEEP_CHECKPOINTS:]:
+        upto = [f for f in self.checkpoints() if checkpoint_generation(f) <= generation and _regular(f)]
+        for old in upto[KEEP_CHECKPOINTS:]:
             old.unlink()
         return path
 
@@ -443,9 +486,32 @@ class RunDir:
         return [f for _, f in sorted(found, reverse=True)]
 
     def last_checkpoint_generation(self) -> int | None:
-        """Generations done at the newest checkpoint file, None without one."""
-        newest = self.checkpoints()[:1]
-        return checkpoint_generation(newest[0]) if newest else None
+        """Generations done at the newest checkpoint file (a regular file, of a generation the run
+        has done: `generations_done`), None without one."""
+        done = self.generations_done()
+        for f in self.checkpoints():
+            g = checkpoint_generation(f)
+            if (done is None or g <= done) and _regular(f):
+                return g
+        return None
+
+    def generations_done(self) -> int | None:
+        """How many generations the run's own records say it has done, the most a checkpoint of
+        it can be after: generations.csv's last whole row (an older sgr's rows count from 0), else,
+        without rows, config.yaml's `generations`; None when neither can be read."""
+        f = self.path / "generations.csv"
+        try:
+            rows, lines = generation_rows(f) if f.exists() or f.is_symlink() else ([], [])
+            if rows:
+                start = check_generation_numbers(rows, lines, f)
+                return start + len(rows) - (start != 0)
+        except (OSError, ValueError):  # a damaged file (refused on resume): the config says
+            pass
+        try:
+            g = self.config().get("generations")
+        except (OSError, ValueError):
+            return None
+        return g if isinstance(g, int) and not isinstance(g, bool) else None
 
     def has_checkpoint(self) -> bool:
         """Whether the run has any checkpoint to resume from, an older sgr's pickled ones included
@@ -465,8 +531,8 @@ class RunDir:
         ours = self.checkpoints()
         others = sorted(f for f in self.ckpt_dir.iterdir() if f not in ours and not f.name.startswith(".")
                         ) if self.ckpt_dir.is_dir() else []  # (".": atomic_write's temporary files)
-        skipped = [f"{f.name} ({'a pickle, never loaded' if is_pickle(f) else 'not a checkpoint'})"
-                   for f in others]
+        skipped = [f"{printable(f.name)} ({_not_ours(f)})" for f in others]
+        done = self.generations_done()
         if not ours and self.pickled_checkpoints():
             raise PickledCheckpoints(
                 f"{self.ckpt_dir} holds only pickled checkpoints of an older sgr "
@@ -475,16 +541,21 @@ class RunDir:
                 f"sgr migrate {self.path} --trust-pickle")
         damaged = []
         for f in ours:
+            if done is not None and checkpoint_generation(f) > done:  # not one this run wrote
+                damaged.append(f"{printable(f.name)} (damaged, after generation {checkpoint_generation(f)}, "
+                               f"past the {done} this run has done: never read)")
+                continue
             try:
                 data = read_checkpoint_file(f)
                 state = decode(data) if decode is not None else data
             except Exception as exc:  # any damage: truncated, garbage, a planted file, bad fields
-                why = f": {' '.join(str(exc).split())[:120]}" if isinstance(exc, ValueError) else ""
-                damaged.append(f"{f.name} (damaged, {type(exc).__name__}{why})")
+                why = str(exc).removeprefix(f"{printable(f)}: ")  # (the reader's errors name the file)
+                why = f": {' '.join(why.split())[:120]}" if isinstance(exc, ValueError) else ""
+                damaged.append(f"{printable(f.name)} (damaged, {type(exc).__name__}{why})")
                 continue
             if damaged or skipped:
-                print(f"sgr: warning: skipped {', '.join(damaged + skipped)} in {self.ckpt_dir}; "
-                      f"resuming from {f.name}", file=sys.stderr)
+                print(f"sgr: warning: skipped {', '.join(damaged + skipped)} in {printable(self.ckpt_dir)}; "
+                      f"resuming from {printable(f.name)}", file=sys.stderr)
             return state
         if ours:
             raise SgrError(f"no usable checkpoint in {self.ckpt_dir}: "

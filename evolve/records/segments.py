@@ -17,6 +17,7 @@ import yaml
 
 from evolve.records.files import atomic_write, load_yaml
 from tsim.backend import DEFAULT_PRECISION
+from tsim.files import CONFIG_CAP, read_text
 
 SEGMENTS_FILE = "segments.json"
 
@@ -28,13 +29,13 @@ def segments(run: str | Path) -> list[dict]:
     path = Path(run) / SEGMENTS_FILE
     if path.is_file():
         try:
-            data = json.loads(path.read_text())
-        except (OSError, ValueError):
+            data = json.loads(read_text(path, CONFIG_CAP))
+        except (OSError, ValueError):  # SgrError: a FIFO, a link, too large
             return []
         return [s for s in data if isinstance(s, dict)] if isinstance(data, list) else []
     try:
-        raw = load_yaml((Path(run) / "config.yaml").read_text())
-    except (OSError, yaml.YAMLError):
+        raw = load_yaml(read_text(Path(run) / "config.yaml", CONFIG_CAP))
+    except (OSError, ValueError, yaml.YAMLError):
         return []
     if isinstance(raw, dict) and isinstance(raw.get("arch"), str):  # an older sgr's record
         return [{"after_generation": 0, "arch": raw["arch"], "device": None, "software": None,
@@ -57,7 +58,7 @@ def record_segment(run: str | Path, after_generation: int, backend: dict, worker
     found.append(entry)
     atomic_write(run / SEGMENTS_FILE, (json.dumps(found, indent=1) + "\n").encode(), inside=run)
     cfg_file = run / "config.yaml"
-    raw = load_yaml(cfg_file.read_text())
+    raw = load_yaml(read_text(cfg_file, CONFIG_CAP))
     if isinstance(raw, dict) and "arch" in raw:  # recorded above now, where it stays true
         atomic_write(cfg_file, yaml.safe_dump({k: v for k, v in raw.items() if k != "arch"},
                                               sort_keys=False).encode(), inside=run)

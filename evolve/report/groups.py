@@ -13,6 +13,7 @@ Reading a folder never runs code: config.yaml is read with yaml's safe loader (`
 
 from __future__ import annotations
 
+import os
 from collections import defaultdict
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -23,6 +24,7 @@ import yaml
 from evolve.records.files import load_yaml
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError
+from tsim.files import CONFIG_CAP, read_text
 
 UNKNOWN = "unknown"
 # every setting that makes two runs' results incomparable; method and task are never pooled
@@ -121,12 +123,14 @@ def _walk(folder: Path, runs: list[Path], skipped: list[Skipped], seen: set[Path
 def _not_a_run(folder: Path, need_config: bool) -> str | None:
     """None for a run folder; why a folder holding some of a run's files is not one; "" for a
     folder holding none of them (searched below)."""
-    has = {n for n in ("config.yaml", "generations.csv", "champion.json") if (folder / n).is_file()}
+    # (a FIFO, a device or a link counts as there: reading it says what it is, in one line)
+    has = {n for n in ("config.yaml", "generations.csv", "champion.json") if os.path.lexists(folder / n)
+           and not (folder / n).is_dir()}
     if "generations.csv" in has:
         if "config.yaml" not in has:
             return "generations.csv but no config.yaml" if need_config else None
         try:
-            raw = load_yaml((folder / "config.yaml").read_text())
+            raw = load_yaml(read_text(folder / "config.yaml", CONFIG_CAP))
         except (yaml.YAMLError, UnicodeDecodeError):
             return "config.yaml is not valid YAML"
         return None if isinstance(raw, dict) else "config.yaml is not a mapping of settings"
@@ -140,10 +144,10 @@ def _not_a_run(folder: Path, need_config: bool) -> str | None:
 def read_config(run_dir: Path) -> dict:
     """A run's config.yaml as a dict ({} without one or when it is not a mapping)."""
     f = Path(run_dir) / "config.yaml"
-    if not f.is_file():
+    if not os.path.lexists(f):
         return {}
     try:
-        raw = load_yaml(f.read_text())
+        raw = load_yaml(read_text(f, CONFIG_CAP))
     except UnicodeDecodeError:
         raise SgrError(f"{f}: not a text file") from None
     except yaml.YAMLError as exc:

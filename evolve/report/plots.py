@@ -52,7 +52,7 @@ def read_generations(run_dir: str | Path) -> dict[str, np.ndarray]:
     """Columns of `run_dir/generations.csv` as float arrays (non-numeric cells become NaN);
     generations counted from 1, also in runs written when the file counted from 0."""
     f = Path(run_dir) / "generations.csv"
-    if not f.is_file():
+    if not os.path.lexists(f):
         raise SgrError(f"{run_dir} has no generations.csv")
     try:
         rows, lines = generation_rows(f)  # a line being written (no newline yet) is no row

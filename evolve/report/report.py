@@ -40,6 +40,7 @@ from evolve.records.segments import backend_summary
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
 from tsim.errors import SgrError
+from tsim.files import CONFIG_CAP, read_text
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -155,7 +156,7 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
     rows = []
     for d in runs:
         g = group_of[d]
-        raw = load_yaml((d / "config.yaml").read_text()) or {}
+        raw = load_yaml(read_text(d / "config.yaml", CONFIG_CAP)) or {}
         cols = generations[d]
         best = best_so_far(cols)
         row = {"method": g.label, "task": g.task, "seed": raw.get("seed"), "generations": len(best),
@@ -556,8 +557,8 @@ def _plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path
     for d in runs:
         g = group_of[d]
         classic[g.label] = g.classic
-        steps[(g.label, g.task)].append(episode_length(load_yaml((d / "config.yaml").read_text()) or {},
-                                                       g.task))
+        raw = load_yaml(read_text(d / "config.yaml", CONFIG_CAP)) or {}
+        steps[(g.label, g.task)].append(episode_length(raw, g.task))
         cols = read_generations(d)
         b = best_so_far(cols)
         if len(b):
