@@ -420,7 +420,7 @@ class Sweep:
         if self.made[run.name] is None:
             self._half_made_files(p)
             return "remake"
-        for name in (".lock", "log.txt", "checkpoints"):
+        for name in (".lock", "log.txt", "checkpoints", "generations.csv", "neat.ini", "segments.json"):
             f = p / name
             if (fst := _lstat(f)) is not None and stat.S_ISLNK(fst.st_mode):
                 raise SgrError(f"{_shown(f)} is a link; {NO_LINKS}")

@@ -19,13 +19,14 @@ import pytest
 import yaml
 
 from evolve.records.rundir import RunDir
-from evolve.sweeps.sweep import RECORD_FILE, Sweep, trust_flag
+from evolve.sweeps.sweep import Sweep
 from tests.evolve.attack import Attack
 
 # sweeps start their runs as processes (the attacks below are refused before any would start)
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
 RUN = "sgr-Walker-v0-s0"
+RECORD_FILE = "sweep-runs.json"  # evolve.sweeps.sweep.RECORD_FILE: the runs a sweep made
 SWEEP = {"methods": ["sgr"], "tasks": ["Walker-v0"], "seeds": [0], "imports": ["own_tasks.py"],
          "overrides": {"generations": 2, "pop_size": 8, "episode_steps": 20, "workers": 1,
                        "render_champion": False, "robust": None, "final_selection": None}}
@@ -69,7 +70,7 @@ def plant_imports(attack: Attack, run: Path) -> None:
 
 def _planted_found_run(attack: Attack, sw: Path) -> None:  # a tarball's folder: no record at all
     plant_imports(attack, sw / "runs" / RUN)
-    (sw / RECORD_FILE).unlink()
+    (sw / RECORD_FILE).unlink(missing_ok=True)
 
 
 def _planted_changed_config(attack: Attack, sw: Path) -> None:  # a run the sweep made, changed since
@@ -245,6 +246,7 @@ def test_a_second_sweep_on_a_folder_another_sweep_runs_is_one_line_and_changes_n
 def test_an_honest_sweep_resumed_with_trust_imports_trusts_its_runs_with_its_imports_alone(tmp_path, made):
     """The control: the sweep's own run, unchanged, is kept for resuming, and its process gets
     --trust-imports only when the sweep is resumed with it (its config names the sweep's imports)."""
+    from evolve.sweeps.sweep import trust_flag
     from tasks.registry import trust_imports
 
     sw = copy_of(made, tmp_path)
