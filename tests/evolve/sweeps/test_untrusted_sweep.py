@@ -154,6 +154,17 @@ def test_a_resumed_sweep_writes_through_no_link_in_its_folder(tmp_path, capsys, 
     assert f"{link} is a link; sgr does not follow links in a sweep folder" in r.error_line()
 
 
+def test_a_fifo_as_a_runs_log_txt_is_refused_not_opened(tmp_path, capsys, made):
+    """A FIFO planted as a run's log.txt would block the sweep opening it for ever: one line names
+    it, before any run starts."""
+    attack = Attack(tmp_path)
+    sw = copy_of(made, tmp_path)
+    os.mkfifo(sw / "runs" / RUN / "log.txt")
+    with attack.watching(sw):
+        r = attack.main("sweep", "--resume", str(sw), "--quiet", capsys=capsys, timeout=20)
+    assert f"{sw}/runs/{RUN}/log.txt is not a regular file" in r.error_line()
+
+
 def test_a_new_sweep_refuses_a_linked_runs_folder_under_out(tmp_path, capsys, made):
     """`--out DIR` where DIR/runs links to a folder outside: one line; nothing is made there."""
     attack = Attack(tmp_path)
