@@ -46,7 +46,8 @@ def run(args: argparse.Namespace) -> int:
             raise SgrError("--resume continues a sweep with its own sweep file; drop --config and --out")
         if not Path(args.resume).exists():
             raise SgrError(f"{args.resume} does not exist")
-        sweep = Sweep.open(args.resume)
+        # its imports are trusted only with --trust-imports; held for this command (no other sweep runs it)
+        sweep = Sweep.open(args.resume, lock=True)
     else:
         if not args.config:
             raise SgrError("sgr sweep needs --config SWEEP.yaml (or --resume DIR)")
@@ -55,19 +56,21 @@ def run(args: argparse.Namespace) -> int:
         config = find_config(args.config, "sweep file")  # a path, or a packaged sweep's name (paper)
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"sweep-{config.stem}-{stamp}")
-        from tasks.registry import trust_imports
-
-        trust_imports()  # the user names this sweep file: its imports go to the run processes trusted
-        sweep = Sweep.create(config, out)
+        # the user names this sweep file: its imports go to the run processes trusted (Sweep.trusted),
+        # and nothing else does
+        sweep = Sweep.create(config, out, lock=True)
         print(f"sweep directory: {out}")
-    if args.backend == "ray":
-        from evolve.sweeps.ray_sweep import RayBackend
-        backend = RayBackend(args.parallel, address=args.address)
-    else:
-        backend = LocalBackend(args.parallel)
     try:
-        failed = run_sweep(sweep, backend, quiet=args.quiet)
-    except KeyboardInterrupt as exc:  # 130 for Ctrl-C, 143 for SIGTERM
-        from evolve.runs.stops import exit_code
-        return exit_code(exc)
+        if args.backend == "ray":
+            from evolve.sweeps.ray_sweep import RayBackend
+            backend = RayBackend(args.parallel, address=args.address)
+        else:
+            backend = LocalBackend(args.parallel)
+        try:
+            failed = run_sweep(sweep, backend, quiet=args.quiet)
+        except KeyboardInterrupt as exc:  # 130 for Ctrl-C, 143 for SIGTERM
+            from evolve.runs.stops import exit_code
+            return exit_code(exc)
+    finally:
+        sweep.unlock()
     return 1 if failed else 0

@@ -15,6 +15,7 @@ names the resume command; every run keeps its last checkpoint.
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import time
@@ -23,7 +24,8 @@ from pathlib import Path
 from evolve.own_modules import child_env, python_command
 from evolve.rollout.ray_cluster import connect
 from evolve.runs.stops import PASSED_ON
-from evolve.sweeps.sweep import BackendLost, die_with_parent, trust_flag
+from evolve.sweeps.sweep import BackendLost, die_with_parent, open_log, trust_flag
+from tsim.errors import SgrError
 
 CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
 HEALTH_EVERY_S = 1.0
@@ -36,12 +38,15 @@ def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> in
     env = child_env()  # -P (python_command) and sgr's folder first: no file of the working folder is imported
     proc = None
     try:
-        with open(Path(run_path) / "log.txt", "ab") as log:
+        log = open_log(Path(run_path) / "log.txt")  # never through a link (SgrError: the task fails)
+        try:
             # the run dies with this worker (a task cancelled with force, a sweep killed): no run goes on
             # alone
             proc = subprocess.Popen(python_command("evolve.cli", "evolve", "--resume", run_path,
                                                    "--workers", str(workers), "--quiet", *flags),
                                     stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
+        finally:
+            os.close(log)
         return _wait(proc)
     except KeyboardInterrupt:  # ray.cancel(force=False): the sweep stops
         if proc is None:
@@ -91,7 +96,7 @@ class RayBackend:
         self._wait_for_cluster()  # a task submitted to a cluster that is gone could wait for ever
         path = sweep.run_dir(run).path.resolve()  # the same path on every node
         self._logs[run] = path / "log.txt"
-        self.procs[run] = self._task.remote(str(path), self.cpus_per_run, tuple(trust_flag()))
+        self.procs[run] = self._task.remote(str(path), self.cpus_per_run, tuple(trust_flag(sweep)))
 
     def poll(self) -> dict:
         """Runs that ended since the last call, with their exit codes (-1: the task failed; why is
@@ -156,10 +161,11 @@ class RayBackend:
     def _log(self, run, exc: Exception) -> None:
         what = " ".join(str(exc).split())[:2000]
         try:
-            with open(self._logs[run], "a") as f:
-                f.write(f"\nsgr sweep: the run's Ray task failed: {type(exc).__name__}: {what}\n")
-        except OSError:
-            pass
+            fd = open_log(self._logs[run])  # never through a link
+        except (OSError, SgrError):
+            return
+        with os.fdopen(fd, "a") as f:
+            f.write(f"\nsgr sweep: the run's Ray task failed: {type(exc).__name__}: {what}\n")
 
     def stop(self) -> None:
         """Ask every running run to stop and wait, as LocalBackend.stop: each task is cancelled

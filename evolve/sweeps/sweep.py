@@ -1,11 +1,20 @@
 """Sweeps: every (method, task, seed) of a sweep file as an ordinary run directory, run to the end.
 
 A sweep directory holds `sweep.yaml` (the resolved sweep: absolute config folder, overrides, the
-list of runs) and `runs/<method>-<task>-s<seed>/`, each a run directory that `sgr evolve --resume`
-also accepts. Each run is created here (config resolved, generation 0 checkpointed) and then
-advanced by `sgr evolve --resume` in its own process, so a run that dies is retried from its own
-checkpoints and never takes the others with it, and resuming a sweep is resuming its runs: a
-run's results depend on its config alone, not on when, where or how often it was interrupted.
+list of runs), `runs/<method>-<task>-s<seed>/`, each a run directory that `sgr evolve --resume`
+also accepts, `sweep-runs.json` (the runs this sweep made, each with the sha256 of the config.yaml
+it wrote) and `.lock` (held by the sweep command that runs it). Each run is created here (config
+resolved, generation 0 checkpointed) and then advanced by `sgr evolve --resume` in its own process,
+so a run that dies is retried from its own checkpoints and never takes the others with it, and
+resuming a sweep is resuming its runs: a run's results depend on its config alone, not on when,
+where or how often it was interrupted.
+
+A sweep folder is data from a stranger (docs/RELIABILITY.md, "Trust"): a sweep resumes only the runs
+its record names, each with the config.yaml it made; it follows no link in the folder (runs/, a
+run's folder, config.yaml, log.txt, .lock); it deletes nothing but the files its own half-made run
+creation left (a run recorded as being made, whose folder holds only the files making a run
+writes); its runs get --trust-imports only when the sweep has imports and was trusted itself
+(started from a sweep file the user named, or resumed with --trust-imports).
 
 Sweep file:
     methods: [sgr, direct, nested]
@@ -21,9 +30,14 @@ Sweep file:
 from __future__ import annotations
 
 import ctypes
+import errno
+import fcntl
+import hashlib
+import json
 import math
-import shutil
+import os
 import signal
+import stat
 import subprocess
 import time
 from dataclasses import dataclass
@@ -44,6 +58,14 @@ SWEEP_FILE = "sweep.yaml"
 MAX_RUNS = 10_000  # runs in one sweep: more is a typo (a seed count of 1e9 would fill memory listing them)
 KEYS = ("configs", "imports", "methods", "overrides", "seeds", "tasks")
 RETRIES = 2  # a run whose process dies is resumed from its checkpoints this many more times
+RECORD_FILE = "sweep-runs.json"  # the runs it made: name -> its config.yaml's sha256 (None: being made)
+LOCK_FILE = ".lock"  # held by the sweep command running the folder
+MAX_RECORD_BYTES = 16 << 20  # sweep-runs.json of MAX_RUNS runs is about 1 MiB
+MAX_CONFIG_BYTES = 1 << 20  # a run's config.yaml: a few KiB
+# what making a run writes before its checkpoint 0 (RunDir.lock and create, record_segment), by name
+MADE_FILES = frozenset({".lock", "config.yaml", "neat.ini", "generations.csv", "segments.json"})
+MADE_CHECKPOINTS = frozenset({"gen-00000.json.gz"})
+NO_LINKS = "sgr does not follow links in a sweep folder"
 
 
 @dataclass(frozen=True)
@@ -167,39 +189,150 @@ def run_config(sweep: dict, run: SweepRun, source: str = "sweep",
     return path, {**overrides, "seed": run.seed}
 
 
+def _shown(path: Path | str) -> str:
+    """A path as an error line shows it: control characters escaped (a planted file's name is the
+    stranger's text, and never reaches the terminal raw)."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in str(path))
+
+
+def _lstat(path: Path) -> os.stat_result | None:
+    """`path`'s own status (a link's, not its target's); None when there is nothing there."""
+    try:
+        return os.lstat(path)
+    except (FileNotFoundError, NotADirectoryError):
+        return None
+
+
+def _sha256(data: bytes) -> str:
+    return hashlib.sha256(data).hexdigest()
+
+
+def read_regular(path: Path, cap: int) -> bytes:
+    """The bytes of `path`, read without following a link or blocking; SgrError in one line unless
+    it is a regular file of at most `cap` bytes."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SgrError(f"{_shown(path)} is a link; {NO_LINKS}") from None
+        raise
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise SgrError(f"{_shown(path)} is not a regular file")
+        chunks, size = [], 0
+        while size <= cap and (chunk := os.read(fd, min(1 << 20, cap + 1 - size))):
+            chunks.append(chunk)
+            size += len(chunk)
+        if size > cap:
+            raise SgrError(f"{_shown(path)} is larger than {cap:,} bytes")
+        return b"".join(chunks)
+    finally:
+        os.close(fd)
+
+
+def _take_lock(folder: Path) -> int:
+    """An exclusive lock on the sweep folder (`folder`/.lock, opened without following a link), held
+    until the descriptor returned is closed; SgrError in one line when another sweep holds it."""
+    f = folder / LOCK_FILE
+    try:
+        fd = os.open(f, os.O_RDWR | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC | os.O_NONBLOCK, 0o666)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SgrError(f"{_shown(f)} is a link; {NO_LINKS}") from None
+        if exc.errno in (errno.EISDIR, errno.ENXIO):
+            raise SgrError(f"{_shown(f)} is not a regular file") from None
+        raise
+    try:
+        if not stat.S_ISREG(os.fstat(fd).st_mode):
+            raise SgrError(f"{_shown(f)} is not a regular file")
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            holder = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+            holder = holder if holder.isascii() and holder.isdigit() else "?"
+            raise SgrError(f"{_shown(folder)} is being run by another sweep (pid {holder})") from None
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, str(os.getpid()).encode(), 0)
+    except BaseException:
+        os.close(fd)
+        raise
+    return fd
+
+
+def _made_name(name: str, names: frozenset[str]) -> bool:
+    """Whether `name` is one of `names` or atomic_write's temporary file for one (.NAME.XXXXXXXX)."""
+    return name in names or any(name.startswith(f".{n}.") for n in names)
+
+
 class Sweep:
     """A sweep directory: create it from a sweep file, or open it to resume."""
 
-    def __init__(self, out: str | Path, sweep: dict, named_in: Path | None = None):
-        """`named_in`: the sweep.yaml it was opened from (a folder's: its imports are data)."""
+    def __init__(self, out: str | Path, sweep: dict, named_in: Path | None = None, trusted: bool = False):
+        """`named_in`: the sweep.yaml it was opened from (a folder's: its imports are data);
+        `trusted`: whether its runs may import the code its sweep names (`trust_flag`)."""
         self.path = Path(out)
         self.sweep = sweep
         self.runs = runs_of(sweep)
         self.named_in = named_in
+        self.trusted = trusted
+        self.made: dict[str, str | None] = {}  # the record (RECORD_FILE): the runs this sweep made
+        self._lock_fd: int | None = None
 
     @classmethod
-    def create(cls, sweep_file: str | Path, out: str | Path) -> Sweep:
-        """A new sweep directory from a sweep file (checked first); ValueError when `out` already
-        holds a sweep."""
+    def create(cls, sweep_file: str | Path, out: str | Path, lock: bool = False) -> Sweep:
+        """A new sweep directory from a sweep file (checked first), trusted with the imports the
+        file names (the user named it); `lock`: hold the folder's lock (`lock`) from now on.
+        SgrError when `out` already holds a sweep, or a run folder of this sweep (none is its
+        own yet), or runs/ is a link."""
         sweep = load_sweep(sweep_file)
         out = Path(out)
-        if (out / SWEEP_FILE).exists():
-            raise SgrError(f"{out} already holds a sweep; use sgr sweep --resume {out} or another --out")
-        (out / "runs").mkdir(parents=True, exist_ok=True)
-        atomic_write(out / SWEEP_FILE, yaml.safe_dump(sweep, sort_keys=False).encode())
-        return cls(out, sweep)
+        held = f"{_shown(out)} already holds a sweep; use sgr sweep --resume {_shown(out)} or another --out"
+        if os.path.lexists(out / SWEEP_FILE):
+            raise SgrError(held)
+        out.mkdir(parents=True, exist_ok=True)
+        new = cls(out, sweep, trusted=True)
+        if lock:
+            new.lock()
+        try:
+            if os.path.lexists(out / SWEEP_FILE):  # made meanwhile by another sweep
+                raise SgrError(held)
+            new.check_runs()
+            (out / "runs").mkdir(exist_ok=True)
+            atomic_write(out / SWEEP_FILE, yaml.safe_dump(sweep, sort_keys=False).encode())
+            new._save_record()
+        except BaseException:
+            new.unlock()
+            raise
+        return new
 
     @classmethod
-    def open(cls, out: str | Path) -> Sweep:
+    def open(cls, out: str | Path, lock: bool = False) -> Sweep:
         """An existing sweep directory, to resume; its sweep.yaml is checked again (the configs must
-        still exist)."""
-        f = Path(out) / SWEEP_FILE
+        still exist), and every run folder of it (`check_runs`). Its imports are trusted only after
+        --trust-imports (`tasks.registry.trust_imports`). `lock`: hold the folder's lock from now on."""
+        from tasks.registry import imports_trusted
+
+        out = Path(out)
+        f = out / SWEEP_FILE
+        if f.is_symlink():
+            raise SgrError(f"{_shown(f)} is a link; {NO_LINKS}")
         if not f.is_file():
             raise SgrError(f"{out} is not a sweep directory (no {SWEEP_FILE})")
-        sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f), named_in=f)
+        fd = _take_lock(out) if lock else None
+        try:
+            sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f), named_in=f,
+                        trusted=imports_trusted())
+            sweep._lock_fd = fd
+            sweep.made = sweep._read_record()
+            sweep.check_runs()
+        except BaseException:
+            if fd is not None:
+                os.close(fd)
+            raise
         old = [r.name for r in sweep.runs if sweep.run_dir(r).pickled_checkpoints()
                and not sweep.run_dir(r).checkpoints()]
         if old:  # refused before any run starts (each would fail, and be retried, alone)
+            sweep.unlock()
             names = ", ".join(old[:3]) + (", ..." if len(old) > 3 else "")
             raise SgrError(f"{len(old)} run(s) of {out} ({names}) "
                            "hold only pickled checkpoints of an older sgr; sgr does not load pickles, "
@@ -207,9 +340,127 @@ class Sweep:
                            f"sgr migrate {out} --trust-pickle")
         return sweep
 
+    # ------------------------------------------------------------------ the folder's lock
+    @property
+    def locked(self) -> bool:
+        """Whether this object holds the folder's lock."""
+        return self._lock_fd is not None
+
+    def lock(self) -> None:
+        """Hold the sweep folder for this command (an flock on its .lock, which is never a link):
+        SgrError `DIR is being run by another sweep (pid P)` while another sweep holds it, so two
+        sweeps never run, make or refuse each other's runs."""
+        if self._lock_fd is None:
+            self._lock_fd = _take_lock(self.path)
+
+    def unlock(self) -> None:
+        """Release the lock taken by `lock`; nothing happens when it is not held."""
+        if self._lock_fd is not None:
+            os.close(self._lock_fd)
+            self._lock_fd = None
+
+    # ------------------------------------------------------------------ the record of its runs
+    def _read_record(self) -> dict[str, str | None]:
+        """RECORD_FILE's runs: name -> sha256 of the config.yaml the sweep wrote (None: being made);
+        {} without the file (a sweep of an older sgr: it made none that it knows of)."""
+        f = self.path / RECORD_FILE
+        if _lstat(f) is None:
+            return {}
+        data = read_regular(f, MAX_RECORD_BYTES)
+        try:
+            raw = json.loads(data)
+        except (ValueError, RecursionError):
+            raw = None
+        runs = raw.get("runs") if isinstance(raw, dict) else None
+        if not isinstance(runs, dict) or not all(
+                isinstance(v, str) and len(v) == 64 and all(c in "0123456789abcdef" for c in v) or v is None
+                for v in runs.values()):
+            raise SgrError(f"{_shown(f)}: not a sweep's record of its runs ({{\"runs\": {{name: sha256}}}})")
+        return dict(runs)
+
+    def _save_record(self) -> None:
+        atomic_write(self.path / RECORD_FILE,
+                     (json.dumps({"runs": self.made}, indent=1, sort_keys=True) + "\n").encode())
+
+    # ------------------------------------------------------------------ its runs
     def run_dir(self, run: SweepRun) -> RunDir:
         """The RunDir of `run` (runs/<name>), whether or not it exists yet."""
         return RunDir(self.path / "runs" / run.name)
+
+    def check_runs(self) -> None:
+        """Refuse, in one line and before any run starts, a sweep folder this sweep may not run:
+        runs/ a link or not a folder, or a run folder it may neither resume nor make (`_state`)."""
+        runs = self.path / "runs"
+        st = _lstat(runs)
+        if st is not None and stat.S_ISLNK(st.st_mode):
+            raise SgrError(f"{_shown(runs)} is a link; {NO_LINKS}")
+        if st is not None and not stat.S_ISDIR(st.st_mode):
+            raise SgrError(f"{_shown(runs)} is not a folder")
+        for run in self.runs:
+            self._state(run)
+
+    def _state(self, run: SweepRun) -> str:
+        """What `prepare` does with `run`'s folder: "new" (there is none: make it), "remake" (the
+        sweep's own run, stopped while being made: its files removed, made anew) or "resume" (a run
+        this sweep made, its config.yaml unchanged, with a checkpoint). SgrError in one line, naming
+        the folder, for anything else: a link, a folder the sweep's record does not name, a changed
+        config.yaml, a run without config.yaml or checkpoint (reported, never removed)."""
+        p = self.run_dir(run).path
+        st = _lstat(p)
+        if st is None:
+            return "new"
+        if stat.S_ISLNK(st.st_mode):
+            raise SgrError(f"{_shown(p)} is a link; {NO_LINKS}")
+        if not stat.S_ISDIR(st.st_mode):
+            raise SgrError(f"{_shown(p)} is not a folder")
+        move = "sgr neither resumes nor removes it: move it away and the sweep makes the run anew"
+        if run.name not in self.made:
+            raise SgrError(f"{_shown(p)} is not a run this sweep made ({RECORD_FILE} has no record of it); "
+                           f"{move}, or resume it alone with sgr evolve --resume {_shown(p)}")
+        if self.made[run.name] is None:
+            self._half_made_files(p)
+            return "remake"
+        for name in (".lock", "log.txt", "checkpoints", "generations.csv", "neat.ini", "segments.json"):
+            f = p / name
+            if (fst := _lstat(f)) is not None and stat.S_ISLNK(fst.st_mode):
+                raise SgrError(f"{_shown(f)} is a link; {NO_LINKS}")
+        cfg = p / "config.yaml"
+        if _lstat(cfg) is None:
+            raise SgrError(f"{_shown(p)} has no config.yaml; {move}")
+        data = read_regular(cfg, MAX_CONFIG_BYTES)
+        if _sha256(data) != self.made[run.name]:
+            raise SgrError(f"{_shown(cfg)} is not the config this sweep made for the run (it changed since); "
+                           f"{move}")
+        if trust_flag(self):  # the imports its process will be trusted with: the sweep's own
+            raw = yaml.safe_load(data)
+            if not isinstance(raw, dict) or raw.get("imports") != self.sweep["imports"]:
+                raise SgrError(f"{_shown(cfg)} names other imports than {self.named_in or 'the sweep file'}; "
+                               f"{move}")
+        if not self.run_dir(run).has_checkpoint():
+            raise SgrError(f"{_shown(p)} has no checkpoint; {move}")
+        return "resume"
+
+    def _half_made_files(self, p: Path) -> list[Path]:
+        """The files of a run folder that making a run writes before its first checkpoint (by name,
+        regular files and the checkpoints folder, no links); SgrError naming the first other file."""
+        found: list[Path] = []
+        for entry in sorted(os.scandir(p), key=lambda e: e.name):
+            if entry.name == "checkpoints" and entry.is_dir(follow_symlinks=False):
+                for sub in sorted(os.scandir(entry.path), key=lambda e: e.name):
+                    if not (sub.is_file(follow_symlinks=False) and _made_name(sub.name, MADE_CHECKPOINTS)):
+                        raise self._not_made(p, Path(sub.path))
+                    found.append(Path(sub.path))
+            elif entry.is_file(follow_symlinks=False) and _made_name(entry.name, MADE_FILES):
+                found.append(Path(entry.path))
+            else:
+                raise self._not_made(p, Path(entry.path))
+        return found
+
+    @staticmethod
+    def _not_made(p: Path, f: Path) -> SgrError:
+        return SgrError(f"{_shown(p)} was being made by this sweep, but holds {_shown(f.relative_to(p))}, "
+                        "which making a run does not write; sgr neither resumes nor removes it: move it away "
+                        "and the sweep makes the run anew")
 
     def status(self, run: SweepRun) -> tuple[int, int]:
         """(generations done, generations wanted) from the run's files; (0, 0) before it exists."""
@@ -219,17 +470,34 @@ class Sweep:
         return len(rd.rows()), int(rd.config()["generations"])
 
     def prepare(self, run: SweepRun) -> None:
-        """Create the run directory (config, generation-0 checkpoint) unless it holds a resumable run;
-        a directory left without any checkpoint (killed while being created) is made anew."""
+        """Make the run directory (config, generation-0 checkpoint) unless it holds a run this sweep
+        made and may resume (`_state`); a run of its own left without a checkpoint (killed while being
+        made) is made anew, once the files making it wrote are removed (nothing else ever is). The
+        run is recorded as being made before, and with its config.yaml's sha256 after."""
         from evolve.runs.experiment import Experiment
 
-        rd = self.run_dir(run)
-        if (rd.path / "config.yaml").is_file() and rd.has_checkpoint():
+        state = self._state(run)
+        if state == "resume":
             return
-        if rd.path.exists():
-            shutil.rmtree(rd.path)
+        rd = self.run_dir(run)
+        if state == "remake":
+            rd.lock()  # (no process of a run holds it meanwhile)
+            try:
+                files = self._half_made_files(rd.path)
+                for f in files:
+                    if f.name != LOCK_FILE:
+                        f.unlink()
+                if (rd.path / "checkpoints").is_dir():
+                    (rd.path / "checkpoints").rmdir()  # (empty now)
+            finally:
+                rd.unlock()
+        if self.made.get(run.name, "") is not None:
+            self.made[run.name] = None
+            self._save_record()
         path, overrides = run_config(self.sweep, run, named_in=self.named_in)
         Experiment.create(str(path), str(rd.path), overrides, quiet=True, named_in=self.named_in).close()
+        self.made[run.name] = _sha256(read_regular(rd.path / "config.yaml", MAX_CONFIG_BYTES))
+        self._save_record()
 
     def pending(self) -> list[SweepRun]:
         """Runs not finished yet, including those not created yet, in sweep order."""
@@ -245,11 +513,30 @@ class BackendLost(RuntimeError):
     """The machines a sweep runs on are gone (a whole Ray cluster): the sweep stops, to be resumed."""
 
 
-def trust_flag() -> list[str]:
-    """`--trust-imports` for a run's process when this sweep was trusted with its imports."""
-    from tasks.registry import imports_trusted
+def trust_flag(sweep: Sweep) -> list[str]:
+    """`--trust-imports` for a run's process, only when the sweep names imports and was trusted with
+    them itself (`Sweep.trusted`); the run's config.yaml is the one the sweep made (`Sweep.prepare`
+    checked it), so the run imports only what the sweep names."""
+    return ["--trust-imports"] if sweep.trusted and sweep.sweep.get("imports") else []
 
-    return ["--trust-imports"] if imports_trusted() else []
+
+def open_log(path: Path) -> int:
+    """A run's log.txt opened for appending (created when missing), as a file descriptor; SgrError
+    in one line when it is a link or not a regular file (a write never follows a link out of the
+    folder, and a FIFO never blocks)."""
+    try:
+        fd = os.open(path, os.O_WRONLY | os.O_APPEND | os.O_CREAT | os.O_NOFOLLOW | os.O_CLOEXEC
+                     | os.O_NONBLOCK, 0o666)
+    except OSError as exc:
+        if exc.errno == errno.ELOOP:
+            raise SgrError(f"{path} is a link; {NO_LINKS}") from None
+        if exc.errno == errno.ENXIO:  # a FIFO nobody reads
+            raise SgrError(f"{path} is not a regular file") from None
+        raise
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        raise SgrError(f"{path} is not a regular file")
+    return fd
 
 
 def die_with_parent() -> None:
@@ -276,12 +563,14 @@ class LocalBackend:
         from evolve.rollout.pool import resolve_workers
 
         workers = max(1, resolve_workers("auto") // self.parallel)
-        log = open(sweep.run_dir(run).path / "log.txt", "ab")  # noqa: SIM115 (closed by the process)
-        self.procs[run] = subprocess.Popen(
-            python_command("evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
-                           "--workers", str(workers), "--quiet", *trust_flag()),
-            stdout=log, stderr=subprocess.STDOUT, env=child_env(), preexec_fn=die_with_parent)
-        log.close()
+        log = open_log(sweep.run_dir(run).path / "log.txt")
+        try:
+            self.procs[run] = subprocess.Popen(
+                python_command("evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
+                               "--workers", str(workers), "--quiet", *trust_flag(sweep)),
+                stdout=log, stderr=subprocess.STDOUT, env=child_env(), preexec_fn=die_with_parent)
+        finally:
+            os.close(log)
 
     def poll(self) -> dict[SweepRun, int]:
         """Runs that ended since the last call, with their exit codes."""
@@ -327,8 +616,16 @@ def run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool = False, every: f
     (`Interrupted` for SIGTERM)."""
     from evolve.runs.stops import sigterm_interrupts
 
-    with sigterm_interrupts():  # and a second SIGTERM, while the runs stop, as a second Ctrl-C
-        return _run_sweep(sweep, backend, quiet, every)
+    took = not sweep.locked
+    if took:  # (the CLI holds it from before the sweep is opened)
+        sweep.lock()
+    try:
+        sweep.check_runs()
+        with sigterm_interrupts():  # and a second SIGTERM, while the runs stop, as a second Ctrl-C
+            return _run_sweep(sweep, backend, quiet, every)
+    finally:
+        if took:
+            sweep.unlock()
 
 
 def _run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool, every: float) -> int:
@@ -373,6 +670,9 @@ def _run_sweep(sweep: Sweep, backend: LocalBackend, quiet: bool, every: float) -
             signum = getattr(exc, "signum", signal.SIGINT)
             by = f" by {signal.Signals(signum).name}" if signum != signal.SIGINT else ""  # (Ctrl-C: as ever)
             say(f"interrupted{by}; continue with: sgr sweep --resume {sweep.path}")
+        raise
+    except SgrError:  # a run refused as it was about to start (its folder changed meanwhile): one line
+        backend.stop()
         raise
     except BackendLost as exc:  # one line, `sgr: error: ...`, exit 2
         backend.stop()
