@@ -64,8 +64,8 @@ def evolve_together(n: int, pin: bool, generations: int, pop: int, steps: int) -
     """Seconds per generation (generations.csv total_s) of each of `n` short runs started together."""
     with tempfile.TemporaryDirectory() as tmp:
         outs = [Path(tmp) / f"run{i}" for i in range(n)]
-        procs = [sgr("evolve", "--generations", str(generations), "--pop", str(pop), "--episode-steps", str(steps),
-                     "--workers", "1", "--quiet", "--seed", str(i), "--out", str(out), pin=pin)
+        procs = [sgr("evolve", "--generations", str(generations), "--pop", str(pop), "--episode-steps",
+                     str(steps), "--workers", "1", "--quiet", "--seed", str(i), "--out", str(out), pin=pin)
                  for i, out in enumerate(outs)]
         for p in procs:
             p.communicate(timeout=3600)
@@ -76,13 +76,13 @@ def evolve_together(n: int, pin: bool, generations: int, pop: int, steps: int) -
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--robots", type=int, default=128, help="robots per sgr bench process (default 128)")
-    ap.add_argument("--steps", type=int, default=300, help="steps timed per sgr bench process (default 300)")
-    ap.add_argument("--rounds", type=int, default=2, help="rounds of every case, pinned and unpinned alternating")
-    ap.add_argument("--counts", default="1,2,4", help="numbers of concurrent sgr bench processes (default 1,2,4)")
-    ap.add_argument("--evolve-counts", default="1,2", help="numbers of concurrent sgr evolve runs (default 1,2)")
-    ap.add_argument("--generations", type=int, default=4, help="generations of each sgr evolve run (default 4)")
-    ap.add_argument("--pop", type=int, default=24, help="population of each sgr evolve run (default 24)")
+    ap.add_argument("--robots", type=int, default=128, help="robots per sgr bench process (128)")
+    ap.add_argument("--steps", type=int, default=300, help="steps timed per sgr bench process (300)")
+    ap.add_argument("--rounds", type=int, default=2, help="rounds of every case, pinned and unpinned (2)")
+    ap.add_argument("--counts", default="1,2,4", help="numbers of concurrent sgr bench processes (1,2,4)")
+    ap.add_argument("--evolve-counts", default="1,2", help="numbers of concurrent sgr evolve runs (1,2)")
+    ap.add_argument("--generations", type=int, default=4, help="generations of each sgr evolve run (4)")
+    ap.add_argument("--pop", type=int, default=24, help="population of each sgr evolve run (24)")
     ap.add_argument("--record", metavar="PATH", help="also write a record (tasks/records.py)")
     args = ap.parse_args()
     cpus = len(os.sched_getaffinity(0))
@@ -109,14 +109,15 @@ def main() -> int:
           "generation (median; lower is better)")
     print(f"{'case':20s} {'pinned':>10s} {'unpinned':>10s} {'pinned/unpinned':>16s}")
     figures = {}
-    for case, (kind, n, _) in cases.items():
+    for case, (kind, _, _) in cases.items():
         pinned = statistics.median(got[(case, True)])
         unpinned = statistics.median(got[(case, False)])
         ratio = pinned / unpinned if kind == "bench" else unpinned / pinned  # > 1: pinning is better
         print(f"{case:20s} {pinned:10.4g} {unpinned:10.4g} {ratio:16.3f}")
         key = case.replace(" ", "_")
         unit = "robot-steps/s per process" if kind == "bench" else "s per generation"
-        figures[key] = {"value": [round(pinned, 3), round(unpinned, 3)], "unit": f"{unit}, pinned and unpinned"}
+        figures[key] = {"value": [round(pinned, 3), round(unpinned, 3)],
+                        "unit": f"{unit}, pinned and unpinned"}
         figures[f"{key}_ratio"] = {"value": round(ratio, 3), "unit": "pinned's speed over unpinned's"}
     if args.record:
         from tasks.records import write_record
