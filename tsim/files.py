@@ -97,9 +97,9 @@ def refuse_links(path: Path, inside: Path) -> Path:
     for part in parts:
         here = here / part
         if here.is_symlink():
-            raise SgrError(f"{here}: a symbolic link inside {inside}, which sgr does not follow (a "
-                           "folder's links could make it write or read elsewhere): replace it with "
-                           "the file or folder itself")
+            raise SgrError(f"{here}: a symbolic link, which sgr does not follow inside a folder ({inside}: "
+                           "its links could make sgr write or read elsewhere): replace it with the file "
+                           "or folder itself")
     return path
 
 

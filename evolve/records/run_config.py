@@ -10,6 +10,7 @@ uses a value. The checks of the values themselves (`check_values`) live here, on
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Mapping
 from pathlib import Path
 
@@ -36,7 +37,8 @@ def short_repr(value: object, most: int = 80) -> str:
     return text if len(text) <= most else text[:most] + " ..."
 
 
-def type_name(t) -> str:
+def type_name(t: type | tuple[type, ...]) -> str:
+    """A key's YAML type(s) as an error line says them: "int", "str or null"."""
     ts = t if isinstance(t, tuple) else (t,)
     return " or ".join("null" if x is type(None) else x.__name__ for x in ts)
 
@@ -172,7 +174,10 @@ def check_run_neat_ini(path: Path, cfg: RunConfig) -> None:
         SgrError: one line naming the file and the key.
     """
     from evolve.search.neat_ini import load_neat_config
+    from tsim.files import read_head
 
+    if os.path.lexists(path):
+        read_head(path, 0)  # a FIFO, a device or a link: one line naming what it is (tsim/files.py)
     if not path.is_file():
         raise SgrError(f"{path}: not there, or not a file: a run keeps the neat-python config it uses")
     neat_config = load_neat_config(path)

@@ -55,7 +55,7 @@ def test_a_run_file_linked_outside_is_refused_by_resume_and_the_target_is_unchan
         r = attack.main("evolve", "--resume", str(run), "--generations", "3", capsys=capsys)
     line = r.error_line()
     assert str(run / name) in line and "symbolic link" in line
-    assert len(RunDir(run).rows()) == 2 or name == "generations.csv"  # no generation was added
+    assert name == "generations.csv" or len(RunDir(run).rows()) == 2  # no generation was added
 
 
 def test_a_linked_checkpoints_folder_is_refused_and_receives_no_checkpoint(finished, tmp_path, capsys):

@@ -100,7 +100,7 @@ def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
         assert float(r["nominal"]) == float(r["replay"])  # nominal runs: the same episode
         assert set(r) >= {"noise1e-09_mean", "noise1e-03_min", "noise1e-03_ratio"}
     text = out.read_text()
-    assert "| sgr | Walker-v0 | 0, 4 | 4 |" in text and "5.75 / 6.09 / 6.56 / 6.60" in text
+    assert "| sgr | Walker-v0 | 2 (seeds 0, 4) | 4 |" in text and "5.75 / 6.09 / 6.56 / 6.60" in text
     assert (out.parent / "curves.png").read_bytes()[:4] == b"\x89PNG"
 
 
