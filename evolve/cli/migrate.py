@@ -16,7 +16,9 @@ def register(sub) -> argparse.ArgumentParser:
     m = sub.add_parser("migrate", help="bring an older sgr's files to today's formats: pickled "
                                        "checkpoints and task.pkl (with --trust-pickle), champion files "
                                        "in the older layout")
-    m.add_argument("dir", metavar="RUN", help="a run folder, a sweep folder, or a folder of champion files")
+    m.add_argument("dir", metavar="RUN", help="a run folder, a sweep folder (an older sgr's: its runs are "
+                   "recorded as the sweep's, so that sgr sweep --resume resumes them), or a folder of "
+                   "champion files")
     m.add_argument("--trust-pickle", action="store_true", help=TRUST_HELP)
     m.set_defaults(fn=run)
     cc = sub.add_parser("convert-checkpoints", help="an alias of `sgr migrate`")
@@ -29,8 +31,13 @@ def register(sub) -> argparse.ArgumentParser:
 def run(args: argparse.Namespace) -> int:
     """`sgr migrate`."""
     from evolve.runs.migrate import migrate
+    from evolve.sweeps.sweep import record_older_sweep
 
-    for line in migrate(args.dir, args.trust_pickle):
+    recorded = record_older_sweep(args.dir)  # an older sgr's sweep: the runs you name yours
+    lines = migrate(args.dir, args.trust_pickle)
+    if recorded and lines and "nothing to migrate" in lines[-1]:
+        lines = []
+    for line in recorded + lines:
         print(line)
     return 0
 

@@ -276,6 +276,7 @@ class Sweep:
         self.named_in = named_in
         self.trusted = trusted
         self.made: dict[str, str | None] = {}  # the record (RECORD_FILE): the runs this sweep made
+        self.older = False  # resumed from a folder an older sgr made: no record at all
         self._lock_fd: int | None = None
 
     @classmethod
@@ -323,6 +324,7 @@ class Sweep:
             sweep = cls(out, check_sweep(read_yaml(f), str(f), named_in=f), named_in=f,
                         trusted=imports_trusted())
             sweep._lock_fd = fd
+            sweep.older = _lstat(out / RECORD_FILE) is None  # (a sweep of an older sgr)
             sweep.made = sweep._read_record()
             sweep.check_runs()
         except BaseException:
@@ -415,6 +417,10 @@ class Sweep:
             raise SgrError(f"{_shown(p)} is not a folder")
         move = "sgr neither resumes nor removes it: move it away and the sweep makes the run anew"
         if run.name not in self.made:
+            if self.older:  # resuming an older sgr's sweep: it kept no record
+                raise SgrError(f"{_shown(p)}: {_shown(self.path)} was made by an older sgr, which kept no "
+                               f"record of the runs it made ({RECORD_FILE}); if its runs are yours, record "
+                               f"them with: sgr migrate {_shown(self.path)}")
             raise SgrError(f"{_shown(p)} is not a run this sweep made ({RECORD_FILE} has no record of it); "
                            f"{move}, or resume it alone with sgr evolve --resume {_shown(p)}")
         if self.made[run.name] is None:
@@ -711,3 +717,35 @@ def _wanted(sweep: Sweep, run: SweepRun) -> int:
     path, overrides = run_config(sweep.sweep, run, named_in=sweep.named_in)
     return int(load_config(path, overrides, sweep.named_in).generations)
 
+
+
+def record_older_sweep(path: str | Path) -> list[str]:
+    """Write the record of an older sgr's sweep folder (which kept none): each run folder under
+    runs/ with a config.yaml, by that file's sha256, so that `sgr sweep --resume` resumes them.
+
+    Only for a folder the user names in `sgr migrate DIR`: the record says "this sweep made these
+    runs", which a folder received from someone else must not be able to say of itself.
+
+    Returns:
+        The lines saying what was recorded (none for a folder that is not such a sweep).
+
+    Raises:
+        SgrError: a link or a file that is not a regular one where a run's config.yaml belongs.
+    """
+    path = Path(path)
+    if _lstat(path / SWEEP_FILE) is None or _lstat(path / RECORD_FILE) is not None:
+        return []
+    runs = path / "runs"
+    st = _lstat(runs)
+    if st is None or not stat.S_ISDIR(st.st_mode):
+        return []
+    made: dict[str, str | None] = {}
+    for p in sorted(runs.iterdir()):
+        pst = _lstat(p)
+        if pst is None or not stat.S_ISDIR(pst.st_mode) or _lstat(p / "config.yaml") is None:
+            continue  # a link, a file or a folder with no run: not recorded (a resume names it)
+        made[p.name] = _sha256(read_regular(p / "config.yaml", MAX_CONFIG_BYTES))
+    atomic_write(path / RECORD_FILE, (json.dumps({"runs": made}, indent=1, sort_keys=True) + "\n").encode(),
+                 inside=path)
+    return [f"{_shown(path)}: recorded its {len(made)} run{'s' if len(made) != 1 else ''} in {RECORD_FILE} "
+            "(a sweep resumes only the runs it recorded)"]

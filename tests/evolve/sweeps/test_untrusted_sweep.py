@@ -83,7 +83,8 @@ def _planted_forged_record(attack: Attack, sw: Path) -> None:  # ... and the rec
 
 
 @pytest.mark.parametrize("plant, message", [
-    (_planted_found_run, f"runs/{RUN} is not a run this sweep made ({RECORD_FILE} has no record of it)"),
+    (_planted_found_run, f"runs/{RUN}: {{sw}} was made by an older sgr, which kept no record of the runs "
+                         f"it made ({RECORD_FILE}); if its runs are yours, record them with: sgr migrate {{sw}}"),
     (_planted_changed_config, f"runs/{RUN}/config.yaml is not the config this sweep made for the run"),
     (_planted_forged_record, f"runs/{RUN}/config.yaml names other imports than {{sw}}/sweep.yaml"),
 ], ids=["found-run", "changed-config", "forged-record"])
@@ -270,3 +271,26 @@ def test_an_honest_sweep_resumed_with_trust_imports_trusts_its_runs_with_its_imp
     trusted.prepare(trusted.runs[0])  # resumable: kept as it is
     assert (sw / "runs" / RUN / "config.yaml").read_bytes() == before
     assert trust_flag(trusted) == ["--trust-imports"] and trust_flag(Sweep.open(sw)) == []
+
+
+def test_an_older_sgrs_sweep_is_refused_until_its_owner_records_its_runs_with_migrate(made, tmp_path, capsys):
+    """A sweep folder of an older sgr has no record: `sgr sweep --resume` names the one command
+    that records its runs (`sgr migrate DIR`, the folder named by its owner in that command), and
+    resumes them once it has."""
+    from evolve.cli import main
+
+    sw = copy_of(made, tmp_path)
+    (sw / RECORD_FILE).unlink()
+    attack = Attack(tmp_path)
+    with attack.watching(sw):
+        r = attack.main("sweep", "--resume", str(sw), capsys=capsys)
+    line = r.error_line()
+    assert "made by an older sgr" in line and f"sgr migrate {sw}" in line, line
+    assert main(["migrate", str(sw)]) == 0
+    assert f"{sw}: recorded its 1 run in {RECORD_FILE}" in capsys.readouterr().out
+    digest = hashlib.sha256((sw / "runs" / RUN / "config.yaml").read_bytes()).hexdigest()
+    assert record(sw) == {"runs": {RUN: digest}}
+    sweep = Sweep.open(sw)  # checks every run: this one resumes
+    assert sweep.made == {RUN: digest}
+    assert main(["migrate", str(sw)]) == 0  # once recorded, the record is kept as it is
+    assert record(sw) == {"runs": {RUN: digest}}
