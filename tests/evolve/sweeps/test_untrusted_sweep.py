@@ -83,8 +83,9 @@ def _planted_forged_record(attack: Attack, sw: Path) -> None:  # ... and the rec
 
 
 @pytest.mark.parametrize("plant, message", [
-    (_planted_found_run, f"runs/{RUN}: {{sw}} was made by an older sgr, which kept no record of the runs "
-                         f"it made ({RECORD_FILE}); if its runs are yours, record them with: sgr migrate {{sw}}"),
+    (_planted_found_run, f"runs/{RUN}: {{sw}} was made by an older sgr, which kept no record of the "
+                         f"runs it made ({RECORD_FILE}); if its runs are yours, record them with: "
+                         "sgr migrate {sw}"),
     (_planted_changed_config, f"runs/{RUN}/config.yaml is not the config this sweep made for the run"),
     (_planted_forged_record, f"runs/{RUN}/config.yaml names other imports than {{sw}}/sweep.yaml"),
 ], ids=["found-run", "changed-config", "forged-record"])
