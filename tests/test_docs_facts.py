@@ -333,7 +333,7 @@ BENCH_RECORDS = {
     "env_host_tasks.py": ["--tasks", "Walker-v0", "--robots", "8", "--steps", "2"],
     "generation_bench.py": ["--pop", "4", "--generations", "1", "--workers", "1"],
     "pinning_bench.py": ["--robots", "2", "--steps", "3", "--rounds", "1", "--counts", "1",
-                         "--evolve-counts", "1", "--generations", "1", "--pop", "4"],
+                         "--evolve-counts", ""],
 }
 
 
