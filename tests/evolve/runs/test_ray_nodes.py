@@ -286,7 +286,8 @@ def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_
 def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_checkpoint(cluster, tmp_path):
     """SIGTERM, then SIGTERM again 0.3 s later, early in a generation of seconds: the sweep cancels
     its tasks with force, so the runs' processes die with their workers without ending the
-    generation (no row, no checkpoint for it: the last is generation 0's), and the sweep exits 143."""
+    generation (no row, no checkpoint for it: the last is generation 0's, or the last finished
+    generation's where a run's process had the stop passed on first), and the sweep exits 143."""
     # generations of seconds (long episodes)
     spec, out, proc, runs, before = _ray_sweep_past_a_generation(cluster, tmp_path, episode_steps=4000)
     proc.send_signal(signal.SIGTERM)
@@ -298,7 +299,9 @@ def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_
     for run, rows in zip(runs, before, strict=True):
         if rows:
             assert len(run.rows()) == rows, run.path.name  # the generation under way did not end
-            assert run.last_checkpoint_generation() == 0, run.path.name
+            # killed outright: generation 0's; or its process had the stop passed on first and,
+            # stopping at once, wrote its last finished generation's checkpoint (docs/RELIABILITY.md)
+            assert run.last_checkpoint_generation() in (0, rows), run.path.name
         pid = (run.path / ".lock").read_text().strip() if (run.path / ".lock").is_file() else ""
         deadline = time.monotonic() + 10
         while pid and _running(int(pid)):
