@@ -20,9 +20,8 @@ import pytest
 from evolve.nn.feedforward import FeedForward, Node, compile_genome, feed_forward_layers
 from evolve.records.files import atomic_write
 from evolve.records.rundir import RunDir, checkpoint_bytes, read_checkpoint_file
-from evolve.runs.experiment import Experiment
 from tests.evolve.attack import Attack
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.runs.conftest import unfinished_run
 
 pytestmark = pytest.mark.slow
 
@@ -142,24 +141,10 @@ def test_a_chain_of_20000_nodes_compiles_in_under_a_second():
 
 
 # ------------------------------------------------------------ planted genomes in a run folder
-class _Stop(Exception):
-    pass
-
-
 @pytest.fixture(scope="module")
 def unfinished(tmp_path_factory) -> Path:
     """A tiny SGR run of 3 generations stopped after 2 (checkpoints after 1 and 2, a champion)."""
-    folder = tmp_path_factory.mktemp("genomes") / "run"
-
-    def stop_after_two(exp: Experiment) -> None:
-        if exp.search.generation >= 2:
-            raise _Stop
-
-    with Experiment.from_config({"method": "sgr", **TINY, "generations": 3, "checkpoint_every": 1},
-                                folder, quiet=True) as exp:
-        with pytest.raises(_Stop):
-            exp.run_all(stop_after_two)
-    return folder
+    return unfinished_run(tmp_path_factory.mktemp("genomes") / "run")
 
 
 def _column(d: dict, key: str, dtype: str, rows: int) -> np.ndarray:

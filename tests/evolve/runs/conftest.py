@@ -19,6 +19,24 @@ def tiny_run(method: str, folder: Path) -> Path:
     return folder
 
 
+class _Stop(Exception):
+    """Ends a tiny run early (`unfinished_run`)."""
+
+
+def unfinished_run(folder: Path) -> Path:
+    """A tiny SGR run of 3 generations stopped after 2, checkpointed every generation (checkpoints
+    after 1 and 2, a champion): one to resume. Returns `folder`."""
+    def stop_after_two(exp: Experiment) -> None:
+        if exp.search.generation >= 2:
+            raise _Stop
+
+    with Experiment.from_config({"method": "sgr", **TINY, "generations": 3, "checkpoint_every": 1},
+                                folder, quiet=True) as exp:
+        with pytest.raises(_Stop):
+            exp.run_all(stop_after_two)
+    return folder
+
+
 @pytest.fixture(scope="module")
 def sgr_run(tmp_path_factory) -> Path:
     """A finished tiny SGR run, once per test file."""

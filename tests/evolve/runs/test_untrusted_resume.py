@@ -15,29 +15,15 @@ import yaml
 
 from evolve.runs.experiment import Experiment
 from tests.evolve.attack import Attack
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.runs.conftest import unfinished_run
 
 pytestmark = pytest.mark.slow
-
-
-class _Stop(Exception):
-    """Ends the tiny run after its second generation (its checkpoint written)."""
 
 
 @pytest.fixture(scope="module")
 def unfinished(tmp_path_factory) -> Path:
     """A tiny SGR run of 3 generations stopped after 2, checkpointed every generation: one to resume."""
-    folder = tmp_path_factory.mktemp("unfinished") / "run"
-
-    def stop_after_two(exp: Experiment) -> None:
-        if exp.search.generation >= 2:
-            raise _Stop
-
-    with Experiment.from_config({"method": "sgr", **TINY, "generations": 3, "checkpoint_every": 1},
-                                folder, quiet=True) as exp:
-        with pytest.raises(_Stop):
-            exp.run_all(stop_after_two)
-    return folder
+    return unfinished_run(tmp_path_factory.mktemp("unfinished") / "run")
 
 
 def plant(run: Path, file: str, key: str, value: str) -> None:
