@@ -485,10 +485,11 @@ class RunDir:
         found = [(g, f) for f in self.ckpt_dir.iterdir() if (g := checkpoint_generation(f)) is not None]
         return [f for _, f in sorted(found, reverse=True)]
 
-    def last_checkpoint_generation(self) -> int | None:
+    def last_checkpoint_generation(self, done: int | None = None) -> int | None:
         """Generations done at the newest checkpoint file (a regular file, of a generation the run
-        has done: `generations_done`), None without one."""
-        done = self.generations_done()
+        has done: `done`, else `generations_done`, read from its files), None without one. A run
+        under way passes `done` (its search's generation), so the loop reads no file back."""
+        done = self.generations_done() if done is None else done
         for f in self.checkpoints():
             g = checkpoint_generation(f)
             if (done is None or g <= done) and _regular(f):

@@ -250,7 +250,7 @@ class Experiment:
         cannot change), when its checkpoint was not written (the schedule skipped it): what a
         second signal's stop, which cuts the next generation short, saves (`_save_finished`).
         None when the newest checkpoint is of that generation."""
-        if self.run.last_checkpoint_generation() == self.search.generation:
+        if self.run.last_checkpoint_generation(self.search.generation) == self.search.generation:
             return None
         return self.search.generation, json.dumps(self.state())
 
@@ -258,7 +258,7 @@ class Experiment:
         """Write the checkpoint of finished `generation` (its state, as `_unsaved_state` took it)
         unless one as new is there: a run stopped at once resumes after its last finished
         generation, exactly as the run would have gone on."""
-        newest = self.run.last_checkpoint_generation()
+        newest = self.run.last_checkpoint_generation(generation)
         if newest is None or newest < generation:
             self.run.save_checkpoint(generation, json.loads(state))
 
