@@ -53,6 +53,7 @@ from evolve.runs.config import configs_dir, short_repr
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 from tsim.errors import SgrError
+from tsim.files import read_bytes
 
 SWEEP_FILE = "sweep.yaml"
 MAX_RUNS = 10_000  # runs in one sweep: more is a typo (a seed count of 1e9 would fill memory listing them)
@@ -207,29 +208,6 @@ def _sha256(data: bytes) -> str:
     return hashlib.sha256(data).hexdigest()
 
 
-def read_regular(path: Path, cap: int) -> bytes:
-    """The bytes of `path`, read without following a link or blocking; SgrError in one line unless
-    it is a regular file of at most `cap` bytes."""
-    try:
-        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK | os.O_CLOEXEC)
-    except OSError as exc:
-        if exc.errno == errno.ELOOP:
-            raise SgrError(f"{_shown(path)} is a link; {NO_LINKS}") from None
-        raise
-    try:
-        if not stat.S_ISREG(os.fstat(fd).st_mode):
-            raise SgrError(f"{_shown(path)} is not a regular file")
-        chunks, size = [], 0
-        while size <= cap and (chunk := os.read(fd, min(1 << 20, cap + 1 - size))):
-            chunks.append(chunk)
-            size += len(chunk)
-        if size > cap:
-            raise SgrError(f"{_shown(path)} is larger than {cap:,} bytes")
-        return b"".join(chunks)
-    finally:
-        os.close(fd)
-
-
 def _take_lock(folder: Path) -> int:
     """An exclusive lock on the sweep folder (`folder`/.lock, opened without following a link), held
     until the descriptor returned is closed; SgrError in one line when another sweep holds it."""
@@ -368,7 +346,7 @@ class Sweep:
         f = self.path / RECORD_FILE
         if _lstat(f) is None:
             return {}
-        data = read_regular(f, MAX_RECORD_BYTES)
+        data = read_bytes(f, MAX_RECORD_BYTES)
         try:
             raw = json.loads(data)
         except (ValueError, RecursionError):
@@ -433,7 +411,7 @@ class Sweep:
         cfg = p / "config.yaml"
         if _lstat(cfg) is None:
             raise SgrError(f"{_shown(p)} has no config.yaml; {move}")
-        data = read_regular(cfg, MAX_CONFIG_BYTES)
+        data = read_bytes(cfg, MAX_CONFIG_BYTES)
         if _sha256(data) != self.made[run.name]:
             raise SgrError(f"{_shown(cfg)} is not the config this sweep made for the run (it changed since); "
                            f"{move}")
@@ -502,7 +480,7 @@ class Sweep:
             self._save_record()
         path, overrides = run_config(self.sweep, run, named_in=self.named_in)
         Experiment.create(str(path), str(rd.path), overrides, quiet=True, named_in=self.named_in).close()
-        self.made[run.name] = _sha256(read_regular(rd.path / "config.yaml", MAX_CONFIG_BYTES))
+        self.made[run.name] = _sha256(read_bytes(rd.path / "config.yaml", MAX_CONFIG_BYTES))
         self._save_record()
 
     def pending(self) -> list[SweepRun]:
@@ -744,7 +722,7 @@ def record_older_sweep(path: str | Path) -> list[str]:
         pst = _lstat(p)
         if pst is None or not stat.S_ISDIR(pst.st_mode) or _lstat(p / "config.yaml") is None:
             continue  # a link, a file or a folder with no run: not recorded (a resume names it)
-        made[p.name] = _sha256(read_regular(p / "config.yaml", MAX_CONFIG_BYTES))
+        made[p.name] = _sha256(read_bytes(p / "config.yaml", MAX_CONFIG_BYTES))
     atomic_write(path / RECORD_FILE, (json.dumps({"runs": made}, indent=1, sort_keys=True) + "\n").encode(),
                  inside=path)
     return [f"{_shown(path)}: recorded its {len(made)} run{'s' if len(made) != 1 else ''} in {RECORD_FILE} "
