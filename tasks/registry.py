@@ -25,8 +25,6 @@ import importlib
 import importlib.machinery
 import importlib.util
 import json
-import os
-import stat
 import sys
 from pathlib import Path
 
@@ -35,7 +33,7 @@ import gymnasium as gym
 from tasks.spec import TaskSpec
 from tasks.specs import BUILTIN, TASKS, forget_worlds
 from tsim.errors import SgrError
-from tsim.files import CONFIG_CAP, read_text
+from tsim.files import CONFIG_CAP, read_bytes, read_text
 
 _SGR = ("tasks", "tsim", "evolve")
 _TRUST_ALL = False  # --trust-imports: import the code that run and sweep folders name
@@ -195,18 +193,9 @@ def _script_bytes(path: Path) -> bytes | None:
     else None: a FIFO or a device found where a script is looked for is never read (a read would
     block or never end)."""
     try:
-        fd = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
-    except OSError:
+        return read_bytes(path, MAX_SCRIPT_BYTES, follow=True)
+    except (OSError, SgrError):  # not there, not a regular file, or too large
         return None
-    try:
-        st = os.fstat(fd)
-        if not stat.S_ISREG(st.st_mode) or st.st_size > MAX_SCRIPT_BYTES:
-            return None
-        with os.fdopen(os.dup(fd), "rb") as f:
-            data = f.read(MAX_SCRIPT_BYTES + 1)
-        return data if len(data) <= MAX_SCRIPT_BYTES else None
-    finally:
-        os.close(fd)
 
 
 def _script_name(ref: dict) -> str | None:
