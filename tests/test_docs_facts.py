@@ -334,6 +334,7 @@ BENCH_RECORDS = {
     "generation_bench.py": ["--pop", "4", "--generations", "1", "--workers", "1"],
     "pinning_bench.py": ["--robots", "2", "--steps", "3", "--rounds", "1", "--counts", "1",
                          "--evolve-counts", ""],
+    "rl_bench.py": ["--envs", "1", "2", "--timesteps", "256"],
 }
 
 

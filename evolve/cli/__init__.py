@@ -1,6 +1,6 @@
 """`sgr` command line: the dispatcher. Each of evolve's commands is a module of this package with
 `register(subparsers)` (its options) and `run(args)`: evolve (evolve_cmd), sweep, report,
-select-champion, render, plot, migrate (alias: convert-checkpoints) and decode; the task and
+select-champion, explain, render, plot, migrate (alias: convert-checkpoints) and decode; the task and
 simulator commands (demo, validate, bench) come from tasks/cli.py. Options shared by commands are
 built once in common.py. The dispatcher lives in evolve, the only layer that may import all three."""
 
@@ -13,7 +13,7 @@ import tempfile
 import time
 import traceback
 
-from evolve.cli import decode, evolve_cmd, migrate, plot, render, report, select_champion, sweep
+from evolve.cli import decode, evolve_cmd, explain, migrate, plot, render, report, select_champion, sweep
 from evolve.cli.common import (
     ClosedStdoutTolerant,
     add_import_file,
@@ -37,6 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     sw = sweep.register(sub)
     rp = report.register(sub)
     sc = select_champion.register(sub)
+    explain.register(sub)
     r = render.register(sub)
     plot.register(sub)
     migrate.register(sub)

@@ -19,14 +19,14 @@ def register(sub) -> argparse.ArgumentParser:
     sc.add_argument("--episodes", type=positive(int), help="perturbed episodes per candidate (default: "
                                                            "the run's, else auto)")
     sc.add_argument("--statistic", help="mean, min, median or qNN (default mean)")
-    sc.add_argument("--tolerance", type=float, help="a candidate holds if its score is at least its "
+    sc.add_argument("--tolerance", type=float, help="a candidate passes if its score is at least its "
                                                     "nominal return less TOLERANCE x it (default 0.05)")
     sc.add_argument("--rank", choices=("min", "score", "pooled"),
-                    help="among candidates that hold: the best min(score, nominal return), the best "
+                    help="among candidates that pass the test: the best min(score, nominal return), the best "
                          "score, or the best mean of score and confirmation by their episodes "
                          "(default min)")
     sc.add_argument("--confirm", type=int, help="fresh perturbed episodes per candidate that judge the "
-                                                "hold again (default 0: off)")
+                                                "test again (default 0: off)")
     sc.add_argument("--holdout", type=positive(int), help="fresh perturbed episodes of the champion alone "
                                                           "that give its fitness (default: as --episodes)")
     add_workers(sc, 1, "rollout processes (default 1)")

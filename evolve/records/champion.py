@@ -68,6 +68,12 @@ def read_champion(run_dir: str | Path,
 
         read_run_config(RunDir(run_dir))  # its task registered, every value of config.yaml checked
     champ = RunDir(run_dir).champion() if cell is None else elite_record(run_dir, cell)  # SgrError: not JSON
+    return check_record(champ, f)
+
+
+def check_record(champ: object, f: Path) -> tuple[dict, np.ndarray, DenseController | GraphController]:
+    """A champion record (champion.json's, or one elite's of elites.json, as read from file `f`),
+    its body and its controller, checked as `read_champion` says; SgrError naming `f` and the key."""
     if not isinstance(champ, dict):
         raise SgrError(f"{f}: a champion must be a JSON object with keys {', '.join(KEYS)}")
     missing = [k for k in KEYS if k not in champ]

@@ -134,6 +134,57 @@ class _SameController:
         return np.stack([self.ctrl.act(o[:self.n_obs]) for o in obs])
 
 
+class _EachController:
+    """A batched policy of one controller per world (each world its own body)."""
+
+    def __init__(self, ctrls: list, n_obs: list[int], n_act: int):
+        self.ctrls, self.n_obs, self.n_act = ctrls, n_obs, n_act
+
+    def act(self, obs: np.ndarray) -> np.ndarray:
+        """One forward pass per world, actions padded to the batch's widest body."""
+        out = np.zeros((len(obs), self.n_act))
+        for i, (c, n) in enumerate(zip(self.ctrls, self.n_obs, strict=True)):
+            a = c.act(obs[i, :n])
+            out[i, :len(a)] = a
+        return out
+
+
+def record_elite_nominals(run_dir: str | Path) -> int:
+    """Write into a map-elites run's elites.json each elite's `nominal`, the return of its exact,
+    noise-free episode (what `load_champion(run, cell=...).rollout()` gives), for the elites that
+    lack it, all simulated as one batch per precision; returns how many were added. Why: an elite's
+    fitness is a score under the run's noise, and its exact return is the other half of its
+    verdict."""
+    from evolve.records.champion import check_record
+    from evolve.records.elites import read_elites
+    from evolve.records.files import atomic_write, record_json
+    from evolve.records.rundir import ELITES_FILE
+
+    f = Path(run_dir) / ELITES_FILE
+    data = read_elites(run_dir)
+    todo = [e for e in data["elites"] if not isinstance(e["champion"].get("nominal"), int | float)]
+    by_precision: dict[str, list] = {}
+    for e in todo:
+        champ, body, ctrl = check_record(e["champion"], f)
+        by_precision.setdefault(precision_of(champ), []).append((e, champ, body, ctrl))
+    for precision, group in by_precision.items():
+        by_task: dict[tuple, list] = {}
+        for item in group:
+            by_task.setdefault((item[1]["task"], item[1]["episode_steps"]), []).append(item)
+        for (task, steps), items in by_task.items():
+            bodies = [b for _, _, b, _ in items]
+            n_obs = [obs_dim(task, build_body(b).n_points) for b in bodies]
+            returns = rollout_policy(
+                task, bodies, lambda env, items=items, n_obs=n_obs: _EachController(
+                    [c for *_, c in items], n_obs, env.sim.max_actuators),
+                steps, precision=precision)
+            for (e, *_), r in zip(items, returns, strict=True):
+                e["champion"]["nominal"] = float(r)
+    if todo:
+        atomic_write(f, record_json(data).encode(), inside=Path(run_dir))
+    return len(todo)
+
+
 def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndarray:
     """Returns of len(noise.keys) episodes of the champion, each perturbed by its row of `noise`,
     as one batch through evolution's own episode loop."""
@@ -179,6 +230,33 @@ def replay_champion(run_dir: str | Path, replays: int = 0, eps: float = 0.0, see
     return _replay(champ, body, ctrl, _replay_noise(replays, eps, kind, offset, seed))
 
 
+def headline(run_dir: str | Path, cell=None) -> verdict_rule.Verdict:
+    """The champion's one figure (evolve/records/verdict.py, "One headline per champion"),
+    simulated from champion.json alone: for a champion chosen by final selection, its held-out
+    episodes again (the episodes of its `fitness`, whose mean this equals when the run's statistic
+    is the mean) beside its exact episode; otherwise `verdict.REPLAYS` replays under the run's noise
+    (uniform ±`verdict.EPS` for a nominal run) beside its exact episode. `cell`: a map-elites
+    run's elite of that cell instead."""
+    champ, body, ctrl = read_champion(run_dir, cell)
+    evaluation = champ.get("evaluation") or {}
+    robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
+    exact = EpisodeNoise(Perturbation(), np.zeros(1, np.uint64), np.zeros(1, bool))
+    if robust is not None and str(evaluation.get("tag", "")).startswith("final-holdout/") \
+            and "tags" not in evaluation:
+        held = robust.noise(evaluation["seed"], [evaluation["tag"]])
+        noise = EpisodeNoise(held.perturbation, np.concatenate([exact.keys, held.keys]),
+                             np.concatenate([exact.on, held.on]))
+        returns = _replay(champ, body, ctrl, noise)
+        return verdict_rule.from_returns(returns, robust.action_scale, robust.action_noise, robust.offset,
+                                         verdict_rule.HELD_OUT)
+    if robust is None:
+        kind, eps, offset = "uniform", verdict_rule.EPS, 0.0
+    else:
+        kind, eps, offset = robust.action_noise, robust.action_scale, robust.offset
+    returns = _replay(champ, body, ctrl, _replay_noise(verdict_rule.REPLAYS, eps, kind, offset, 0))
+    return verdict_rule.from_returns(returns, eps, kind, offset)
+
+
 def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,
           eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
     """The verdict (evolve/records/verdict.py) on a run folder's champion.json: its robot replayed
@@ -219,20 +297,40 @@ class Champion:
     def nominal(self) -> float | None:
         """The return of its exact, noise-free episode as evolution computed it (what `rollout()`
         gives again): its fitness for a run scored by that episode, the recorded nominal return
-        for a champion chosen by final selection (whose fitness is its score under noise); None
-        for a champion scored under noise alone (`verdict()` replays it)."""
+        for a champion chosen by final selection (whose fitness is its score under noise); for a
+        champion scored under noise alone, its headline's exact episode, or a map-elites elite's
+        recorded `nominal` (`record_elite_nominals`); None for a record without them (`verdict()`
+        replays it)."""
         if (self.record.get("evaluation") or {}).get("robust") is None:
             return self.fitness
         selection = self.record.get("selection")
-        return None if selection is None else float(selection["nominal"])
+        if selection is not None:
+            return float(selection["nominal"])
+        if isinstance(self.record.get("nominal"), int | float):  # a map-elites elite's, recorded at the end
+            return float(self.record["nominal"])
+        h = self.headline
+        return None if h is None else h.nominal
+
+    @property
+    def headline(self) -> verdict_rule.Verdict | None:
+        """Its one figure as its run recorded it (champion.json's `headline`: the mean return of
+        held-out episodes under the run's noise, their sd, and the verdict; evolve/records/verdict.py);
+        None for a record written before headlines (`headline(run_dir)` simulates it)."""
+        return verdict_rule.from_headline(self.record.get("headline"))
 
     def __repr__(self) -> str:
         from tsim.body import describe_body
 
-        nominal = self.nominal
+        h = self.headline
+        if h is not None:  # the headline, as the console and the report show it
+            figure = (f"return={h.noisy_mean:.4g}±{h.sd:.2g} over {h.replays} {h.episodes} "
+                      f"({h.noise}), {h.label}, exact={h.nominal:.4g}")
+        else:
+            nominal = self.nominal
+            figure = (f"fitness={self.fitness:.6g}"
+                      + ("" if nominal is None else f", nominal={nominal:.6g}"))
         return (f"Champion(task={self.task!r}, {describe_body(self.body)}, {self.controller!r}, "
-                f"episode_steps={self.episode_steps}, fitness={self.fitness:.6g}"
-                + (f", nominal={nominal:.6g}" if nominal is not None else "")
+                f"episode_steps={self.episode_steps}, {figure}"
                 + (f", cell={self.cell}" if self.cell is not None else "") + ")")
 
     def policy(self, obs: np.ndarray) -> np.ndarray:

@@ -38,18 +38,19 @@ def body_image(body: np.ndarray, cell: int = 20) -> np.ndarray:
 
 def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Path]) -> list[dict]:
     """Per (method, task) (the report's groups), the summary row and run directory of the seed with
-    the best recorded champion fitness (ties: the lower seed), sorted by method and task; `runs`
-    by the rows' `run` names (a list: by folder name)."""
+    the best champion figure (its headline, else its recorded fitness; ties: the lower seed),
+    sorted by method and task; `runs` by the rows' `run` names (a list: by folder name)."""
     by_name = dict(runs) if isinstance(runs, Mapping) else {d.name: d for d in runs}
     best: dict[tuple[str, str], dict] = {}
     for r in rows:
-        f = r.get("champion_fitness")
+        f = r.get("headline", r.get("champion_fitness"))
         d = by_name.get(r["run"])
         if f is None or not math.isfinite(f) or d is None or not (d / "champion.json").is_file():
             continue
         key = (r["method"], r["task"])
-        if key not in best or (f, -int(r["seed"] or 0)) > (best[key]["champion_fitness"],
-                                                             -int(best[key]["seed"] or 0)):
+        held = best.get(key)
+        if held is None or (f, -int(r["seed"] or 0)) > (held.get("headline", held["champion_fitness"]),
+                                                        -int(held["seed"] or 0)):
             best[key] = r
     return [{"row": best[k], "run": by_name[best[k]["run"]]} for k in sorted(best)]
 
@@ -157,7 +158,7 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Seq
                 f"<figure><img alt='{name} episode' src='{_data_uri(e['gif'], 'image/gif')}'>"
                 f"<img alt='{name} body' class='body' src='{_data_uri(e['body'], 'image/png')}'>"
                 f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
-                f"{r['seed']} · fitness {r['champion_fitness']:.3f}{_verdict_caption(r)}"
+                f"{r['seed']} · {_figure_caption(r)}{_verdict_caption(r)}"
                 f"{_body_caption(r)}</figcaption></figure>")
         parts.append("</div>")
     parts += list(extra)
@@ -177,6 +178,13 @@ def _body_caption(row: dict) -> str:
     if "body_diversity" in row:
         parts.append(f"final diversity {row['body_diversity']:.3f}")
     return "<br>" + html.escape(" · ".join(parts)) if parts else ""
+
+
+def _figure_caption(row: dict) -> str:
+    """"return 0.412" (its headline, evolve/records/verdict.py) or "fitness 0.412" (a record without one)."""
+    if "headline" in row:
+        return f"return {row['headline']:.3f}"
+    return f"fitness {row['champion_fitness']:.3f}"
 
 
 def _verdict_caption(row: dict) -> str:

@@ -72,7 +72,8 @@ def authors_not_comparable(task: str, episode_steps: list) -> str | None:
 
 
 SUMMARY_COLUMNS = ["method", "task", "seed", "generations", "best_gen1", "best_gen30", "best_gen100",
-                   "best_final", "champion_fitness", "replay", "nominal", "s_per_gen", "run"]
+                   "best_final", "champion_fitness", "headline", "headline_sd", "headline_verdict", "replay",
+                   "nominal", "s_per_gen", "run"]
 NOISE_LEVELS = (1e-9, 1e-3)  # sgr report's default: rounding, and a physical actuator's error
 NOISE_STATS = ("mean", "sd", "min", "ratio")  # ratio: mean / nominal (NaN unless nominal > 0)
 
@@ -166,6 +167,9 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         champ = champions[d]
         if champ is not None:
             row["champion_fitness"] = float(champ["fitness"])
+            h = verdict_rule.from_headline(champ.get("headline"))
+            if h is not None:  # the one figure (evolve/records/verdict.py), as the run's end recorded it
+                row.update(headline=h.noisy_mean, headline_sd=h.sd, headline_verdict=h.label)
             row.update(champion_body_measures(champ))
         diversity = cols.get("body_diversity", np.zeros(0))  # older runs: no column
         if len(diversity) and math.isfinite(diversity[-1]):
@@ -176,7 +180,7 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         if robustness and (d / "champion.json").is_file():
             row.update(champion_robustness(d, replays, levels))
             if verdict_rule.EPS in levels:  # the gallery's caption says it too
-                row["verdict"] = _verdict(row).label
+                row["verdict"] = row.get("headline_verdict") or _verdict(row).label
         rows.append(row)
     return rows
 
@@ -237,7 +241,10 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
     levels = _levels(rows)
     out = io.StringIO()
     out.write("# Results\n\nBest fitness found up to generation g (mean ± sd over seeds); "
-              "*authors*: the SGR authors' released logs. *champion*: its recorded fitness; "
+              "*authors*: the SGR authors' released logs. *champion*: its headline, the mean return "
+              "of episodes that took no part in choosing it, under the run's noise (champion.json's "
+              "`headline`; `sgr explain RUN` says what each figure is; a record without one: its recorded "
+              "fitness); *hold*: how many champions' verdicts say holds; "
               "*nominal*: its return replayed without noise (the same, unless the run was scored "
               "by robust evaluation); *±eps*: the champion replayed with uniform(±eps) added to "
               "every action (mean over replays, then mean ± sd over seeds; *worst*: the worst "
@@ -245,7 +252,7 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
     if any(method.endswith("robust") for method, _ in groups):
         out.write(" For runs scored by robust evaluation (*... robust*) the generation columns are "
                   "the best of noisy scores, which selection biases upward; their *champion* is the "
-                  "recorded fitness of the champion file, scored afresh where the run chose it by "
+                  "headline of the champion file, scored afresh where the run chose it by "
                   "final selection (docs/EVOLVE.md).")
     out.write("\n\n")
     judged = verdict_rule.EPS in levels  # the verdict's column: how many champions hold
@@ -268,7 +275,7 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
             shown = [x if g <= max(gens) else None for x, g in zip(authors, CHECKPOINTS, strict=False)]
             a = " / ".join(_fmt(x) for x in [*shown, None])
         rob = [r for r in rs if "nominal" in r]
-        cells = [_ms([r["champion_fitness"] for r in rob]) if rob else "-",
+        cells = [_ms([champion_figure(r) for r in rob]) if rob else "-",
                  _ms([r["nominal"] for r in rob]) if rob else "-"]
         for e in levels:
             have = [r for r in rob if noise_column(e, "mean") in r]
@@ -276,7 +283,7 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
             cells.append(f"{min(r[noise_column(e, 'min')] for r in have):.2f}" if have else "-")
         if judged:
             have = [r for r in rob if noise_column(verdict_rule.EPS, "mean") in r]
-            cells.append(f"{sum(_verdict(r).holds for r in have)} of {len(have)}" if have else "-")
+            cells.append(f"{sum(_holds(r) for r in have)} of {len(have)}" if have else "-")
         out.write(f"| {method} | {task} | {_runs_and_seeds(rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
                   + "".join(_ms([r[f"best_gen{g}"] for r in rs]) + " | " for g in gen_cols)
@@ -301,7 +308,7 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
                   "the mean as a share of the nominal return and of the champion's recorded fitness "
                   "(- where that is not positive).")
         if judged:
-            held = sum(_verdict(r).holds for r in rob)
+            held = sum(_holds(r) for r in rob)
             out.write(f" **{held} of {len(rob)} champions hold.** Verdict, {_rule(rob)}.")
         out.write("\n\n| run | champion | nominal |" + "".join(f" ±{e:g} mean / worst | ±{e:g} share of "
                                                               f"nominal / of champion |" for e in levels)
@@ -315,12 +322,12 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
             cells = []
             for e in levels:
                 ratio = r.get(noise_column(e, "ratio"), math.nan)
-                mean, champ = r[noise_column(e, "mean")], r["champion_fitness"]
+                mean, champ = r[noise_column(e, "mean")], champion_figure(r)
                 cells += [f"{mean:.3f} / {r[noise_column(e, 'min')]:.3f}",
                           f"{pct(ratio)} / {pct(mean / champ if champ > 0 else math.nan)}"]
             if judged:
-                cells.append(f"**{_verdict(r).label}**")
-            out.write(f"| {r['run']} | {r['champion_fitness']:.3f} | {r['nominal']:.3f} | "
+                cells.append(f"**{'holds' if _holds(r) else 'knife-edge'}**")
+            out.write(f"| {r['run']} | {champion_figure(r):.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
     out.write(bodies_markdown(rows))
     out.write(backends_markdown(rows))
@@ -448,8 +455,8 @@ def method_tests(rows: list[dict]) -> list[dict]:
             both = ra + rb
             on = ("champion" if all(math.isfinite(r.get("champion_fitness", math.nan)) for r in both)
                   else "end")
-            key = "champion_fitness" if on == "champion" else "best_final"
-            test = mann_whitney([r[key] for r in ra], [r[key] for r in rb])
+            values = champion_figure if on == "champion" else (lambda r: r["best_final"])
+            test = mann_whitney([values(r) for r in ra], [values(r) for r in rb])
             out.append({"task": others[0], "a": la, "b": lb, "on": on, "n": (len(ra), len(rb)),
                         "test": test})
     return out
@@ -474,6 +481,20 @@ def tests_markdown(rows: list[dict]) -> str:
         out.write(f"| {t['task']} | {t['a']} | {t['b']} | {t['on']} | {t['n'][0]} / {t['n'][1]} | "
                   + " | ".join(cells) + " |\n")
     return out.getvalue()
+
+
+def champion_figure(row: dict) -> float:
+    """A summary row's champion figure: its headline (the held-out mean return under the run's
+    noise, evolve/records/verdict.py), or for a record without one its recorded fitness."""
+    return row.get("headline", row["champion_fitness"])
+
+
+def _holds(row: dict) -> bool:
+    """A summary row's verdict: its champion's recorded headline verdict, else the report's own
+    replays at the rule's noise level judged by the rule."""
+    if row.get("headline_verdict"):
+        return row["headline_verdict"] == "holds"
+    return _verdict(row).holds
 
 
 def _verdict(row: dict) -> verdict_rule.Verdict:

@@ -238,6 +238,8 @@ class Experiment:
                     if stop.is_set() and search.generation < cfg.generations:
                         raise Interrupted(stop.signum)
                 self._ran_to_end = True
+                if search.best is not None:  # the champion is final: its one figure goes in its record
+                    record_end_figures(self.run)
             except Interrupted as exc:
                 if exc.at_once and finished is not None:
                     self._save_finished(*finished)
@@ -319,26 +321,49 @@ class Experiment:
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)
         if self.search.best is not None and not self.quiet:
-            import numpy as np
+            print("\n".join(champion_lines(self.run)), flush=True)
 
-            from evolve.methods.body_measures import describe, measures
-            from evolve.records.replay import judge
 
-            best = self.run.champion()
-            ev = best.get("evaluation") or {}
-            held = ev.get("tag", "").startswith("final-holdout/")  # final selection's held-out figure
-            how = (f"the {ev['robust']['statistic']} of {ev['robust']['episodes']} held-out perturbed "
-                   "episodes, " if held else "")
-            print(f"champion: fitness {best['fitness']:.3f} ({how}generation {best['generation']}) -> "
-                  f"{self.run.path / 'champion.json'}; plots and GIF in {self.run.path}")
-            if best.get("body") is not None:  # the verdict's line stays the last
-                print(f"champion body: {describe(measures(np.asarray(best['body'])))}")
-            verdict = judge(self.run.path)
-            if (self.run.path / "champion.gif").exists():
-                print(f"champion.gif: its typical episode, the median of {verdict.replays} perturbed "
-                      f"replays (replay number {verdict.median_replay}, return {verdict.median:.3f}); "
-                      f"the exact episode: sgr render {self.run.path} --exact")
-            print(f"champion {verdict.line()}", flush=True)
+def champion_lines(run: RunDir) -> list[str]:
+    """The console's lines on a finished run's champion: where it is, its body, its GIF, and last
+    its headline (champion.json's `headline`: the held-out mean return under the run's noise, sd,
+    worst, verdict and exact episode), with a line on why final selection's test and the verdict
+    differ where they do (evolve/records/verdict.py, "One headline per champion")."""
+    import numpy as np
+
+    from evolve.methods.body_measures import describe, measures
+    from evolve.records import verdict as verdict_rule
+    from evolve.records.selection import passes, selection_and_verdict
+
+    best = run.champion()
+    h = verdict_rule.from_headline(best.get("headline"))
+    key = (best.get("genome") or {}).get("key", "?")
+    lines = [f"champion: genome {key} of generation {best['generation']} -> "
+             f"{run.path / 'champion.json'}; plots and GIF in {run.path}; what each number is: "
+             f"sgr explain {run.path}"]
+    if best.get("body") is not None:
+        lines.append(f"champion body: {describe(measures(np.asarray(best['body'])))}")
+    if (run.path / "champion.gif").exists():
+        lines.append(f"champion.gif: a typical perturbed episode (the median of {verdict_rule.REPLAYS} "
+                     f"replays); the exact episode: sgr render {run.path} --exact")
+    sel = best.get("selection")
+    if h is not None and sel is not None and passes(sel) != h.holds:
+        lines.append(selection_and_verdict(sel, h))
+    if h is not None:
+        lines.append(f"champion {h.line()}")
+    return lines
+
+
+def record_end_figures(run: RunDir) -> None:
+    """The figures a finished run's records carry (each simulated once, kept when there): its
+    champion's headline in champion.json (`record_headline`) and, for a map-elites run, each
+    elite's exact return in elites.json (`record_elite_nominals`)."""
+    from evolve.records.replay import record_elite_nominals
+    from evolve.runs.final_selection import record_headline
+
+    record_headline(run)
+    if (run.path / ELITES_FILE).is_file():
+        record_elite_nominals(run.path)
 
 
 def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
@@ -350,6 +375,8 @@ def write_end_files(run: RunDir, cfg: RunConfig, champion: bool = True) -> None:
     from evolve.report.plots import plot_run
 
     run.begin_end_files()
+    if champion:  # (a run killed before run_all recorded them)
+        record_end_figures(run)
     plot_run(run.path, run.path / "fitness.png")
     if (run.path / ELITES_FILE).is_file():  # a map-elites run's archive
         from evolve.report.archive import plot_archive

@@ -1,6 +1,6 @@
 """Choosing a run's champion afresh at its end: among the final elites and the best-ever genome, by
-many new perturbed episodes, keeping only genomes that hold: whose exact episode is not far better
-than their perturbed ones.
+many new perturbed episodes, keeping only genomes that pass its test: whose exact episode is not far
+better than their perturbed ones.
 
 Why: a run's best-ever record is the maximum of thousands of noisy scores, so under robust
 evaluation it keeps a lucky one (docs/RESULTS.md, "Champions that hold": Walker-v0 champions kept
@@ -12,22 +12,23 @@ sees it (its exact episode, e.g. in gymnasium): the best worse-of-the-two wins.
 
 The rule (`choose`): every candidate gets a score (the `statistic` of K episodes perturbed as the
 run's `robust` key says, uniform(+-1e-3) on a nominal run; episode k of genome g is drawn from the
-tag "final/<g>") and its nominal return; a candidate holds when its score is at least its nominal
-return minus `tolerance` x |nominal return|. The champion is the candidate that holds with the
+tag "final/<g>") and its nominal return; a candidate *passes* when its score is at least its nominal
+return minus `tolerance` x |nominal return| (`verdict.clears`, the verdict's comparison at the
+selection's own tolerance). The champion is the candidate that passes with the
 highest min(score, nominal return) (`rank: min`; `rank: score`, the highest score; `rank:
 pooled`, the highest mean of the score and the confirmation below, weighted by their episodes), or
-the highest of all when none holds (champion.json says so). Its `fitness` is the held-out
+the highest of all when none passes (champion.json says so). Its `fitness` is the held-out
 score below.
 Why `pooled` in the packaged configs: a chaotic gait's exact episode is one draw from the noise's
 spread, so `min` mixes a one-episode estimate into the choice; on the robust-fast sweep `pooled`
 chose champions that return more under the noise they were evolved for (docs/RESULTS.md), at the
 price of exact episodes that may return less.
 
-`confirm: N` (0: off) judges the hold on episodes that did not choose: every candidate is scored
-again by N fresh perturbed episodes (tag "final-confirm/<g>"), and a candidate holds only when both
+`confirm: N` (0: off) judges the test on episodes that did not choose: every candidate is scored
+again by N fresh perturbed episodes (tag "final-confirm/<g>"), and a candidate passes only when both
 its score and this confirmation clear the tolerance. Why: the champion is the maximum over
-candidates of noisy scores, so its own score is biased upward (the winner's curse) and the hold
-test passes on luck. On the robust-fast sweep (docs/RESULTS.md) 4 of the 12 champions chosen
+candidates of noisy scores, so its own score is biased upward (the winner's curse) and the test
+passes on luck. On the robust-fast sweep (docs/RESULTS.md) 4 of the 12 champions chosen
 without it kept under 90 % in 20 replays on other noise; 1 of 12 with it.
 
 The headline (`holdout`): the champion's `fitness` (the figure the console, champion.json and `sgr
@@ -36,7 +37,9 @@ report` show) is the `statistic` of `holdout` fresh perturbed episodes of the ch
 reproduces it from champion.json. Why: with `rank: pooled` the confirmation also ranks, so it
 carries the winner's curse too: on the bigger-bodies study's Climber-v2 champions the recorded
 confirmation overstated 20 fresh noisy replays by 19-67 % on 6 of 9. The score and the
-confirmation stay in `selection` (`score`, `confirmed`).
+confirmation stay in `selection` (`score`, `confirmed`). champion.json's `headline` (`record_headline`)
+is these held-out episodes again with their sd and the verdict (evolve/records/verdict.py): the one
+figure every place shows.
 
 How many episodes (`sized`): `candidates`, `episodes`, `confirm` and `holdout` may be `auto` (the
 default of all but `confirm`, whose default 0 is off). An explicit number is used as it is. The
@@ -76,8 +79,10 @@ from evolve.config import (
     not_for,
     run_episodes,
 )
+from evolve.records import verdict as verdict_rule
 from evolve.records.champion import best_ever_record, champion_record
 from evolve.records.files import atomic_write, record_json
+from evolve.records.selection import describe, explain, passes  # noqa: F401  (the console's words)
 from tsim.errors import SgrError
 
 BEST_EVER_FILE = "champion-best-ever.json"
@@ -100,17 +105,13 @@ def candidates(search, n: int) -> list[tuple[int, object]]:
 def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
            rank: str = "min", confirmed: np.ndarray | None = None,
            weights: tuple[int, int] = (1, 1)) -> tuple[int, np.ndarray]:
-    """The chosen candidate's index and which candidates hold (module docstring); with `confirmed`
-    (the confirmation's scores) a candidate holds when both its score and its confirmation do.
+    """The chosen candidate's index and which candidates pass (module docstring); with `confirmed`
+    (the confirmation's scores) a candidate passes when both its score and its confirmation do.
     `rank: pooled` ranks by the score and the confirmation averaged with `weights` (their episode
     counts): every perturbed episode a candidate got."""
-    def clears(x: np.ndarray) -> np.ndarray:
-        with np.errstate(invalid="ignore"):
-            return (x >= nominal - tolerance * np.abs(nominal)) & np.isfinite(x)
-
-    holds = clears(scores) & np.isfinite(nominal)
+    holds = verdict_rule.clears(scores, nominal, tolerance) & np.isfinite(nominal)
     if confirmed is not None:
-        holds &= clears(confirmed)
+        holds &= verdict_rule.clears(confirmed, nominal, tolerance)
     pool = np.flatnonzero(holds) if holds.any() else np.flatnonzero(np.isfinite(scores))
     if len(pool) == 0:
         raise SgrError("no candidate has a finite score")
@@ -165,13 +166,13 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     champ = champion_record(cfg, problem, genome, phenotypes[i], fit, search.generation,
                             {"robust": fit_robust.to_json(), "seed": cfg.seed, "tag": fit_tag})
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
-             "score": float(s), "nominal": float(n), "holds": bool(h)}
+             "score": float(s), "nominal": float(n), "passes": bool(h)}
             for (k, g), s, n, h in zip(cands, scores, nominal, holds, strict=True)]
     if confirmed is not None:
         for row, c in zip(rows, confirmed, strict=True):
             row["confirmed"] = float(c)
     champ["selection"] = {
-        **settings.to_json(), "holds": bool(holds[i]), "nominal": float(nominal[i]),
+        **settings.to_json(), "passes": bool(holds[i]), "nominal": float(nominal[i]),
         "score": float(scores[i]),
         **({"confirmed": float(confirmed[i])} if confirmed is not None else {}),
         "sized": {"share": SHARE, "run_episodes": run_episodes(cfg),
@@ -181,89 +182,17 @@ def select_champion(exp, settings: FinalSelection) -> dict:
         "candidates": rows}
     atomic_write(exp.run.path / BEST_EVER_FILE, record_json(best_ever).encode(), inside=exp.run.path)
     exp.run.write_champion(champ)
+    return record_headline(exp.run)
+
+
+def record_headline(run) -> dict:
+    """champion.json of `run` (a RunDir) with its `headline` (evolve/records/verdict.py: the held-out
+    mean return, its sd and the verdict), simulated from the file and written into it; the record
+    as it is when it already has one. Returns the record."""
+    from evolve.records.replay import headline
+
+    champ = run.champion()
+    if verdict_rule.from_headline(champ.get("headline")) is None:
+        champ["headline"] = headline(run.path).to_headline()
+        run.write_champion(champ)
     return champ
-
-
-def describe(champ: dict) -> str:
-    """One line on a chosen champion (the console's and `sgr select-champion`'s): what chose it
-    and what its fitness is."""
-    sel = champ["selection"]
-    confirm = sel.get("confirm", 0)
-    n = len(sel["candidates"])
-    if "holdout" in sel:  # the fitness is a held-out score (older records: the score or confirmation)
-        confirmed = f", confirmed {sel['confirmed']:.4f}" if "confirmed" in sel else ""
-        scored = (f"chosen by {sel['episodes']}{f' + {confirm}' if confirm else ''} perturbed episodes "
-                  f"each (score {sel['score']:.4f}{confirmed}, nominal {sel['nominal']:.4f}); fitness "
-                  f"{champ['fitness']:.4f}: the {sel['statistic']} of {sel['holdout']} fresh episodes "
-                  "that took no part in choosing it")
-    else:
-        scored = (f"score {sel.get('score', champ['fitness']):.4f} ({sel['statistic']} of "
-                  f"{sel['episodes']} perturbed episodes)")
-        if confirm:
-            scored += f", confirmed {champ['fitness']:.4f} by {confirm} fresh ones"
-        scored += f", nominal {sel['nominal']:.4f}"
-    sized = sel.get("sized") or {}
-    cost = (f"; {sized['episodes']} episodes in all, sized for the run's {sized['run_episodes']}"
-            if sized.get("auto") else "")
-    return (f"champion genome {champ['genome']['key']} of {n} candidates, {scored}"
-            f"{'' if sel['holds'] else ' (no candidate held: each lost over tolerance x its nominal return)'}"
-            f"{cost}; best-ever {sel['best_ever']['fitness']:.4f} kept in {sel['best_ever']['file']}")
-
-
-def _rank_key(sel: dict, row: dict) -> float:
-    """A candidate's value by the selection's rank (`choose`)."""
-    if sel.get("rank") == "min":
-        return row["score"] if math.isnan(row["nominal"]) else min(row["score"], row["nominal"])
-    if sel.get("rank") == "pooled" and "confirmed" in row:
-        w, c = sel["episodes"], sel["confirm"]
-        return (w * row["score"] + c * row["confirmed"]) / (w + c)
-    return row["score"]
-
-
-def _rank_name(sel: dict) -> str:
-    if sel.get("rank") == "min":
-        return "the worse of score and exact return"
-    if sel.get("rank") == "pooled" and sel.get("confirm"):
-        return "the mean of all its perturbed episodes"
-    return "score"
-
-
-def _misses(sel: dict, row: dict) -> str:
-    """Why a candidate does not hold, in words: which noisy figure falls outside the tolerance."""
-    tol, nominal = sel["tolerance"], row["nominal"]
-    floor = nominal - tol * abs(nominal)
-    for name, value in (("", row["score"]), (" (its confirmation)", row.get("confirmed"))):
-        if value is not None and not (value >= floor):
-            return (f"{value:.4g} under noise{name} is outside the {100 * tol:g} % tolerance of its "
-                    f"noise-free {nominal:.4g}")
-    return f"its noise-free return {nominal} is not finite"
-
-
-def explain(champ: dict) -> str:
-    """One line on why the champion is the one it is: whether it holds and ranks first, and what
-    became of the best-ever genome (dropped for not holding, or ranked below)."""
-    sel = champ["selection"]
-    rows = {r["key"]: r for r in sel["candidates"]}
-    key = champ["genome"]["key"]
-    me = rows[key]
-    held = [r for r in sel["candidates"] if r["holds"]]
-    how = _rank_name(sel)
-    if sel["holds"]:
-        why = (f"it holds and ranks first among the {len(held)} of {len(rows)} candidates that hold by "
-               f"{how} ({_rank_key(sel, me):.4g})")
-    else:
-        why = (f"no candidate holds, so it ranks first of all {len(rows)} by {how} "
-               f"({_rank_key(sel, me):.4g})")
-    b = sel["best_ever"]
-    if b["key"] == key:
-        return f"why: {why}; it is the best-ever genome (recorded {b['fitness']:.4g})"
-    row = rows.get(b["key"])
-    if row is None:
-        return f"why: {why}; best-ever {b['fitness']:.4g} was not a candidate"
-    if sel["holds"] and not row["holds"]:
-        fate = f"best-ever {b['fitness']:.4g} dropped: {_misses(sel, row)}"
-    else:
-        fate = f"best-ever {b['fitness']:.4g} ranks below: {_rank_key(sel, row):.4g} by {how}"
-        if not row["holds"]:
-            fate += f", and does not hold: {_misses(sel, row)}"
-    return f"why: {why}; {fate}"

@@ -6,7 +6,6 @@ scale with the run's length (at most a fifth of the quick run's) and explicit co
 from __future__ import annotations
 
 import json
-import re
 import shutil
 import statistics
 from pathlib import Path
@@ -21,7 +20,7 @@ from evolve.records import verdict
 from evolve.records.replay import champion_gif, replay_champion, rescore_champion
 from evolve.records.rundir import RunDir
 from evolve.rollout.robust import episode_keys
-from evolve.runs.final_selection import FinalSelection, explain, run_episodes
+from evolve.runs.final_selection import FinalSelection, explain, passes, run_episodes
 
 ROBUST = {"episodes": 2, "action_noise": "uniform", "action_scale": 1e-2, "offset": 0.0,
           "statistic": "mean"}
@@ -64,7 +63,7 @@ def test_a_best_ever_dropped_for_its_noisy_score_is_explained_with_its_numbers()
     line = explain(record(rows, 3, 9, 2.169))
     assert "best-ever 2.169 dropped: 2.02 under noise is outside the 5 % tolerance of its noise-free 2.16" \
         in line, line
-    assert "it holds and ranks first among the 1 of 2 candidates that hold" in line, line
+    assert "it passes the selection's test and ranks first among the 1 of 2 candidates that pass" in line
 
 
 def test_a_best_ever_that_fails_only_its_confirmation_or_ranks_below_is_explained():
@@ -90,9 +89,12 @@ def test_the_end_of_run_lines_say_what_chose_the_champion_and_why(finished):
     if best["key"] == champ["genome"]["key"]:
         assert "it is the best-ever genome" in why
     else:
-        assert ("dropped" if sel["holds"] and not best["holds"] else "ranks below") in why
-    head = next(x for x in console.splitlines() if x.startswith("champion: fitness "))
-    assert head.startswith(f"champion: fitness {champ['fitness']:.3f} (the mean of 10 held-out perturbed")
+        assert ("dropped" if passes(sel) and not passes(best) else "ranks below") in why
+    head = next(x for x in console.splitlines() if x.startswith("champion: "))
+    assert head.startswith(f"champion: genome {champ['genome']['key']} of generation {champ['generation']}")
+    h = verdict.from_headline(champ["headline"])  # the last line: the one figure, of the held-out episodes
+    assert console.splitlines()[-1] == f"champion {h.line()}"
+    assert h.noisy_mean == champ["fitness"] and h.replays == 10 and h.episodes == "held-out episodes"
 
 
 @pytest.mark.slow
@@ -123,10 +125,10 @@ def test_the_verdict_line_leads_with_the_return_under_noise_and_puts_the_exact_e
     returns = np.array([0.044, 0.30, 0.20, 0.26, 0.28])  # the issue's baffling "592 % of 0.044"
     v = verdict.from_returns(returns)
     sd = statistics.stdev([0.30, 0.20, 0.26, 0.28])
-    assert v.line() == (f"holds: mean return 0.260, sd {sd:.3f}, worst 0.200 under ±0.001 (4 replays); "
-                        "exact episode 0.044")
+    assert v.line() == (f"holds: mean return 0.260, sd {sd:.3f}, worst 0.200 over 4 replays under uniform "
+                        "±0.001; exact episode 0.044")
     edge = verdict.from_returns(np.array([2.0, 1.0, 1.2]))
-    assert edge.line().startswith("knife-edge: mean return 1.100, sd 0.141, worst 1.000 under")
+    assert edge.line().startswith("knife-edge: mean return 1.100, sd 0.141, worst 1.000 over 2 replays under")
     assert edge.line().endswith("exact episode 2.000 (the mean is more than 10 % below it)")
 
 
@@ -144,8 +146,7 @@ def test_champion_gif_shows_the_median_replay_and_the_exact_episode_is_one_flag_
     i = int(np.flatnonzero(noisy == sorted(noisy)[(len(noisy) - 1) // 2])[0]) + 1
     median = champion_gif(run, run / "median.gif", replay=i)
     assert (run / "champion.gif").read_bytes() == median.read_bytes()  # the run's own GIF
-    assert f"champion.gif: its typical episode, the median of 20 perturbed replays (replay number {i}," \
-        in console
+    assert "champion.gif: a typical perturbed episode (the median of 20 replays)" in console
     assert main(["render", str(run), "--exact"]) == 0
     assert f"wrote {run / 'champion-exact.gif'}: the exact episode" in capsys.readouterr().out
     exact = champion_gif(run, run / "exact.gif", replay=0)
@@ -190,12 +191,16 @@ def test_a_bad_auto_count_names_its_key():
 
 
 def test_a_selection_record_from_before_the_holdout_still_describes():
-    """Older champion.json files (fitness = the score or the confirmation, no `holdout`) still read."""
+    """Older champion.json files (fitness = the score or the confirmation, no `holdout`; "holds" for
+    "passes") still read: the line says the figure is the score, and no candidate is said to fail."""
     from evolve.runs.final_selection import describe
 
     rows = [{"key": 3, "score": 1.5, "nominal": 1.5, "holds": True}]
     old = record(rows, 3, 3, 2.0)
-    assert re.search(r"score 1\.5000 \(mean of 32 perturbed episodes\), nominal 1\.5000", describe(old))
+    line = describe(old)
+    assert "genome 3, chosen among 1 candidates by 32 perturbed episodes each" in line, line
+    assert "its figure is its score (the mean of the episodes that chose it)" in line
+    assert "no candidate passed" not in line
 
 
 @pytest.mark.slow

@@ -127,7 +127,7 @@ def test_a_runs_end_names_its_champions_body_before_the_verdict(tmp_path, capsys
     lines = capsys.readouterr().out.splitlines()
     body = np.array(json.loads((tmp_path / "run" / "champion.json").read_text())["body"])
     m = measures(body)
-    named = next(i for i, x in enumerate(lines) if x.startswith("champion: fitness"))
+    named = next(i for i, x in enumerate(lines) if x.startswith("champion: genome"))
     assert lines[-1].startswith(("champion holds", "champion knife-edge"))
     assert lines[named + 1] == (f"champion body: {m['height']}x{m['width']}, symmetry lr "
                                   f"{m['symmetry_lr']:.2f} tb {m['symmetry_tb']:.2f}, irregularity "

@@ -11,6 +11,7 @@ import pytest
 
 from evolve import load_champion
 from evolve.records import verdict
+from evolve.records.replay import headline
 from evolve.report.report import write_report
 
 PAPER = Path(__file__).resolve().parents[3] / "results" / "paper" / "runs"
@@ -32,7 +33,7 @@ def test_load_champion_tells_a_knife_edge_champion_from_one_that_holds():
     assert edge.label == "knife-edge" and edge.share < 0.8 and edge.replays == verdict.REPLAYS
     assert held.label == "holds" and held.share >= 0.9
     assert edge.nominal == load_champion(PAPER / "sgr-Walker-v0-s0").fitness  # a nominal run's return
-    assert edge.line().startswith("knife-edge: ") and "under ±0.001 (20 replays)" in edge.line()
+    assert edge.line().startswith("knife-edge: ") and "over 20 replays under uniform ±0.001" in edge.line()
 
 
 def test_the_report_marks_each_champion_with_the_rule_that_decided(tmp_path):
@@ -54,7 +55,8 @@ def test_the_report_marks_each_champion_with_the_rule_that_decided(tmp_path):
 
 def test_a_short_default_run_ends_with_a_champion_that_holds_and_says_so(tmp_path, capsys, repo_root):
     """`sgr evolve`'s packaged default, shortened: evolved under noise and chosen by final selection,
-    its champion holds, and the run's last console line says so by the rule."""
+    its champion holds, and the run's last console line says so by the rule: its headline, the
+    held-out episodes under the run's noise, recorded in champion.json and shown by its repr."""
     import yaml
 
     from evolve.cli import main
@@ -67,6 +69,8 @@ def test_a_short_default_run_ends_with_a_champion_that_holds_and_says_so(tmp_pat
     assert main(["evolve", "--config", str(tmp_path / "c.yaml"), "--out", str(tmp_path / "run")]) == 0
     last = capsys.readouterr().out.strip().splitlines()[-1]
     champ = load_champion(tmp_path / "run")
-    v = champ.verdict()
-    assert v.holds and last == f"champion {v.line()}"
+    v = headline(tmp_path / "run")  # simulated again from the file
+    assert v.to_headline() == champ.headline.to_headline() and v.holds and last == f"champion {v.line()}"
+    assert v.noisy_mean == champ.fitness and v.episodes == "held-out episodes"
+    assert f"return={v.noisy_mean:.4g}" in repr(champ) and "holds" in repr(champ)
     assert champ.rollout() == champ.nominal  # its exact episode, as final selection recorded it
