@@ -188,11 +188,15 @@ def select_champion(exp, settings: FinalSelection) -> dict:
 def record_headline(run) -> dict:
     """champion.json of `run` (a RunDir) with its `headline` (evolve/records/verdict.py: the held-out
     mean return, its sd and the verdict), simulated from the file and written into it; the record
-    as it is when it already has one. Returns the record."""
+    as it is when it already has one, or when sgr cannot replay it (a registered method's own
+    controller format: `load_champion` cannot either). Returns the record."""
     from evolve.records.replay import headline
 
     champ = run.champion()
     if verdict_rule.from_headline(champ.get("headline")) is None:
-        champ["headline"] = headline(run.path).to_headline()
+        try:
+            champ["headline"] = headline(run.path).to_headline()
+        except SgrError:  # a method of the user's whose controller sgr cannot replay: no headline
+            return champ
         run.write_champion(champ)
     return champ

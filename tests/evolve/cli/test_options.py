@@ -16,7 +16,7 @@ def _actions(parser: argparse.ArgumentParser) -> dict[str, dict[str, argparse.Ac
 def test_every_command_is_registered():
     assert set(_actions(build_parser())) == {"evolve", "sweep", "report", "select-champion", "render", "plot",
                                              "migrate", "convert-checkpoints", "decode", "demo", "validate",
-                                             "bench"}
+                                             "bench", "explain"}
 
 
 def test_noise_and_workers_are_typed_the_same_way_in_every_command():

@@ -1,0 +1,140 @@
+"""Learning, not just stepping: wall time until PPO's deterministic policy for evogym's speed_bot
+on Walker-v0 reaches a return (default 3.96, what evogym's example loop reaches after 100,000
+timesteps), with `sgr.rl.make_vec_env` and N envs in one batch.
+
+Every `--eval-every` PPO updates the deterministic policy plays one episode of evogym's length
+(500 steps) in a one-env batch, as evogym's `examples/ppo/eval.py` does; the clock counts learning
+only (evaluation time is printed apart). The curve (timesteps, learning seconds, return) is
+printed and, with `--out`, written as JSON and drawn as return against wall time.
+
+    python bench/rl_learn.py                                 # the recipe's defaults, 64 envs
+    python bench/rl_learn.py --envs 16 --lr 2.5e-4 --epochs 4 --no-normalize   # evogym's settings
+    python bench/rl_learn.py --out docs/img/rl-learning.json
+
+Needs the rl extra: pip install 'sgr[rl]'.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from bench.rl_bench import SPEED_BOT  # noqa: E402
+
+# the recipe's defaults for many envs (docs/RL.md, "A recipe that learns sooner")
+RECIPE = {"envs": 64, "n_steps": 64, "batch": 1024, "epochs": 8, "lr": 1e-3, "normalize": True,
+          "clip": 0.2, "ent": 0.0, "gamma": 0.99}
+
+
+def deterministic_return(model, norm, steps: int = 500) -> float:
+    """One episode of the deterministic policy in a one-env batch (observations normalised with
+    the learner's statistics, frozen)."""
+    from sgr.rl import SgrVecEnv
+
+    env = SgrVecEnv("Walker-v0", [SPEED_BOT], episode_steps=steps)
+    obs = env.reset()
+    total = 0.0
+    for _ in range(steps):
+        o = norm.normalize_obs(obs) if norm is not None else obs
+        action, _ = model.predict(o, deterministic=True)
+        obs, r, done, _ = env.step(action)
+        total += float(r[0])
+        if done[0]:
+            break
+    return total
+
+
+def learn(a: argparse.Namespace) -> list[dict]:
+    import torch
+    from stable_baselines3 import PPO
+    from stable_baselines3.common.callbacks import BaseCallback
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from sgr.rl import make_vec_env
+
+    torch.manual_seed(a.seed)
+    env = make_vec_env("Walker-v0", n_envs=a.envs, seed=a.seed, env_kwargs={"body": SPEED_BOT})
+    norm = VecNormalize(env, norm_obs=True, norm_reward=True, gamma=a.gamma) if a.normalize else None
+    model = PPO("MlpPolicy", norm or env, n_steps=a.n_steps, batch_size=a.batch, n_epochs=a.epochs,
+                learning_rate=a.lr, gamma=a.gamma, gae_lambda=0.95, clip_range=a.clip, ent_coef=a.ent,
+                vf_coef=0.5, max_grad_norm=0.5, seed=a.seed, device="cpu", verbose=0)
+    curve: list[dict] = []
+    clock = {"learn": 0.0, "eval": 0.0, "t0": time.perf_counter(), "updates": 0}
+
+    class Eval(BaseCallback):
+        def _on_rollout_end(self) -> None:
+            clock["updates"] += 1
+
+        def _on_rollout_start(self) -> None:
+            if clock["updates"] == 0 or clock["updates"] % a.eval_every:
+                return
+            clock["learn"] += time.perf_counter() - clock["t0"]
+            t = time.perf_counter()
+            ret = deterministic_return(self.model, norm)
+            clock["eval"] += time.perf_counter() - t
+            curve.append({"timesteps": int(self.model.num_timesteps), "learn_s": clock["learn"],
+                          "return": ret})
+            print(f"{self.model.num_timesteps:8d} steps  {clock['learn']:7.1f} s learning  return {ret:6.3f}",
+                  flush=True)
+            clock["t0"] = time.perf_counter()
+            if ret >= a.target:
+                clock["reached"] = True
+
+        def _on_step(self) -> bool:
+            return not clock.get("reached")
+
+    model.learn(a.timesteps, callback=Eval())
+    reached = next((c for c in curve if c["return"] >= a.target), None)
+    said = f"{reached['learn_s']:.1f} s of learning, {reached['timesteps']} timesteps" if reached else "no"
+    print(f"# reached {a.target}: {said}; evaluation {clock['eval']:.1f} s")
+    return curve
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    p.add_argument("--envs", type=int, default=RECIPE["envs"])
+    p.add_argument("--n-steps", type=int, default=RECIPE["n_steps"])
+    p.add_argument("--batch", type=int, default=RECIPE["batch"])
+    p.add_argument("--epochs", type=int, default=RECIPE["epochs"])
+    p.add_argument("--lr", type=float, default=RECIPE["lr"])
+    p.add_argument("--clip", type=float, default=RECIPE["clip"])
+    p.add_argument("--ent", type=float, default=RECIPE["ent"])
+    p.add_argument("--gamma", type=float, default=RECIPE["gamma"])
+    p.add_argument("--no-normalize", dest="normalize", action="store_false")
+    p.add_argument("--target", type=float, default=3.96)
+    p.add_argument("--timesteps", type=int, default=1_000_000, help="the most to learn")
+    p.add_argument("--eval-every", type=int, default=2, help="PPO updates between evaluations")
+    p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--out", help="the curve as JSON (and a .png beside it)")
+    a = p.parse_args(argv)
+    from tasks.records import cpu_model
+
+    print(f"# {cpu_model()}; {vars(a)}")
+    curve = learn(a)
+    if a.out:
+        out = Path(a.out)
+        out.write_text(json.dumps({"settings": vars(a), "cpu": cpu_model(), "curve": curve}, indent=1) + "\n")
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+
+        fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
+        ax.plot([c["learn_s"] for c in curve], [c["return"] for c in curve], marker=".",
+                label=f"sgr.rl, {a.envs} envs in one batch")
+        ax.axhline(a.target, color="grey", ls="--", lw=1, label=f"target {a.target}")
+        ax.set_xlabel("seconds of learning")
+        ax.set_ylabel("deterministic return")
+        ax.legend(loc="lower right")
+        fig.tight_layout()
+        fig.savefig(out.with_suffix(".png"))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
