@@ -4,9 +4,10 @@ batch (batch n_steps x N / 4), with evogym's other PPO arguments (examples/ppo/a
 rate 2.5e-4, n_steps 128, 4 epochs, gamma 0.99, GAE 0.95, clip 0.1, entropy 0.01, vf 0.5, grad
 norm 0.5), on Walker-v0 with evogym's speed_bot body.
 
-Each line: envs, timesteps learned, seconds, learn steps/s, and the share of the time spent
-stepping the environment (the rest is SB3: the policy's forward passes, the rollout buffer and
-the updates), which says what limits the figure.
+Each line: envs, timesteps learned, seconds (after a warm-up: the simulator's kernels compile at
+their first launch), learn steps/s, and the share of the time spent stepping the environment
+(the rest is SB3: the policy's forward passes, the rollout buffer and the updates), which says
+what limits the figure.
 
     python bench/rl_bench.py                       # 1, 16, 64, 256 envs
     python bench/rl_bench.py --envs 64 --timesteps 65536
@@ -18,7 +19,6 @@ Needs the rl extra: pip install 'sgr[rl]'.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import time
 from pathlib import Path
@@ -63,17 +63,17 @@ def evogym_loop_env():
 
 def measure(n_envs: int, timesteps: int) -> dict:
     """One PPO learn of `timesteps` on `n_envs` envs; its seconds and the env's share."""
-    import torch
     from stable_baselines3 import PPO
 
     from sgr.rl import make_vec_env
-
-    torch.set_num_threads(max(1, os.cpu_count() or 1))
     if n_envs == 1:
         env, batch, what = evogym_loop_env(), 4, "evogym's loop (SB3 make_vec_env, 1 env) on sgr.evogym"
     else:
         env = make_vec_env("Walker-v0", n_envs=n_envs, seed=0, env_kwargs={"body": SPEED_BOT})
         batch, what = EVOGYM_PPO["n_steps"] * n_envs // 4, "sgr.rl.make_vec_env"
+    env.reset()  # warm: Taichi compiles the simulator's kernels at their first launch, not measured here
+    for _ in range(3):
+        env.step(np.stack([env.action_space.sample() for _ in range(n_envs)]))
     clock = StepClock(env.unwrapped if n_envs > 1 else env)
     model = PPO("MlpPolicy", env, batch_size=batch, seed=0, device="cpu", verbose=0, **EVOGYM_PPO)
     t0 = time.perf_counter()
@@ -88,7 +88,7 @@ def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--envs", type=int, nargs="+", default=[1, 16, 64, 256])
     p.add_argument("--timesteps", type=int, default=0,
-                   help="per measurement (default: two PPO rollouts, 2 x 128 x N; 4096 for 1 env)")
+                   help="per measurement (default: four PPO rollouts, 4 x 128 x N; 4096 for 1 env)")
     p.add_argument("--record", help="write the figures as JSON here")
     a = p.parse_args(argv)
     from tasks.records import cpu_model
@@ -96,7 +96,7 @@ def main(argv: list[str] | None = None) -> int:
     rows = []
     print(f"# {cpu_model()}; Walker-v0, speed_bot, evogym's PPO arguments")
     for n in a.envs:
-        steps = a.timesteps or (4096 if n == 1 else 2 * EVOGYM_PPO["n_steps"] * n)
+        steps = a.timesteps or (4096 if n == 1 else 4 * EVOGYM_PPO["n_steps"] * n)
         r = measure(n, steps)
         rows.append(r)
         print(f"{n:4d} envs  batch {r['batch']:5d}  {r['timesteps']:7d} steps  {r['seconds']:7.1f} s  "
