@@ -335,6 +335,8 @@ BENCH_RECORDS = {
     "pinning_bench.py": ["--robots", "2", "--steps", "3", "--rounds", "1", "--counts", "1",
                          "--evolve-counts", ""],
     "rl_bench.py": ["--envs", "1", "2", "--timesteps", "256"],
+    "rl_learn.py": ["--envs", "2", "--n-steps", "32", "--batch", "32", "--epochs", "1", "--timesteps", "256",
+                    "--eval-every", "1"],
 }
 
 
