@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from bench.rl_bench import SPEED_BOT  # noqa: E402
 
 # the recipe's defaults for many envs (docs/RL.md, "A recipe that learns sooner")
-# (measured here, seeds 0 and 1: 30-34 s of learning, 45-53k timesteps; 64 envs, batch 1024, 8 epochs:
+# (measured here, seeds 0 and 1: 30-39 s of learning, 45-53k timesteps; 64 envs, batch 1024, 8 epochs:
 # 88 s, 197k timesteps; evogym's loop needs 100k timesteps)
 RECIPE = {"envs": 32, "n_steps": 64, "batch": 512, "epochs": 10, "lr": 1e-3, "normalize": True,
           "clip": 0.2, "ent": 0.0, "gamma": 0.99}
