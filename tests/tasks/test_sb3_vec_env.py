@@ -205,3 +205,17 @@ def test_without_stable_baselines3_it_says_what_to_install(monkeypatch):
     monkeypatch.setitem(sys.modules, "stable_baselines3.common.vec_env", None)
     with pytest.raises(SgrError, match=r"needs stable-baselines3 and torch: pip install 'sgr\[rl\]'"):
         make_vec_env("sgr/Walker-v0", env_kwargs={"body": BODY})
+
+
+def test_rgb_array_rendering_gives_each_robots_picture_and_sb3_tiles_them():
+    vec = SgrVecEnv("Walker-v0", [BODY, SMALL], episode_steps=10, render_mode="rgb_array")
+    vec.reset()
+    images = vec.get_images()
+    assert len(images) == 2 and all(im.ndim == 3 and im.shape[2] == 3 and im.dtype == np.uint8
+                                    for im in images)
+    assert not np.array_equal(images[0], images[1])  # two bodies, two pictures
+    tiled = vec.render()  # SB3's own grid of them
+    h, w, _ = images[0].shape
+    assert tiled.ndim == 3 and tiled.shape[0] * tiled.shape[1] >= 2 * h * w
+    assert any(np.array_equal(tiled[r:r + h, c:c + w], images[1]) for r in range(0, tiled.shape[0], h)
+               for c in range(0, tiled.shape[1], w))
