@@ -57,9 +57,9 @@ class FinalSelection:
     candidates: int | str = AUTO  # the top final elites by recorded fitness, plus the best-ever genome
     episodes: int | str = AUTO
     statistic: str = "mean"
-    tolerance: float = 0.05  # holds: score >= nominal return - tolerance x |nominal return|
-    rank: str = "min"  # among those that hold: min(score, nominal return), "score" alone, or "pooled"
-    confirm: int | str = 0  # > 0: the hold judged again on this many fresh episodes
+    tolerance: float = 0.05  # passes: score >= nominal return - tolerance x |nominal return|
+    rank: str = "min"  # among those that pass: min(score, nominal return), "score" alone, or "pooled"
+    confirm: int | str = 0  # > 0: the test judged again on this many fresh episodes
     holdout: int | str = AUTO  # fresh episodes of the champion alone that give its fitness
 
     def to_json(self) -> dict:
@@ -266,7 +266,8 @@ KEY_DOCS: dict[str, str] = {
     "robust": "Each genome scored by K episodes with noise added to its actions (episodes, "
               "action_noise, action_scale, statistic, ...); null: one exact episode.",
     "final_selection": "At the run's end, the champion chosen afresh among the final elites by many "
-                       "perturbed episodes, keeping only those that hold; null: the best-ever genome.",
+                       "perturbed episodes, keeping only those that pass its test; null: the best-ever "
+                       "genome.",
     "start_from": "{run: PATH, generation: G}: start from that run's population after generation G "
                   "(sgr; at another robot_shape too); null: a fresh population.",
 }
