@@ -131,12 +131,13 @@ def chain(n: int):
     return SimpleNamespace(nodes=nodes, connections=conns), SimpleNamespace(input_keys=[-1], output_keys=[0])
 
 
-def test_a_chain_of_20000_nodes_compiles_in_under_a_second():
-    """Compiling is linear: a 20,000-node chain (the old compile: minutes) in < 1 s, one layer per node."""
+def test_a_chain_of_20000_nodes_compiles_in_seconds_not_minutes():
+    """Compiling is linear: a 20,000-node chain (the old compile: minutes) in < 5 s, one layer per
+    node (0.4 s alone on a 2-vCPU AMD EPYC; 1.3 s once under the whole suite's load there)."""
     genome, gc = chain(20_000)
     t0 = time.perf_counter()
     net = compile_genome(genome, gc)
-    assert time.perf_counter() - t0 < 1.0
+    assert time.perf_counter() - t0 < 5.0
     assert len(net.layers) == 20_001 and net.layers[-1][0].key == 0
 
 
