@@ -123,19 +123,8 @@ def replay_line(run_dir: str | Path, replay: int | str = MEDIAN, eps: float = ve
     return f"replay {replay} ({noise}) return {returns[replay]:.4f}, {nominal}"
 
 
-class _SameController:
-    """A batched policy of one controller driving every world (all worlds hold the same body)."""
-
-    def __init__(self, ctrl: DenseController | GraphController, n_obs: int):
-        self.ctrl, self.n_obs = ctrl, n_obs
-
-    def act(self, obs: np.ndarray) -> np.ndarray:
-        """One forward pass per world (a replay has few)."""
-        return np.stack([self.ctrl.act(o[:self.n_obs]) for o in obs])
-
-
 class _EachController:
-    """A batched policy of one controller per world (each world its own body)."""
+    """A batched policy of one controller per world (each world its own body, or one body in all)."""
 
     def __init__(self, ctrls: list, n_obs: list[int], n_act: int):
         self.ctrls, self.n_obs, self.n_act = ctrls, n_obs, n_act
@@ -163,33 +152,35 @@ def record_elite_nominals(run_dir: str | Path) -> int:
     f = Path(run_dir) / ELITES_FILE
     data = read_elites(run_dir)
     todo = [e for e in data["elites"] if not isinstance(e["champion"].get("nominal"), int | float)]
-    by_precision: dict[str, list] = {}
+    batches: dict[tuple, list] = {}  # one batch per (precision, task, episode length)
     for e in todo:
         champ, body, ctrl = check_record(e["champion"], f)
-        by_precision.setdefault(precision_of(champ), []).append((e, champ, body, ctrl))
-    for precision, group in by_precision.items():
-        by_task: dict[tuple, list] = {}
-        for item in group:
-            by_task.setdefault((item[1]["task"], item[1]["episode_steps"]), []).append(item)
-        for (task, steps), items in by_task.items():
-            bodies = [b for _, _, b, _ in items]
-            n_obs = [obs_dim(task, build_body(b).n_points) for b in bodies]
-            returns = rollout_policy(
-                task, bodies, lambda env, items=items, n_obs=n_obs: _EachController(
-                    [c for *_, c in items], n_obs, env.sim.max_actuators),
-                steps, precision=precision)
-            for (e, *_), r in zip(items, returns, strict=True):
-                e["champion"]["nominal"] = float(r)
+        batches.setdefault((precision_of(champ), champ["task"], champ["episode_steps"]), []).append(
+            (e, body, ctrl))
+    for (precision, task, steps), items in batches.items():
+        bodies = [b for _, b, _ in items]
+        n_obs = [obs_dim(task, build_body(b).n_points) for b in bodies]
+        returns = rollout_policy(task, bodies, lambda env, items=items, n_obs=n_obs: _EachController(
+            [c for *_, c in items], n_obs, env.sim.max_actuators), steps, precision=precision)
+        for (e, *_), r in zip(items, returns, strict=True):
+            e["champion"]["nominal"] = float(r)
     if todo:
         atomic_write(f, record_json(data).encode(), inside=Path(run_dir))
     return len(todo)
 
 
+def _exact() -> EpisodeNoise:
+    """The noise of one exact, unperturbed episode."""
+    return EpisodeNoise(Perturbation(), np.zeros(1, np.uint64), np.zeros(1, bool))
+
+
 def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndarray:
     """Returns of len(noise.keys) episodes of the champion, each perturbed by its row of `noise`,
     as one batch through evolution's own episode loop."""
+    n = len(noise.keys)
     n_obs = obs_dim(champ["task"], build_body(body).n_points)
-    return rollout_policy(champ["task"], [body] * len(noise.keys), lambda env: _SameController(ctrl, n_obs),
+    return rollout_policy(champ["task"], [body] * n,
+                          lambda env: _EachController([ctrl] * n, [n_obs] * n, env.sim.max_actuators),
                           champ["episode_steps"], noise, precision=precision_of(champ))
 
 
@@ -202,8 +193,7 @@ def rescore_champion(run_dir: str | Path, cell=None) -> float:
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
     if robust is None:
-        return float(_replay(champ, body, ctrl, EpisodeNoise(Perturbation(), np.zeros(1, np.uint64),
-                                                             np.zeros(1, bool)))[0])
+        return float(_replay(champ, body, ctrl, _exact())[0])
     if "tags" not in evaluation:
         returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
         return float(robust.score(returns[:, None])[0])
@@ -240,7 +230,7 @@ def headline(run_dir: str | Path, cell=None) -> verdict_rule.Verdict:
     champ, body, ctrl = read_champion(run_dir, cell)
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
-    exact = EpisodeNoise(Perturbation(), np.zeros(1, np.uint64), np.zeros(1, bool))
+    exact = _exact()
     if robust is not None and str(evaluation.get("tag", "")).startswith("final-holdout/") \
             and "tags" not in evaluation:
         held = robust.noise(evaluation["seed"], [evaluation["tag"]])
@@ -255,6 +245,21 @@ def headline(run_dir: str | Path, cell=None) -> verdict_rule.Verdict:
         kind, eps, offset = robust.action_noise, robust.action_scale, robust.offset
     returns = _replay(champ, body, ctrl, _replay_noise(verdict_rule.REPLAYS, eps, kind, offset, 0))
     return verdict_rule.from_returns(returns, eps, kind, offset)
+
+
+def record_headline(run) -> dict:
+    """champion.json of `run` (a RunDir) with its `headline` (`headline`: the held-out mean return,
+    its sd and the verdict), simulated from the file and written into it; the record as it is when
+    it already has one, or when sgr cannot replay it (a registered method's own controller format:
+    `load_champion` cannot either). Returns the record."""
+    champ = run.champion()
+    if verdict_rule.from_headline(champ.get("headline")) is None:
+        try:
+            champ["headline"] = headline(run.path).to_headline()
+        except SgrError:  # a method of the user's whose controller sgr cannot replay: no headline
+            return champ
+        run.write_champion(champ)
+    return champ
 
 
 def judge(run_dir: str | Path, replays: int = verdict_rule.REPLAYS,

@@ -16,7 +16,6 @@ def passes(row: dict) -> bool:
     return bool(row["passes"] if "passes" in row else row["holds"])
 
 
-
 def describe(champ: dict) -> str:
     """One line on a chosen champion (the console's and `sgr select-champion`'s): what chose it, on
     which episodes, and what its figure is; the figures themselves are the headline's line and
@@ -60,9 +59,8 @@ def _misses(sel: dict, row: dict) -> str:
     """Why a candidate fails the selection's test, in words: which noisy figure falls outside the
     tolerance."""
     tol, nominal = sel["tolerance"], row["nominal"]
-    floor = nominal - tol * abs(nominal)
     for name, value in (("", row["score"]), (" (its confirmation)", row.get("confirmed"))):
-        if value is not None and not (value >= floor):
+        if value is not None and not verdict_rule.clears(value, nominal, tol):  # `choose`'s comparison
             return (f"{value:.4g} under noise{name} is outside the {100 * tol:g} % tolerance of its "
                     f"noise-free {nominal:.4g}")
     return f"its noise-free return {nominal} is not finite"
@@ -104,10 +102,10 @@ def explain(champ: dict) -> str:
     rows = {r["key"]: r for r in sel["candidates"]}
     key = champ["genome"]["key"]
     me = rows[key]
-    held = [r for r in sel["candidates"] if passes(r)]
+    passing = [r for r in sel["candidates"] if passes(r)]
     how = _rank_name(sel)
     if passes(sel):
-        why = (f"it passes the selection's test and ranks first among the {len(held)} of {len(rows)} "
+        why = (f"it passes the selection's test and ranks first among the {len(passing)} of {len(rows)} "
                f"candidates that pass by {how} ({_rank_key(sel, me):.4g})")
     else:
         why = (f"no candidate passes the selection's test, so it ranks first of all {len(rows)} by {how} "

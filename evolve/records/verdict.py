@@ -35,6 +35,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from evolve.rollout.robust import Robust
+
 EPS = 1e-3  # a physical actuator's error, 0.1 % of the action range's scale
 REPLAYS = 20
 TOLERANCE = 0.10
@@ -146,10 +148,9 @@ def from_returns(returns: np.ndarray, eps: float = EPS, kind: str = "uniform", o
     noisy = returns[1:]
     m = median_replay(returns)
     sd = float(noisy.std(ddof=1)) if len(noisy) > 1 else 0.0
-    total = 0.0  # summed in order, as `Robust.score` sums a held-out score: the headline is its figure
-    for r in noisy:
-        total += float(r)
-    return Verdict(float(returns[0]), total / len(noisy), len(noisy), eps, sd, float(noisy.min()), m,
+    # the mean as `Robust.score` takes it (summed in order): a held-out headline is its fitness, bit for bit
+    mean = float(Robust().score(noisy[:, None])[0])
+    return Verdict(float(returns[0]), mean, len(noisy), eps, sd, float(noisy.min()), m,
                    float(returns[m]), kind, offset, episodes)
 
 

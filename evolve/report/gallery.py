@@ -36,6 +36,12 @@ def body_image(body: np.ndarray, cell: int = 20) -> np.ndarray:
     return out
 
 
+def champion_figure(row: dict) -> float:
+    """A summary row's champion figure: its headline (the held-out mean return under the run's
+    noise, evolve/records/verdict.py), or for a record without one its recorded fitness."""
+    return row.get("headline", row["champion_fitness"])
+
+
 def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Path]) -> list[dict]:
     """Per (method, task) (the report's groups), the summary row and run directory of the seed with
     the best champion figure (its headline, else its recorded fitness; ties: the lower seed),
@@ -43,14 +49,13 @@ def gallery_entries(rows: Sequence[dict], runs: Sequence[Path] | Mapping[str, Pa
     by_name = dict(runs) if isinstance(runs, Mapping) else {d.name: d for d in runs}
     best: dict[tuple[str, str], dict] = {}
     for r in rows:
-        f = r.get("headline", r.get("champion_fitness"))
+        f = champion_figure(r) if "champion_fitness" in r else None
         d = by_name.get(r["run"])
         if f is None or not math.isfinite(f) or d is None or not (d / "champion.json").is_file():
             continue
         key = (r["method"], r["task"])
         held = best.get(key)
-        if held is None or (f, -int(r["seed"] or 0)) > (held.get("headline", held["champion_fitness"]),
-                                                        -int(held["seed"] or 0)):
+        if held is None or (f, -int(r["seed"] or 0)) > (champion_figure(held), -int(held["seed"] or 0)):
             best[key] = r
     return [{"row": best[k], "run": by_name[best[k]["run"]]} for k in sorted(best)]
 

@@ -37,6 +37,7 @@ from evolve.records import verdict as verdict_rule
 from evolve.records.files import atomic_write, load_yaml
 from evolve.records.rundir import champion_of
 from evolve.records.segments import backend_summary
+from evolve.report.gallery import champion_figure
 from evolve.report.groups import episode_length
 from evolve.report.plots import read_generations, save_png
 from tsim.errors import SgrError
@@ -481,12 +482,6 @@ def tests_markdown(rows: list[dict]) -> str:
         out.write(f"| {t['task']} | {t['a']} | {t['b']} | {t['on']} | {t['n'][0]} / {t['n'][1]} | "
                   + " | ".join(cells) + " |\n")
     return out.getvalue()
-
-
-def champion_figure(row: dict) -> float:
-    """A summary row's champion figure: its headline (the held-out mean return under the run's
-    noise, evolve/records/verdict.py), or for a record without one its recorded fitness."""
-    return row.get("headline", row["champion_fitness"])
 
 
 def _holds(row: dict) -> bool:

@@ -358,8 +358,7 @@ def record_end_figures(run: RunDir) -> None:
     """The figures a finished run's records carry (each simulated once, kept when there): its
     champion's headline in champion.json (`record_headline`) and, for a map-elites run, each
     elite's exact return in elites.json (`record_elite_nominals`)."""
-    from evolve.records.replay import record_elite_nominals
-    from evolve.runs.final_selection import record_headline
+    from evolve.records.replay import record_elite_nominals, record_headline
 
     record_headline(run)
     if (run.path / ELITES_FILE).is_file():

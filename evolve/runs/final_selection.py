@@ -82,6 +82,7 @@ from evolve.config import (
 from evolve.records import verdict as verdict_rule
 from evolve.records.champion import best_ever_record, champion_record
 from evolve.records.files import atomic_write, record_json
+from evolve.records.replay import record_headline
 from evolve.records.selection import describe, explain, passes  # noqa: F401  (the console's words)
 from tsim.errors import SgrError
 
@@ -109,10 +110,10 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
     (the confirmation's scores) a candidate passes when both its score and its confirmation do.
     `rank: pooled` ranks by the score and the confirmation averaged with `weights` (their episode
     counts): every perturbed episode a candidate got."""
-    holds = verdict_rule.clears(scores, nominal, tolerance) & np.isfinite(nominal)
+    passing = verdict_rule.clears(scores, nominal, tolerance) & np.isfinite(nominal)
     if confirmed is not None:
-        holds &= verdict_rule.clears(confirmed, nominal, tolerance)
-    pool = np.flatnonzero(holds) if holds.any() else np.flatnonzero(np.isfinite(scores))
+        passing &= verdict_rule.clears(confirmed, nominal, tolerance)
+    pool = np.flatnonzero(passing) if passing.any() else np.flatnonzero(np.isfinite(scores))
     if len(pool) == 0:
         raise SgrError("no candidate has a finite score")
     if rank == "min":
@@ -121,7 +122,7 @@ def choose(scores: np.ndarray, nominal: np.ndarray, tolerance: float,
         key = (weights[0] * scores + weights[1] * confirmed) / (weights[0] + weights[1])
     else:
         key = scores
-    return int(pool[np.argmax(key[pool])]), holds
+    return int(pool[np.argmax(key[pool])]), passing
 
 
 def select_champion(exp, settings: FinalSelection) -> dict:
@@ -154,7 +155,7 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     if settings.confirm:
         confirm_tags = [f"{TAG}-confirm/{k}" for k, _ in cands]
         confirmed = scored(settings.robust(cfg.robust, settings.confirm).to_json(), phenotypes, confirm_tags)
-    i, holds = choose(scores, nominal, settings.tolerance, settings.rank, confirmed,
+    i, passing = choose(scores, nominal, settings.tolerance, settings.rank, confirmed,
                       (settings.episodes, settings.confirm))
     # the headline: the chosen genome alone, on fresh episodes that took no part in the choice
     fit_robust = settings.robust(cfg.robust, settings.holdout)
@@ -167,12 +168,12 @@ def select_champion(exp, settings: FinalSelection) -> dict:
                             {"robust": fit_robust.to_json(), "seed": cfg.seed, "tag": fit_tag})
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
              "score": float(s), "nominal": float(n), "passes": bool(h)}
-            for (k, g), s, n, h in zip(cands, scores, nominal, holds, strict=True)]
+            for (k, g), s, n, h in zip(cands, scores, nominal, passing, strict=True)]
     if confirmed is not None:
         for row, c in zip(rows, confirmed, strict=True):
             row["confirmed"] = float(c)
     champ["selection"] = {
-        **settings.to_json(), "passes": bool(holds[i]), "nominal": float(nominal[i]),
+        **settings.to_json(), "passes": bool(passing[i]), "nominal": float(nominal[i]),
         "score": float(scores[i]),
         **({"confirmed": float(confirmed[i])} if confirmed is not None else {}),
         "sized": {"share": SHARE, "run_episodes": run_episodes(cfg),
@@ -184,19 +185,3 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     exp.run.write_champion(champ)
     return record_headline(exp.run)
 
-
-def record_headline(run) -> dict:
-    """champion.json of `run` (a RunDir) with its `headline` (evolve/records/verdict.py: the held-out
-    mean return, its sd and the verdict), simulated from the file and written into it; the record
-    as it is when it already has one, or when sgr cannot replay it (a registered method's own
-    controller format: `load_champion` cannot either). Returns the record."""
-    from evolve.records.replay import headline
-
-    champ = run.champion()
-    if verdict_rule.from_headline(champ.get("headline")) is None:
-        try:
-            champ["headline"] = headline(run.path).to_headline()
-        except SgrError:  # a method of the user's whose controller sgr cannot replay: no headline
-            return champ
-        run.write_champion(champ)
-    return champ
