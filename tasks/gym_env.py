@@ -95,8 +95,7 @@ class SgrEnv(gym.Env):
         if self._renderer is None:
             self._renderer = Renderer(sim.world, sim.bodies[0],
                                       grid=not self._render_options.get("hide_grid", False))
-        return self._renderer.frame(sim.robot_pos(0),
-                                    {o.name: sim.object_pos(0, o.name) for o in sim.free_objects})
+        return self._renderer.frame(sim.robot_pos(0), sim.objects_pos(0))
 
     def robot_points(self) -> np.ndarray:
         """(2, N) robot point positions in evogym's point order, world units."""

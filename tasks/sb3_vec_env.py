@@ -98,8 +98,7 @@ class RobotView:
         renderer = self._vec._renderers.get(self.index)
         if renderer is None:
             renderer = self._vec._renderers[self.index] = Renderer(sim.world, sim.bodies[self.index])
-        return renderer.frame(sim.robot_pos(self.index),
-                              {o.name: sim.object_pos(self.index, o.name) for o in sim.free_objects})
+        return renderer.frame(sim.robot_pos(self.index), sim.objects_pos(self.index))
 
 
 def SgrVecEnv(*args: Any, **kwargs: Any):  # noqa: N802 (a class to its users: built on first use)
@@ -130,6 +129,8 @@ def _make_class(base: type) -> type:
                      precision: str | None = None, render_mode: str | None = None):
             if len(bodies) == 0:
                 raise SgrError("an SgrVecEnv needs at least one body")
+            if render_mode not in (None, "rgb_array"):
+                raise SgrError(f"render_mode {render_mode!r} is not supported here (None, 'rgb_array')")
             self._env = BatchEnv(task, list(bodies), episode_steps=episode_steps, precision=precision)
             self.task = task
             self.render_mode = render_mode  # (what SB3's __init__ asks every env for)
@@ -210,9 +211,10 @@ def _make_class(base: type) -> type:
     return _SgrVecEnv
 
 
-def make_vec_env(env_id: str, n_envs: int = 1, seed: int | None = None, env_kwargs: dict | None = None,
-                 monitor_dir: str | None = None, vec_env_cls: Any = None, vec_env_kwargs: dict | None = None,
-                 monitor_kwargs: dict | None = None, **unused: Any):
+def make_vec_env(env_id: str, n_envs: int = 1, seed: int | None = None, start_index: int = 0,
+                 monitor_dir: str | None = None, wrapper_class: Any = None, env_kwargs: dict | None = None,
+                 vec_env_cls: Any = None, vec_env_kwargs: dict | None = None,
+                 monitor_kwargs: dict | None = None, wrapper_kwargs: dict | None = None):
     """An SB3 `VecEnv` of `n_envs` robots in one batch, with SB3's `make_vec_env` signature, wrapped
     in `VecMonitor` (episode returns and lengths in infos, `monitor_dir` for its CSV) as SB3's
     wraps each env in `Monitor`.
@@ -221,15 +223,21 @@ def make_vec_env(env_id: str, n_envs: int = 1, seed: int | None = None, env_kwar
         env_id: "sgr/<task>" (the paper's episode length) or evogym's bare id ("Walker-v0",
             evogym's length).
         n_envs: robots in the batch.
-        seed: world i's task stream restarts from seed + i at the first reset.
+        seed: world i's task stream restarts from seed + start_index + i at the first reset (SB3's
+            numbering).
         env_kwargs: `body` (one voxel matrix for every env, with evogym's optional
             `connections`) or `bodies` (a list of n_envs), and optionally `max_episode_steps`
             and `precision` ("f64", "f32").
         vec_env_cls, vec_env_kwargs: accepted for SB3's signature; the batch is always one
             `SgrVecEnv` (SB3's `SubprocVecEnv` would put each robot in its own process).
+        wrapper_class, wrapper_kwargs: refused (a gymnasium wrapper wraps one env; the robots here
+            are one batch: wrap the returned VecEnv instead).
     Raises:
-        SgrError: an unknown id, a missing body, or no stable-baselines3 installed.
+        SgrError: an unknown id, a missing body, a wrapper_class, or no stable-baselines3 installed.
     """
+    if wrapper_class is not None:
+        raise SgrError("wrapper_class: the robots are one batched VecEnv, not one env each; wrap the "
+                       "returned VecEnv with a VecEnvWrapper instead")
     kw = dict(env_kwargs or {})
     task, steps = task_of(env_id)
     steps = kw.pop("max_episode_steps", steps)
@@ -238,6 +246,8 @@ def make_vec_env(env_id: str, n_envs: int = 1, seed: int | None = None, env_kwar
     if "body" in kw and "bodies" in kw:
         raise SgrError("env_kwargs: give body (one for every env) or bodies (one per env), not both")
     if "bodies" in kw:
+        if connections is not None:
+            raise SgrError("env_kwargs: connections goes with body=; give bodies=[...] as built bodies")
         bodies = list(kw.pop("bodies"))
         if len(bodies) != n_envs:
             raise SgrError(f"env_kwargs: {len(bodies)} bodies for n_envs={n_envs}")
@@ -248,13 +258,13 @@ def make_vec_env(env_id: str, n_envs: int = 1, seed: int | None = None, env_kwar
         bodies = [body] * int(n_envs)
     else:
         raise SgrError("env_kwargs needs body= (a voxel matrix) or bodies= (one per env)")
-    kw.pop("render_mode", None)
+    render_mode = kw.pop("render_mode", None)
     if kw:
         raise SgrError(f"env_kwargs: unknown key{'s' if len(kw) > 1 else ''} {', '.join(map(repr, kw))} "
-                       "(body, bodies, connections, max_episode_steps, precision)")
-    env = SgrVecEnv(task, bodies, episode_steps=steps, precision=precision)
+                       "(body, bodies, connections, max_episode_steps, precision, render_mode)")
+    env = SgrVecEnv(task, bodies, episode_steps=steps, precision=precision, render_mode=render_mode)
     if seed is not None:
-        env.seed(seed)
+        env.seed(seed + start_index)
     from stable_baselines3.common.vec_env import VecMonitor
 
     filename = None

@@ -688,6 +688,10 @@ class BatchSim:
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 0:2].T.copy()
 
+    def objects_pos(self, w: int) -> dict[str, np.ndarray]:
+        """`object_pos` of every free object of world w, by name (what a picture of it draws)."""
+        return {o.name: self.object_pos(w, o.name) for o in self.free_objects}
+
     def object_vel(self, w: int, name: str) -> np.ndarray:
         """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
         as `object_pos`."""

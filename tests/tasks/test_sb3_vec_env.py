@@ -129,6 +129,9 @@ def test_seeding_repeats_rollouts_and_gives_each_world_its_own_stream():
     assert np.array_equal(a, b)
     assert not np.array_equal(a, c)
     assert np.array_equal(a[:, 1], c[:, 0])  # world 1 of seed 3 is world 0 of seed 4
+    shifted = make_vec_env("BidirectionalWalker-v0", n_envs=2, seed=3, start_index=1,
+                           env_kwargs={"body": BODY, "max_episode_steps": 60}).unwrapped
+    assert np.array_equal(_rollout(shifted, None, 60), c)  # SB3's start_index: seed 3 + 1
     assert not np.array_equal(a[:, 0], a[:, 1])
 
 
@@ -191,6 +194,12 @@ def test_evogym_bare_ids_take_evogyms_episode_length():
     ({"env_id": "sgr/Walker-v0", "n_envs": 3, "env_kwargs": {"bodies": [BODY, BODY]}},
      "2 bodies for n_envs=3"),
     ({"env_id": "sgr/Walker-v0", "env_kwargs": {"body": BODY, "colour": 1}}, "unknown key 'colour'"),
+    ({"env_id": "sgr/Walker-v0", "env_kwargs": {"bodies": [BODY], "connections": np.zeros((2, 0))}},
+     "connections goes with body="),
+    ({"env_id": "sgr/Walker-v0", "env_kwargs": {"body": BODY, "render_mode": "human"}},
+     "render_mode 'human' is not supported here"),
+    ({"env_id": "sgr/Walker-v0", "env_kwargs": {"body": BODY}, "wrapper_class": gym.wrappers.ClipAction},
+     "wrapper_class: the robots are one batched VecEnv"),
 ])
 def test_bad_arguments_are_one_line(kwargs, words):
     with pytest.raises(SgrError, match=words):
@@ -208,7 +217,9 @@ def test_without_stable_baselines3_it_says_what_to_install(monkeypatch):
 
 
 def test_rgb_array_rendering_gives_each_robots_picture_and_sb3_tiles_them():
-    vec = SgrVecEnv("Walker-v0", [BODY, SMALL], episode_steps=10, render_mode="rgb_array")
+    vec = make_vec_env("sgr/Walker-v0", n_envs=2,
+                       env_kwargs={"bodies": [BODY, SMALL], "render_mode": "rgb_array"})
+    assert vec.render_mode == "rgb_array"
     vec.reset()
     images = vec.get_images()
     assert len(images) == 2 and all(im.ndim == 3 and im.shape[2] == 3 and im.dtype == np.uint8

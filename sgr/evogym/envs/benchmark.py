@@ -78,8 +78,7 @@ class _TaskScene:
 
     def _render_scene(self):
         sim = self._sim
-        return (sim.world, sim.bodies[0], sim.robot_pos(0),
-                {o.name: sim.object_pos(0, o.name) for o in sim.free_objects})
+        return sim.world, sim.bodies[0], sim.robot_pos(0), sim.objects_pos(0)
 
 
 class TaskEnv(SgrEnv):
