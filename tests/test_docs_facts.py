@@ -331,6 +331,7 @@ BENCH_RECORDS = {
     "body_size_bench.py": ["--sizes", "3", "--robots", "2", "--steps", "5"],
     "device_state_bench.py": ["--robots", "8", "--steps", "2", "--rounds", "1"],
     "env_host_tasks.py": ["--tasks", "Walker-v0", "--robots", "8", "--steps", "2"],
+    "ga_ppo_bench.py": ["--bodies", "2", "--timesteps", "128", "--base-timesteps", "64", "--cores", "1"],
     "generation_bench.py": ["--pop", "4", "--generations", "1", "--workers", "1"],
     "pinning_bench.py": ["--robots", "2", "--steps", "3", "--rounds", "1", "--counts", "1",
                          "--evolve-counts", ""],

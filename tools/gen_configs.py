@@ -1,5 +1,5 @@
-"""Write the packaged per-task configs, configs/{sgr,direct,nested,map-elites}/<task>.yaml, for every one of
-sgr's 32 tasks from one template per method (a developer tool: it is not installed).
+"""Write the packaged per-task configs, configs/<method>/<task>.yaml (sgr, direct, nested, map-elites,
+ga-ppo), for every one of sgr's 32 tasks from one template per method (a developer tool: it is not installed).
 
 Every config of a method is the same template with the task's name and episode length filled in:
 the paper's settings (generations 250; SGR and direct NEAT 128 genomes, nested NEAT 12 bodies x 12
@@ -30,7 +30,7 @@ sys.path.insert(0, str(ROOT))
 from tasks.specs import BUILTIN, TASKS  # noqa: E402
 
 PAPER_TASKS = ("Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0")  # the SGR paper's
-METHODS = ("sgr", "direct", "nested", "map-elites")
+METHODS = ("sgr", "direct", "nested", "map-elites", "ga-ppo")
 
 # the honest evaluation of docs/EVOLVE.md "Robust evaluation", as every packaged config has it
 ROBUST_ACCUMULATED = """\
@@ -137,6 +137,45 @@ reevaluate: true, accumulate: true, settle: 8}
 final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
 confirm: auto, holdout: auto}
 """,
+    "ga-ppo": """\
+# evogym's GA co-design on $task$about
+# All of a generation's new bodies train together in one batched simulation, each with its own
+# policy (docs/RL.md "Co-design with PPO").
+method: ga-ppo
+task: $task
+generations: 20
+pop_size: 16                 # bodies per generation; the best survive untrained, mutants fill the rest
+seed: 0
+robot_shape: [5, 5]
+$episode
+checkpoint_every: 1          # a generation trains for long: a checkpoint after each
+render_champion: true
+ga:
+  mutation_rate: 0.1         # evogym's: each voxel redrawn with this probability
+  survival: 0.6              # the first survivors' fraction, falling linearly to 0 (at least 2)
+  max_evaluations: null      # null: it falls over the generations; N: over N bodies (evogym's run_ga.py)
+ppo:                         # evogym's PPO arguments (examples/ppo/args.py), per body
+  timesteps: 1000000         # ~1.4 h a generation of 16 bodies on a 2-core VM (docs/BENCHMARKS.md)
+  n_envs: 1
+  n_steps: 128
+  batch_size: 4
+  n_epochs: 4
+  learning_rate: 0.00025
+  gamma: 0.99
+  gae_lambda: 0.95
+  clip_range: 0.1
+  ent_coef: 0.01
+  vf_coef: 0.5
+  max_grad_norm: 0.5
+  hidden: [64, 64]           # SB3's MlpPolicy: policy and value networks of two 64-unit tanh layers
+# Honest by default (docs/EVOLVE.md "Robust evaluation"): a body's fitness is its trained policy's
+# deterministic episode under uniform(±1e-3) actuator noise, a survivor's the mean of its scores so far
+# (8 at most: settle); the champion chosen at the end among the final population (final_selection).
+robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
+reevaluate: true, accumulate: true, settle: 8}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
+confirm: auto, holdout: auto}
+""",
 }
 
 # what each method's first line says of it, after the task's name
@@ -149,6 +188,10 @@ ABOUT = {
     "nested": (": outer NEAT over body networks, inner NEAT over controllers per body.",
                " (not in the SGR paper): outer NEAT over body networks, inner NEAT over\n"
                "# controllers per body; the paper's settings and evogym's episode length."),
+    "ga-ppo": (": bodies by a genetic algorithm, each body's controller trained by PPO\n"
+               "# (evogym's examples/ga with its PPO arguments; evogym's episode length).",
+               ": bodies by a genetic algorithm, each body's controller trained by PPO\n"
+               "# (evogym's examples/ga with its PPO arguments; evogym's episode length)."),
     "map-elites": (": an archive of the best robot per kind of body (docs/EVOLVE.md).",
                    " (not in the SGR paper): an archive of the best robot per kind of body\n"
                    "# (docs/EVOLVE.md); evogym's episode length."),
@@ -164,7 +207,7 @@ PAPER_EPISODE = {
 def render(method: str, task: str) -> str:
     """The text of configs/<method>/<task>.yaml."""
     paper = task in PAPER_TASKS
-    episode = (PAPER_EPISODE[method] if paper else
+    episode = (PAPER_EPISODE[method] if paper and method in PAPER_EPISODE else
                f"episode_steps: {TASKS[task].evogym_steps:<19}# evogym's max_episode_steps for {task}")
     return Template(TEMPLATES[method]).substitute(task=task, about=ABOUT[method][0 if paper else 1],
                                                   episode=episode)

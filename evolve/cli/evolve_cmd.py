@@ -21,7 +21,7 @@ def register(sub) -> argparse.ArgumentParser:
                                     "sgr/Climber-v2 or direct/Walker-v0 (default: quick, a short SGR "
                                     "Walker-v0 run)")
     e.add_argument("--task", help="the packaged config of this task (with --method; default method sgr)")
-    e.add_argument("--method", help="with --task: sgr, direct, nested or map-elites")
+    e.add_argument("--method", help="with --task: sgr, direct, nested, map-elites or ga-ppo")
     e.add_argument("--shape", metavar="RxC",
                    help="the body grid, rows x columns (e.g. 10x10): with --task the packaged "
                         "<task>-RxC config when there is one, else the task's config at this size")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 from evolve.methods.base import Problem
 from evolve.methods.direct import DirectProblem
+from evolve.methods.ga_ppo import GaPpoProblem
 from evolve.methods.map_elites import MapElitesProblem
 from evolve.methods.nested import NestedProblem
 from evolve.methods.sgr import SgrProblem
@@ -15,6 +16,7 @@ METHODS: dict[str, type[Problem]] = {p.name: p for p in (
     DirectProblem,
     NestedProblem,
     MapElitesProblem,
+    GaPpoProblem,
 )}
 
 
@@ -27,4 +29,5 @@ def method(name: str) -> type[Problem]:
         raise SgrError(f"unknown method {name!r}; known methods: {', '.join(METHODS)}") from None
 
 
-__all__ = ["METHODS", "DirectProblem", "MapElitesProblem", "NestedProblem", "Problem", "SgrProblem", "method"]
+__all__ = ["METHODS", "DirectProblem", "GaPpoProblem", "MapElitesProblem", "NestedProblem", "Problem",
+           "SgrProblem", "method"]

@@ -19,6 +19,7 @@ import numpy as np
 from evolve.config import RunConfig
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
+from evolve.search.genome_record import genome_json
 from evolve.search.state_codec import decode_search_state, encode_search_state
 from tsim.errors import SgrError
 
@@ -42,6 +43,7 @@ class Problem:
     config_docs: ClassVar[dict[str, str]] = {}  # what each of `config_keys` does, in a sentence
     # keys holding files (relative to the YAML that names them) -> default file in configs/neat/
     default_files: ClassVar[dict[str, str]] = {}
+    uses_neat: ClassVar[bool] = True  # False: no neat-python config (no neat.ini in its runs)
     reevaluate_elites: ClassVar[bool] = False  # True when evaluation changes state (nested's inner search)
     # what a key of `config_keys` that an older run's config.yaml lacks meant, where that is not its
     # default (the key did not exist then)
@@ -123,6 +125,11 @@ class Problem:
         function of the genome may record it as that (SGR: evolve/methods/sgr_record.py), since the
         champion file holds the genome too."""
         return self.champion(phenotype)
+
+    def genome_record(self, genome) -> dict:
+        """What champion.json holds as `genome`: a NEAT genome's record (`genome_json`); a method
+        whose search has no NEAT genome records what it has (at least `key`)."""
+        return genome_json(genome)
 
     @classmethod
     def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:

@@ -15,7 +15,7 @@ from evolve.nn.dense import DenseController
 from evolve.nn.graph import GraphController
 from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
-from evolve.search.genome_record import genome_json, record_size_problem
+from evolve.search.genome_record import record_size_problem
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
 from tsim import runtime
@@ -33,7 +33,7 @@ def champion_record(cfg: dict, problem, genome, phenotype, fitness: float, gener
     method (`Problem.champion` gives the body and controller)."""
     champ = {"format": "sgr-champion-1", "method": cfg.method, "task": cfg.task,
              "episode_steps": cfg.episode_steps, "fitness": fitness, "generation": generation,
-             "precision": cfg.precision, "genome": genome_json(genome)}
+             "precision": cfg.precision, "genome": problem.genome_record(genome)}
     method_keys = problem.champion_of(genome, phenotype)
     evaluation = {**evaluation, **method_keys.pop("evaluation", {})}
     champ.update(method_keys, evaluation=evaluation)

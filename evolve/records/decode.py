@@ -50,6 +50,9 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     if cfg.method == "nested":
         raise SgrError(f"{run_dir}: a nested run's champion controller is one genome of an inner population "
                        "evolved for its body alone; it has no meaning at another size (decode sgr runs)")
+    if not METHODS[cfg.method].uses_neat:
+        raise SgrError(f"{run_dir}: a {cfg.method} run's champion is a body and a controller trained for it, "
+                       "no genome to decode at another size (decode sgr runs)")
     if cfg.method == "direct" and not own:
         raise SgrError(f"{run_dir}: direct NEAT's network reads the observation of a full "
                        f"{cfg.robot_shape[0]}x{cfg.robot_shape[1]} body (and, in its default layout, has "

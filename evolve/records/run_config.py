@@ -161,7 +161,7 @@ def read_run_config(run, running: bool = False) -> tuple[dict, RunConfig]:
         run.refuse_links()
     raw = run.config()
     cfg = check_run_config(raw, run.path / "config.yaml", load_task=run.load_task, running=running)
-    if running:
+    if running and METHODS[cfg.method].uses_neat:
         check_run_neat_ini(run.path / "neat.ini", cfg)
     return raw, cfg
 

@@ -273,9 +273,9 @@ class RunDir:
             raise
 
     # ------------------------------------------------------------------ creation
-    def create(self, cfg: RunConfig, neat_ini: str, extra_files: dict[str, str] | None = None) -> None:
-        """Write a new run's config.yaml, neat.ini, any `extra_files` and an empty generations.csv;
-        ValueError when the directory already holds a run."""
+    def create(self, cfg: RunConfig, neat_ini: str | None, extra_files: dict[str, str] | None = None) -> None:
+        """Write a new run's config.yaml, neat.ini (unless None: a method without NEAT), any
+        `extra_files` and an empty generations.csv; ValueError when the directory already holds a run."""
         if (self.path / "generations.csv").exists():
             raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                            "or another --out")
@@ -283,7 +283,8 @@ class RunDir:
         # the arch is not the config's: segments.json records where each part of the run ran
         config = yaml.safe_dump({k: v for k, v in cfg.to_yaml().items() if k != "arch"}, sort_keys=False)
         atomic_write(self.path / "config.yaml", config.encode(), inside=self.path)
-        atomic_write(self.path / "neat.ini", neat_ini.encode(), inside=self.path)
+        if neat_ini is not None:
+            atomic_write(self.path / "neat.ini", neat_ini.encode(), inside=self.path)
         for name, text in (extra_files or {}).items():
             atomic_write(self.path / name, text.encode(), inside=self.path)
         self._write_rows([])

@@ -46,5 +46,6 @@ def load_checkpoint(run: RunDir, cfg: RunConfig | None = None) -> dict | None:
     """The newest usable checkpoint of `run`, decoded (RunDir.latest_checkpoint: damaged ones are
     skipped with one warning line); None when there is none."""
     cfg = read_run_config(run, running=True)[1] if cfg is None else cfg
-    neat_config = load_neat_config(run.neat_ini())  # (a FIFO or a link refused in one line)
+    neat_config = (load_neat_config(run.neat_ini())  # (a FIFO or a link refused in one line)
+                   if METHODS[cfg.method].uses_neat else None)
     return run.latest_checkpoint(lambda data: decode_checkpoint(data, cfg, neat_config))

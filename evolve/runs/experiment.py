@@ -94,9 +94,9 @@ class Experiment:
         self._stop = None  # the loop's stop request, while it runs (`stopping`)
         # the run's precision for this process and its rollout workers (started with this process's)
         start_backend(cfg.precision)
-        self.neat_config = load_neat_config(run.path / "neat.ini")
-        self.pool = rollout_pool(cfg.workers if workers is None else workers)
         method = METHODS[cfg.method]
+        self.neat_config = load_neat_config(run.path / "neat.ini") if method.uses_neat else None
+        self.pool = rollout_pool(cfg.workers if workers is None else workers)
         self.problem = method(cfg, self.neat_config, self.pool)
         if state is not None:
             self.problem.restore(state.get("problem", {}))
@@ -130,8 +130,10 @@ class Experiment:
 
     @classmethod
     def _start(cls, cfg: RunConfig, out: str | Path, quiet: bool) -> Experiment:
-        ini = neat_ini_text(cfg.neat_config, cfg.pop_size, METHODS[cfg.method].neat_overrides(cfg))
-        neat_config_from_text(ini, cfg.neat_config)  # a bad INI must fail before the run exists
+        ini = None
+        if METHODS[cfg.method].uses_neat:
+            ini = neat_ini_text(cfg.neat_config, cfg.pop_size, METHODS[cfg.method].neat_overrides(cfg))
+            neat_config_from_text(ini, cfg.neat_config)  # a bad INI must fail before the run exists
         if cfg.workers == "ray":
             from evolve.rollout.ray_cluster import require_ray
             require_ray("workers: ray")

@@ -196,6 +196,13 @@ class ConsoleProgress:
                   f"sim {row['sim_s']:.2f} archive {row['neat_s']:.2f})  {elapsed:6.0f} s",
                   file=sys.stdout, flush=True)
             return
+        if "trained" in row:  # bodies trained by PPO (ga-ppo)
+            print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
+                  f"(ever {best:7.3f})  mean {row['mean']:7.3f}  trained {row['trained']:>3} bodies x "
+                  f"{row['timesteps'] // max(row['trained'], 1):,} steps  {row['total_s']:6.1f} s/gen "
+                  f"(ga {row['neat_s']:.2f} ppo {row['build_s']:.1f} score {row['sim_s']:.1f})"
+                  f"{_diversity(row)}  {elapsed:6.0f} s", file=sys.stdout, flush=True)
+            return
         print(f"gen {row['generation']:>4}/{exp.cfg.generations}  best {row['best']:8.3f}  "
               f"(ever {best:7.3f})  mean {row['mean']:7.3f}  species {row['n_species']:>3}  "
               f"valid {row['n_valid']:>4}/{row['n_valid'] + row['n_invalid']}  "

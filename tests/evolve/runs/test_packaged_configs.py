@@ -28,14 +28,14 @@ def gen():
 def test_the_committed_configs_are_what_the_generator_writes(gen):
     """Edit the templates, not the files: a hand edit of a generated config fails here."""
     made = gen.generated()
-    assert len(made) == 4 * len(BUILTIN) == 128  # sgr, direct, nested, map-elites
+    assert len(made) == 5 * len(BUILTIN) == 160  # sgr, direct, nested, map-elites, ga-ppo
     stale = [str(rel) for rel, text in made.items() if (ROOT / "configs" / rel).read_text() != text]
     assert not stale, f"run python tools/gen_configs.py: {stale}"
 
 
 def test_the_generators_check_finds_a_hand_edited_config(gen, tmp_path, capsys):
     out = tmp_path / "configs"
-    assert gen.main(["--out", str(out)]) == 0  # writes all 96
+    assert gen.main(["--out", str(out)]) == 0  # writes all 160
     assert gen.main(["--check", "--out", str(out)]) == 0
     edited = out / "direct" / "Jumper-v0.yaml"
     edited.write_text(edited.read_text().replace("pop_size: 128", "pop_size: 64"))
@@ -58,6 +58,20 @@ def test_every_task_has_a_config_of_every_method(method):
         assert cfg.episode_steps == (spec.paper_steps if task in PAPER_TASKS else spec.evogym_steps), task
         assert cfg.robust is not None and (cfg.final_selection is not None) == (method != "nested"), task
         assert cfg.pop_size == (12 if method == "nested" else 128)
+
+
+def test_every_task_has_a_ga_ppo_config_with_evogyms_ga_and_ppo_arguments():
+    """configs/ga-ppo/<task>.yaml: evogym's episode length on every task (its GA trains on its
+    envs), evogym's PPO arguments (examples/ppo/args.py) and GA mutation rate, honest evaluation."""
+    pytest.importorskip("torch", reason="method ga-ppo needs torch: pip install 'sgr[rl]'")
+    from evolve.rollout.ppo import PpoSettings
+
+    for task in sorted(BUILTIN):
+        path = evolve_config(argparse.Namespace(config=None, task=task, method="ga-ppo"))
+        cfg = load_config(path)
+        assert (cfg.method, cfg.task, cfg.episode_steps) == ("ga-ppo", task, TASKS[task].evogym_steps)
+        assert PpoSettings.from_config(dict(cfg.ppo)) == PpoSettings() and cfg.ga["mutation_rate"] == 0.1
+        assert cfg.robust is not None and cfg.final_selection is not None
 
 
 def test_a_copied_config_takes_the_packaged_neat_files_saying_so(tmp_path, capsys):
