@@ -112,7 +112,8 @@ def main(argv: list[str] | None = None) -> int:
           f"{base['steps_per_s']:7.0f} learn steps/s -> {base['generation_s']:8.1f} s a generation",
           flush=True)
     mine = ours(a.bodies, a.timesteps)
-    print(f"sgr ga-ppo, one batch:       {mine['steps_per_s']:7.0f} learn steps/s -> {mine['seconds']:8.1f} s "
+    print(f"sgr ga-ppo, one batch:       {mine['steps_per_s']:7.0f} learn steps/s -> "
+          f"{mine['seconds']:8.1f} s "
           f"a generation (train {mine['train_s']:.1f} s, score {mine['score_s']:.1f} s); "
           f"{base['generation_s'] / mine['seconds']:.1f}x", flush=True)
     if a.record:

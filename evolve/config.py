@@ -243,7 +243,8 @@ class RunConfig:
 # key: (type or tuple of types, default), from RunConfig's fields: the one place they are listed
 # what each common key does, in a sentence (docs/reference/config.md, `sgr evolve --help`)
 KEY_DOCS: dict[str, str] = {
-    "method": "How bodies and controllers are evolved: sgr, direct, nested, map-elites or ga-ppo (docs/EVOLVE.md).",
+    "method": "How bodies and controllers are evolved: sgr, direct, nested, map-elites or ga-ppo "
+              "(docs/EVOLVE.md).",
     "task": "The task robots are scored on: one of sgr's 32 (docs/TASKS.md) or one you register "
             "(imports:).",
     "generations": "How many generations the run evolves.",

@@ -73,7 +73,8 @@ def test_a_registered_toy_method_runs_from_a_config_dict(tmp_path, monkeypatch):
 
 def test_an_unknown_method_and_a_key_of_another_method_are_named(tmp_path):
     with pytest.raises(ValueError,
-                       match="key 'method' must be one of sgr, direct, nested, map-elites, ga-ppo, got 'gait'"):
+                       match="key 'method' must be one of sgr, direct, nested, map-elites, ga-ppo, "
+                             "got 'gait'"):
         Experiment.from_config({"method": "gait", "task": "Walker-v0"}, tmp_path / "a")
     with pytest.raises(ValueError, match="unknown key 'inner_pop_size' for method 'sgr'"):
         Experiment.from_config({"method": "sgr", "task": "Walker-v0", "inner_pop_size": 3}, tmp_path / "b")
