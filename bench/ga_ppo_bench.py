@@ -9,7 +9,9 @@ Both sides use evogym's PPO arguments (examples/ppo/args.py: 1 env per body, n_s
   (SB3's make_vec_env, 1 env), num_cores bodies at a time. It is run here on sgr.evogym, whose env
   steps faster than evogym's (so the ratio is a lower bound on the one against evogym itself), in
   as many processes as the machine has cores, each training one body for --base-timesteps; the
-  generation's seconds are N x T over their summed rate.
+  generation's seconds are N x T over their summed rate. Twice: with torch's default threads (what
+  run_ga.py does: each process takes every core) and with one torch thread per process (the best
+  case for evogym's loop, which the speed-up is taken against).
 Kernels are compiled and torch is imported before the clocks start.
 
     python bench/ga_ppo_bench.py                          # 16 bodies x 20,000 timesteps
@@ -65,13 +67,16 @@ def ours(n: int, timesteps: int) -> dict:
 
 def _sb3_one(args: tuple) -> float:
     """One process of evogym's loop: SB3's PPO on one body, 1 env; its learn's seconds."""
-    body, timesteps = args
+    body, timesteps, threads = args
+    import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
 
     import sgr.evogym.envs  # noqa: F401  (evogym's bare ids)
     from sgr.evogym.utils import get_full_connectivity
 
+    if threads:
+        torch.set_num_threads(threads)
     env = make_vec_env("Walker-v0", n_envs=1, seed=42,
                        env_kwargs={"body": body, "connections": get_full_connectivity(body)})
     env.reset()
@@ -83,16 +88,17 @@ def _sb3_one(args: tuple) -> float:
     return time.perf_counter() - t0
 
 
-def evogym_loop(n: int, timesteps: int, base: int, cores: int) -> dict:
+def evogym_loop(n: int, timesteps: int, base: int, cores: int, threads: int | None) -> dict:
     """evogym's run_ga.py loop on sgr.evogym: `cores` processes at once, each one body for `base`
-    timesteps; the generation of n bodies x `timesteps` estimated from their summed rate."""
+    timesteps (`threads`: torch's threads per process; None: torch's default); the generation of n
+    bodies x `timesteps` estimated from their summed rate."""
     import multiprocessing as mp
 
     with mp.get_context("spawn").Pool(cores) as pool:
-        seconds = pool.map(_sb3_one, [(b, base) for b in bodies(cores)])
+        seconds = pool.map(_sb3_one, [(b, base, threads) for b in bodies(cores)])
     rate = sum(base / s for s in seconds)
-    return {"processes": cores, "timesteps_each": base, "seconds_each": seconds, "steps_per_s": rate,
-            "generation_s": n * timesteps / rate}
+    return {"processes": cores, "torch_threads": threads or "default", "timesteps_each": base,
+            "seconds_each": seconds, "steps_per_s": rate, "generation_s": n * timesteps / rate}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -107,10 +113,13 @@ def main(argv: list[str] | None = None) -> int:
 
     print(f"# {cpu_model()}; Walker-v0, {a.bodies} random 5x5 bodies x {a.timesteps:,} timesteps, "
           "evogym's PPO arguments", flush=True)
-    base = evogym_loop(a.bodies, a.timesteps, a.base_timesteps, a.cores)
-    print(f"evogym's loop on sgr.evogym: {base['processes']} processes x {a.base_timesteps:,} steps: "
-          f"{base['steps_per_s']:7.0f} learn steps/s -> {base['generation_s']:8.1f} s a generation",
-          flush=True)
+    loops = {}
+    for threads in (None, 1):
+        loops[threads] = r = evogym_loop(a.bodies, a.timesteps, a.base_timesteps, a.cores, threads)
+        print(f"evogym's loop on sgr.evogym: {r['processes']} processes x {a.base_timesteps:,} steps, torch "
+              f"threads {r['torch_threads']}: {r['steps_per_s']:7.0f} learn steps/s -> "
+              f"{r['generation_s']:8.1f} s a generation", flush=True)
+    base, default = loops[1], loops[None]
     mine = ours(a.bodies, a.timesteps)
     print(f"sgr ga-ppo, one batch:       {mine['steps_per_s']:7.0f} learn steps/s -> "
           f"{mine['seconds']:8.1f} s "
@@ -119,12 +128,14 @@ def main(argv: list[str] | None = None) -> int:
     if a.record:
         from tasks.records import figure, write_record
 
-        figures = {"evogym_loop_steps_per_s": figure(base["steps_per_s"], "steps/s"),
+        figures = {"evogym_loop_default_threads_steps_per_s": figure(default["steps_per_s"], "steps/s"),
+                   "evogym_loop_steps_per_s": figure(base["steps_per_s"], "steps/s"),
                    "evogym_loop_generation_s": figure(base["generation_s"], "s"),
                    "ga_ppo_steps_per_s": figure(mine["steps_per_s"], "steps/s"),
                    "ga_ppo_generation_s": figure(mine["seconds"], "s"),
                    "speedup": figure(base["generation_s"] / mine["seconds"], "x")}
-        write_record(a.record, None, figures, evogym_loop=base, ga_ppo=mine)
+        write_record(a.record, None, figures, evogym_loop=base, evogym_loop_default_threads=default,
+                     ga_ppo=mine)
         print(f"wrote {a.record}")
     return 0
 
