@@ -155,7 +155,7 @@ ga:
   survival: 0.6              # the first survivors' fraction, falling linearly to 0 (at least 2)
   max_evaluations: null      # null: it falls over the generations; N: over N bodies (evogym's run_ga.py)
 ppo:                         # evogym's PPO arguments (examples/ppo/args.py), per body
-  timesteps: 1000000         # ~1.4 h a generation of 16 bodies on a 2-core VM (docs/BENCHMARKS.md)
+  timesteps: 1000000         # 16 new bodies: ~2.7 h on a 2-vCPU VM (docs/BENCHMARKS.md, "GA + PPO")
   n_envs: 1
   n_steps: 128
   batch_size: 4
