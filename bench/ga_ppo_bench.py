@@ -108,15 +108,26 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--base-timesteps", type=int, default=2048, help="per process of evogym's loop")
     p.add_argument("--cores", type=int, default=os.cpu_count() or 1, help="evogym's num_cores")
     p.add_argument("--record", help="write the figures as JSON here")
+    p.add_argument("--evogym-python", help="the Python of a venv with evogym 2.0 and SB3: evogym's loop in "
+                                           "evogym itself (bench/evogym_side.py) instead of on sgr.evogym")
     a = p.parse_args(argv)
     from tasks.records import cpu_model
 
     print(f"# {cpu_model()}; Walker-v0, {a.bodies} random 5x5 bodies x {a.timesteps:,} timesteps, "
           "evogym's PPO arguments", flush=True)
     loops = {}
+    where = "in evogym" if a.evogym_python else "on sgr.evogym"
     for threads in (None, 1):
-        loops[threads] = r = evogym_loop(a.bodies, a.timesteps, a.base_timesteps, a.cores, threads)
-        print(f"evogym's loop on sgr.evogym: {r['processes']} processes x {a.base_timesteps:,} steps, torch "
+        if a.evogym_python:
+            from bench.evogym_side import run_side
+
+            r = run_side(a.evogym_python, "ga-loop", "--cores", str(a.cores), "--timesteps",
+                         str(a.base_timesteps), "--threads", str(threads or 0))
+            r["generation_s"] = a.bodies * a.timesteps / r["steps_per_s"]
+        else:
+            r = evogym_loop(a.bodies, a.timesteps, a.base_timesteps, a.cores, threads)
+        loops[threads] = r
+        print(f"evogym's loop {where}: {r['processes']} processes x {a.base_timesteps:,} steps, torch "
               f"threads {r['torch_threads']}: {r['steps_per_s']:7.0f} learn steps/s -> "
               f"{r['generation_s']:8.1f} s a generation", flush=True)
     base, default = loops[1], loops[None]
@@ -135,7 +146,7 @@ def main(argv: list[str] | None = None) -> int:
                    "ga_ppo_generation_s": figure(mine["seconds"], "s"),
                    "speedup": figure(base["generation_s"] / mine["seconds"], "x")}
         write_record(a.record, None, figures, evogym_loop=base, evogym_loop_default_threads=default,
-                     ga_ppo=mine)
+                     ga_ppo=mine, evogym_loop_runs=where)
         print(f"wrote {a.record}")
     return 0
 

@@ -90,11 +90,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--timesteps", type=int, default=0,
                    help="per measurement (default: four PPO rollouts, 4 x 128 x N; 4096 for 1 env)")
     p.add_argument("--record", help="write the figures as JSON here")
+    p.add_argument("--evogym-python", help="the Python of a venv with evogym 2.0 and SB3: also time evogym's "
+                                           "example loop in evogym itself (bench/evogym_side.py)")
     a = p.parse_args(argv)
     from tasks.records import cpu_model
 
     rows = []
     print(f"# {cpu_model()}; Walker-v0, speed_bot, evogym's PPO arguments")
+    evogym = None
+    if a.evogym_python:
+        from bench.evogym_side import run_side
+
+        evogym = run_side(a.evogym_python, "learn-speed", "--timesteps", str(a.timesteps or 4096))
+        print(f"   evogym's loop in evogym {evogym['evogym']}: {evogym['timesteps']:7d} steps  "
+              f"{evogym['seconds']:7.1f} s  {evogym['steps_per_s']:8.0f} learn steps/s", flush=True)
     for n in a.envs:
         steps = a.timesteps or (4096 if n == 1 else 4 * EVOGYM_PPO["n_steps"] * n)
         r = measure(n, steps)
@@ -102,6 +111,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"{n:4d} envs  batch {r['batch']:5d}  {r['timesteps']:7d} steps  {r['seconds']:7.1f} s  "
               f"{r['steps_per_s']:8.0f} learn steps/s  env {100 * r['env_share']:4.1f} %  ({r['what']})",
               flush=True)
+    if evogym:
+        print("vs evogym's loop in evogym: " + ", ".join(
+            f"{r['envs']} envs {r['steps_per_s'] / evogym['steps_per_s']:.1f}x" for r in rows))
     base = next((r["steps_per_s"] for r in rows if r["envs"] == 1), None)
     if base:
         print("vs evogym's loop on sgr.evogym: " + ", ".join(
@@ -112,7 +124,11 @@ def main(argv: list[str] | None = None) -> int:
         figures = {f"ppo_learn_steps_per_s_{r['envs']}_envs": figure(r["steps_per_s"], "steps/s")
                    for r in rows}
         figures.update({f"env_share_{r['envs']}_envs": figure(r["env_share"], "fraction") for r in rows})
-        write_record(a.record, None, figures, rows=rows)
+        if evogym:
+            figures["ppo_learn_steps_per_s_evogym"] = figure(evogym["steps_per_s"], "steps/s")
+            figures.update({f"vs_evogym_{r['envs']}_envs":
+                            figure(r["steps_per_s"] / evogym["steps_per_s"], "x") for r in rows})
+        write_record(a.record, None, figures, rows=rows, evogym=evogym)
         print(f"wrote {a.record}")
     return 0
 

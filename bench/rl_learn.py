@@ -11,6 +11,11 @@ target, the curve) and `--plot` draws it, return against seconds of learning.
     python bench/rl_learn.py                                 # the recipe's defaults, 32 envs
     python bench/rl_learn.py --envs 16 --lr 2.5e-4 --epochs 4 --no-normalize   # evogym's settings
     python bench/rl_learn.py --record docs/records/rl-learning.json --plot docs/img/rl-learning.png
+    python bench/rl_learn.py --evogym-python ~/evogym-venv/bin/python ...   # and evogym's own loop
+
+With `--evogym-python` (a venv with evogym 2.0 and SB3) evogym's example loop is run in evogym
+itself first, 100,000 timesteps with the deterministic return every 8 updates
+(bench/evogym_side.py), on its own: the record and the picture then hold both curves.
 
 Needs the rl extra: pip install 'sgr[rl]'.
 """
@@ -114,10 +119,24 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--record", help="write the figures and the curve as a record here")
     p.add_argument("--plot", help="draw the curve here (PNG)")
+    p.add_argument("--evogym-python", help="the Python of a venv with evogym 2.0 and SB3: evogym's example "
+                                           "loop's curve too")
+    p.add_argument("--evogym-timesteps", type=int, default=100_000)
     a = p.parse_args(argv)
     from tasks.records import cpu_model
 
     print(f"# {cpu_model()}; {vars(a)}")
+    evogym = None
+    if a.evogym_python:
+        from bench.evogym_side import run_side
+
+        evogym = run_side(a.evogym_python, "learn-curve", "--timesteps", str(a.evogym_timesteps),
+                          "--target", str(a.target))
+        hit = evogym["reached"]
+        print(f"# evogym's loop in evogym {evogym['evogym']}: final return {evogym['final_return']:.3f} "
+              "after "
+              f"{evogym['learn_s']:.1f} s of learning; reached {a.target}: "
+              + (f"{hit['learn_s']:.1f} s, {hit['timesteps']} timesteps" if hit else "no"), flush=True)
     curve = learn(a)
     reached = next((c for c in curve if c["return"] >= a.target), None)
     if a.record:
@@ -127,7 +146,16 @@ def main(argv: list[str] | None = None) -> int:
         if reached:
             figures.update(learn_s_to_target=figure(reached["learn_s"], "s"),
                            timesteps_to_target=figure(reached["timesteps"], "timesteps"))
-        write_record(a.record, None, figures, settings=vars(a), curve=curve)
+        if evogym:
+            figures["evogym_final_return"] = figure(evogym["final_return"], "return")
+            figures["evogym_learn_s"] = figure(evogym["learn_s"], "s")
+            if evogym["reached"]:
+                figures["evogym_learn_s_to_target"] = figure(evogym["reached"]["learn_s"], "s")
+                figures["evogym_timesteps_to_target"] = figure(evogym["reached"]["timesteps"], "timesteps")
+                if reached:
+                    ratio = evogym["reached"]["learn_s"] / reached["learn_s"]
+                    figures["sooner_than_evogym"] = figure(ratio, "x")
+        write_record(a.record, None, figures, settings=vars(a), curve=curve, evogym=evogym)
         print(f"wrote {a.record}")
     if a.plot:
         import matplotlib
@@ -138,6 +166,10 @@ def main(argv: list[str] | None = None) -> int:
         fig, ax = plt.subplots(figsize=(6, 3.5), dpi=100)
         ax.plot([c["learn_s"] for c in curve], [c["return"] for c in curve], marker=".",
                 label=f"sgr.rl, {a.envs} envs in one batch")
+        if evogym:
+            ax.plot([c["learn_s"] for c in evogym["curve"]], [c["return"] for c in evogym["curve"]],
+                    marker=".", label="evogym's example loop in evogym (1 env)")
+            ax.set_xscale("log")
         ax.axhline(a.target, color="grey", ls="--", lw=1, label=f"target {a.target}")
         ax.set_xlabel("seconds of learning")
         ax.set_ylabel("deterministic return")
