@@ -33,6 +33,7 @@ from evolve.methods.base import Problem
 from evolve.nn.mlp import FORMAT as MLP_FORMAT
 from evolve.nn.mlp import MlpController, mlp_policy
 from evolve.rollout.ppo import PpoSettings, require_torch, train_bodies
+from evolve.rollout.robust import check_mapping
 from evolve.search.body_distance import mean_pairwise_body_distance
 from evolve.search.state_codec import StateError, check, get
 from tsim.body import has_actuator, is_connected
@@ -63,11 +64,7 @@ class GaSettings:
     def from_config(cls, raw: object, pop_size: int, source: str = "config") -> GaSettings:
         """The checked `ga` mapping; SgrError naming the key otherwise."""
         name = f"{source}: key 'ga"
-        if not isinstance(raw, dict):
-            raise SgrError(f"{name}' must be a mapping ({', '.join(GA_KEYS)}), got {raw!r}")
-        for k in raw:
-            if k not in GA_KEYS:
-                raise SgrError(f"{name}': unknown key {k!r}; known keys: {', '.join(GA_KEYS)}")
+        check_mapping(raw, list(GA_KEYS), name)
         v = {k: raw.get(k, d) for k, d in GA_KEYS.items()}
         for k in ("mutation_rate", "survival"):
             x = v[k]

@@ -36,6 +36,7 @@ from evolve.config import MAX_POP
 from evolve.methods.descriptors import DESCRIPTORS
 from evolve.methods.sgr import SgrProblem
 from evolve.rollout.pool import RolloutPool
+from evolve.rollout.robust import check_mapping
 from evolve.search.body_distance import mean_pairwise_body_distance
 from evolve.search.genome import peek
 from evolve.search.state_codec import (
@@ -87,11 +88,7 @@ class QdSettings:
                     source: str = "config") -> QdSettings:
         """The checked `qd` mapping ({} : every default); SgrError naming the key otherwise."""
         name = f"{source}: key 'qd"
-        if not isinstance(raw, dict):
-            raise SgrError(f"{name}' must be a mapping ({', '.join(QD_KEYS)}), got {raw!r}")
-        for k in raw:
-            if k not in QD_KEYS:
-                raise SgrError(f"{name}': unknown key {k!r}; known keys: {', '.join(QD_KEYS)}")
+        check_mapping(raw, QD_KEYS, name)
         names = raw.get("descriptors", list(DEFAULT_DESCRIPTORS))
         if (not isinstance(names, list) or not names or not all(isinstance(n, str) for n in names)
                 or len(set(names)) != len(names)):

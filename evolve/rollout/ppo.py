@@ -25,6 +25,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from evolve.nn.mlp import ACTION_HIGH, ACTION_LOW, MlpController
+from evolve.rollout.robust import check_mapping
 from tasks.env import BatchEnv
 from tsim.errors import SgrError
 
@@ -73,11 +74,7 @@ class PpoSettings:
         """The checked `ppo` mapping ({}: every default); SgrError naming the key otherwise."""
         keys = [f.name for f in fields(cls)]
         name = f"{source}: key 'ppo"
-        if not isinstance(raw, dict):
-            raise SgrError(f"{name}' must be a mapping ({', '.join(keys)}), got {raw!r}")
-        for k in raw:
-            if k not in keys:
-                raise SgrError(f"{name}': unknown key {k!r}; known keys: {', '.join(keys)}")
+        check_mapping(raw, keys, name)
         values = {}
         for f in fields(cls):
             v = raw.get(f.name, f.default)
@@ -85,7 +82,7 @@ class PpoSettings:
                 v = tuple(v) if isinstance(v, list | tuple) else v
                 if not (isinstance(v, tuple) and v and all(_is_int(h) and 1 <= h <= 4096 for h in v)):
                     raise SgrError(f"{name}.hidden' must be a list of layer widths from 1 to 4096, got {v!r}")
-            elif f.type == "int" or isinstance(f.default, int):
+            elif isinstance(f.default, int):
                 top = 10**10 if f.name == "timesteps" else 1 << 20
                 if not (_is_int(v) and 1 <= v <= top):
                     raise SgrError(f"{name}.{f.name}' must be an int from 1 to {top:,}, got {v!r}")

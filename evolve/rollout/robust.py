@@ -25,6 +25,8 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from tsim.errors import SgrError
+
 NOISE_KINDS = ("none", "uniform", "gaussian")
 MAX_EPISODES = 100_000  # perturbed episodes of one genome: more is a typo (it would run for days)
 STATISTICS = ("mean", "min", "median", "qNN (a quantile in percent, e.g. q25)")
@@ -105,6 +107,16 @@ class EpisodeNoise:
         """(B,) start offsets (zero for nominal worlds), or None."""
         s = self.perturbation.shifts(self.keys)
         return None if s is None else np.where(self.on, s, 0.0)
+
+
+def check_mapping(raw: object, known, name: str) -> None:
+    """SgrError unless `raw` is a mapping whose keys are among `known` (in the order given); `name`
+    is the source and the key, without its closing quote ("run.yaml: key 'ppo")."""
+    if not isinstance(raw, dict):
+        raise SgrError(f"{name}' must be a mapping ({', '.join(known)}), got {raw!r}")
+    for k in raw:
+        if k not in known:
+            raise SgrError(f"{name}': unknown key {k!r}; known keys: {', '.join(known)}")
 
 
 def config_dataclass(cls, raw: object, name: str):
