@@ -106,14 +106,12 @@ def deterministic_return(model, steps: int = 500) -> float:
     return total
 
 
-def learn_curve(timesteps: int, eval_every: int, target: float) -> dict:
-    """Learn up to `timesteps`, the deterministic return every `eval_every` updates; the clock
-    counts learning only."""
+def curve_callback(evaluate, eval_every: int, curve: list, clock: dict, stop_at: float | None = None):
+    """An SB3 callback that, every `eval_every` PPO updates, appends `evaluate(model)` (a return)
+    with the timesteps and seconds of learning so far to `curve`; `clock` ({"learn": 0.0, "eval":
+    0.0, "updates": 0, "t0": now}) counts learning apart from evaluating. Learning stops once a
+    return reaches `stop_at` (None: never). Shared by both sides (bench/rl_learn.py)."""
     from stable_baselines3.common.callbacks import BaseCallback
-
-    model = example_loop(SPEED_BOT)
-    curve: list[dict] = []
-    clock = {"learn": 0.0, "t0": time.perf_counter(), "updates": 0, "eval": 0.0}
 
     class Eval(BaseCallback):
         def _on_rollout_end(self) -> None:
@@ -124,18 +122,29 @@ def learn_curve(timesteps: int, eval_every: int, target: float) -> dict:
                 return
             clock["learn"] += time.perf_counter() - clock["t0"]
             t = time.perf_counter()
-            ret = deterministic_return(self.model)
+            ret = evaluate(self.model)
             clock["eval"] += time.perf_counter() - t
             curve.append({"timesteps": int(self.model.num_timesteps), "learn_s": clock["learn"],
                           "return": ret})
             print(f"{self.model.num_timesteps:8d} steps  {clock['learn']:7.1f} s learning  return {ret:6.3f}",
                   flush=True)
             clock["t0"] = time.perf_counter()
+            if stop_at is not None and ret >= stop_at:
+                clock["reached"] = True
 
         def _on_step(self) -> bool:
-            return True
+            return not clock.get("reached")
 
-    model.learn(timesteps, callback=Eval())
+    return Eval()
+
+
+def learn_curve(timesteps: int, eval_every: int, target: float) -> dict:
+    """Learn up to `timesteps`, the deterministic return every `eval_every` updates; the clock
+    counts learning only."""
+    model = example_loop(SPEED_BOT)
+    curve: list[dict] = []
+    clock = {"learn": 0.0, "t0": time.perf_counter(), "updates": 0, "eval": 0.0}
+    model.learn(timesteps, callback=curve_callback(deterministic_return, eval_every, curve, clock))
     clock["learn"] += time.perf_counter() - clock["t0"]
     final = deterministic_return(model)
     curve.append({"timesteps": int(model.num_timesteps), "learn_s": clock["learn"], "return": final})

@@ -25,10 +25,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from functools import partial
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from bench.evogym_side import curve_callback  # noqa: E402
 from bench.rl_bench import SPEED_BOT  # noqa: E402
 
 # the recipe's defaults for many envs (docs/RL.md, "A recipe that learns sooner")
@@ -59,7 +61,6 @@ def deterministic_return(model, norm, steps: int = 500) -> float:
 def learn(a: argparse.Namespace) -> list[dict]:
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.callbacks import BaseCallback
     from stable_baselines3.common.vec_env import VecNormalize
 
     from sgr.rl import make_vec_env
@@ -72,30 +73,8 @@ def learn(a: argparse.Namespace) -> list[dict]:
                 vf_coef=0.5, max_grad_norm=0.5, seed=a.seed, device="cpu", verbose=0)
     curve: list[dict] = []
     clock = {"learn": 0.0, "eval": 0.0, "t0": time.perf_counter(), "updates": 0}
-
-    class Eval(BaseCallback):
-        def _on_rollout_end(self) -> None:
-            clock["updates"] += 1
-
-        def _on_rollout_start(self) -> None:
-            if clock["updates"] == 0 or clock["updates"] % a.eval_every:
-                return
-            clock["learn"] += time.perf_counter() - clock["t0"]
-            t = time.perf_counter()
-            ret = deterministic_return(self.model, norm)
-            clock["eval"] += time.perf_counter() - t
-            curve.append({"timesteps": int(self.model.num_timesteps), "learn_s": clock["learn"],
-                          "return": ret})
-            print(f"{self.model.num_timesteps:8d} steps  {clock['learn']:7.1f} s learning  return {ret:6.3f}",
-                  flush=True)
-            clock["t0"] = time.perf_counter()
-            if ret >= a.target:
-                clock["reached"] = True
-
-        def _on_step(self) -> bool:
-            return not clock.get("reached")
-
-    model.learn(a.timesteps, callback=Eval())
+    evaluate = partial(deterministic_return, norm=norm)
+    model.learn(a.timesteps, callback=curve_callback(evaluate, a.eval_every, curve, clock, stop_at=a.target))
     reached = next((c for c in curve if c["return"] >= a.target), None)
     said = f"{reached['learn_s']:.1f} s of learning, {reached['timesteps']} timesteps" if reached else "no"
     print(f"# reached {a.target}: {said}; evaluation {clock['eval']:.1f} s")
