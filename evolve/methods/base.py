@@ -21,6 +21,7 @@ from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
 from evolve.search.genome_record import genome_json
 from evolve.search.state_codec import decode_search_state, encode_search_state
+from tasks.behaviour import FEATURES
 from tsim.errors import SgrError
 
 # config key -> (type or tuple of types, default)
@@ -48,6 +49,10 @@ class Problem:
     # what a key of `config_keys` that an older run's config.yaml lacks meant, where that is not its
     # default (the key did not exist then)
     absent_before: ClassVar[dict[str, Any]] = {}
+    # whether `rollout` records behaviour features (a search that places robots by what they do sets
+    # it), and the last rollout's, (n, len(FEATURES)), when it did
+    record_behaviour: bool = False
+    behaviour: np.ndarray | None = None
 
     def __init__(self, cfg: RunConfig | Mapping, neat_config, pool: RolloutPool | None = None):
         """`cfg` is the run's config (`RunConfig`; a resolved config mapping is read as one);
@@ -89,17 +94,30 @@ class Problem:
         """Fitness of each robot (`RolloutPool.run`'s bodies, items and factory) and the episodes
         simulated: its episode return, or with the config's `robust` key the statistic over K
         perturbed episodes, the K episodes of every robot in one batch; episode k of the robot
-        tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`)."""
+        tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`).
+
+        With `record_behaviour` set, `behaviour` is then each robot's behaviour features
+        (tasks/behaviour.py), the mean over its K episodes."""
         cfg = self.cfg
         robust = cfg.robust  # parsed once, with the config
+        record = self.record_behaviour
+        self.behaviour = None
         if robust is None:
-            return self.pool.run(cfg.task, bodies, items, factory, cfg.episode_steps), len(bodies)
+            out = self.pool.run(cfg.task, bodies, items, factory, cfg.episode_steps, record=record)
+            if record:
+                out, self.behaviour = out[:, 0].copy(), out[:, 1:]
+            return out, len(bodies)
         n, k = len(bodies), robust.episodes
         if n == 0:
+            if record:
+                self.behaviour = np.zeros((0, len(FEATURES)))
             return np.zeros(0), 0
         tags = [str(i) for i in range(n)] if tags is None else list(tags)
         returns = self.pool.run(cfg.task, list(bodies) * k, list(items) * k, factory,
-                                cfg.episode_steps, robust.noise(cfg.seed, tags))
+                                cfg.episode_steps, robust.noise(cfg.seed, tags), record=record)
+        if record:
+            self.behaviour = returns[:, 1:].reshape(k, n, -1).mean(axis=0)
+            returns = returns[:, 0].copy()
         return robust.score(returns.reshape(k, n)), n * k
 
     @contextmanager

@@ -33,7 +33,8 @@ from typing import Any
 import numpy as np
 
 from evolve.config import MAX_POP
-from evolve.methods.descriptors import DESCRIPTORS
+from evolve.methods.descriptors import DESCRIPTORS, measure, needs_behaviour
+from evolve.methods.qd_floors import FLOORS
 from evolve.methods.sgr import SgrProblem
 from evolve.rollout.pool import RolloutPool
 from evolve.rollout.robust import check_mapping
@@ -50,10 +51,14 @@ from evolve.search.state_codec import (
     is_int,
     row,
 )
+from tasks.behaviour import FEATURES
 from tsim.errors import SgrError
 
 INSTALL_QD = "pip install 'sgr[qd]' (or: pip install ribs)"
-QD_KEYS = ("descriptors", "ranges", "resolution", "batch", "initial", "rescore", "score_offset")
+QD_KEYS = ("descriptors", "ranges", "resolution", "batch", "initial", "rescore", "score_offset", "selection",
+           "exploit")
+SELECTIONS = ("uniform", "curiosity")
+TOURNAMENT = 4  # elites drawn for each exploiting parent, the fittest taken
 DEFAULT_DESCRIPTORS = ("actuator", "rigid")
 MAX_CELLS = 1_000_000  # the archive's cells at most (pyribs allocates every cell up front)
 MAX_TRIES = 20  # genomes made per child asked for, at most, before a generation goes on with fewer valid
@@ -73,8 +78,11 @@ class QdSettings:
     """The `qd` config key: the descriptors (names in evolve/methods/descriptors.py) and their
     ranges, the archive's cells per descriptor (`resolution`), the valid children per generation
     (`batch`; default the config's pop_size), the valid genomes of the first generation (`initial`;
-    default `batch`), the elites re-scored per generation at most (`rescore`; default batch / 4)
-    and the offset of the QD score (the sum over elites of fitness - `score_offset`)."""
+    default `batch`), the elites re-scored per generation at most (`rescore`; default batch / 4),
+    the offset of the QD score (the sum over elites of max(0, fitness - `score_offset`); default
+    "auto": the task's floor, evolve/methods/qd_floors.py), how parents are drawn (`selection`:
+    uniform, or curiosity: favouring elites whose children entered the archive) and the share of
+    children whose parents are instead the fittest of TOURNAMENT elites drawn (`exploit`)."""
     descriptors: tuple[str, ...]
     ranges: tuple[tuple[float, float], ...]
     resolution: tuple[int, ...]
@@ -82,11 +90,14 @@ class QdSettings:
     initial: int
     rescore: int
     score_offset: float
+    selection: str = "uniform"
+    exploit: float = 0.0
 
     @classmethod
     def from_config(cls, raw: object, shape: tuple[int, int], pop_size: int,
-                    source: str = "config") -> QdSettings:
-        """The checked `qd` mapping ({} : every default); SgrError naming the key otherwise."""
+                    source: str = "config", task: str | None = None) -> QdSettings:
+        """The checked `qd` mapping ({} : every default) of a run of `task` (which gives the
+        default score_offset); SgrError naming the key otherwise."""
         name = f"{source}: key 'qd"
         check_mapping(raw, QD_KEYS, name)
         names = raw.get("descriptors", list(DEFAULT_DESCRIPTORS))
@@ -131,15 +142,30 @@ class QdSettings:
             if not is_int(v) or not least <= v <= MAX_POP:  # more: a typo that fills memory
                 raise SgrError(f"{name}.{key}' must be an int from {least} to {MAX_POP:,}, got {v!r}")
             counts[key] = v
-        offset = raw.get("score_offset", 0.0)
+        offset = raw.get("score_offset", "auto")
+        if offset == "auto":
+            offset = FLOORS.get(task, 0.0)
         if isinstance(offset, bool) or not isinstance(offset, int | float) or not math.isfinite(offset):
-            raise SgrError(f"{name}.score_offset' must be a number, got {offset!r}")
+            raise SgrError(f"{name}.score_offset' must be a number or 'auto', got {offset!r}")
+        selection = raw.get("selection", "uniform")
+        if selection not in SELECTIONS:
+            raise SgrError(f"{name}.selection' must be one of {', '.join(SELECTIONS)}, got {selection!r}")
+        exploit = raw.get("exploit", 0.0)
+        if (isinstance(exploit, bool) or not isinstance(exploit, int | float)
+                or not 0.0 <= exploit <= 1.0):
+            raise SgrError(f"{name}.exploit' must be a share from 0 to 1, got {exploit!r}")
         return cls(tuple(names), ranges, tuple(res), counts["batch"], counts["initial"], counts["rescore"],
-                   float(offset))
+                   float(offset), selection, float(exploit))
 
-    def measure(self, body: np.ndarray) -> np.ndarray:
-        """The descriptors of a (valid) body, in order."""
-        return np.array([DESCRIPTORS[n].fn(body) for n in self.descriptors], dtype=np.float64)
+    @property
+    def behaviour(self) -> bool:
+        """Whether a descriptor describes behaviour (the rollout then records it)."""
+        return needs_behaviour(self.descriptors)
+
+    def measure(self, body: np.ndarray, features: np.ndarray | None = None) -> np.ndarray:
+        """The descriptors of a (valid) body, in order; `features`: its behaviour features (the
+        mean over its scored episodes), which behaviour descriptors read."""
+        return measure(self.descriptors, body, features)
 
 
 class MapElitesProblem(SgrProblem):
@@ -156,13 +182,15 @@ class MapElitesProblem(SgrProblem):
 
     def __init__(self, cfg, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
-        self.qd = QdSettings.from_config(dict(self.cfg.qd), tuple(self.cfg.robot_shape), self.cfg.pop_size)
+        self.qd = QdSettings.from_config(dict(self.cfg.qd), tuple(self.cfg.robot_shape), self.cfg.pop_size,
+                                         task=self.cfg.task)
+        self.record_behaviour = self.qd.behaviour
 
     @classmethod
     def validate(cls, cfg, source: str) -> None:
         """SGR's checks, the `qd` key's, no `start_from` (a NEAT population), and pyribs installed."""
         super().validate(cfg, source)
-        QdSettings.from_config(dict(cfg.qd), tuple(cfg.robot_shape), cfg.pop_size, source)
+        QdSettings.from_config(dict(cfg.qd), tuple(cfg.robot_shape), cfg.pop_size, source, cfg.task)
         if cfg.start_from is not None:
             raise SgrError(f"{source}: key 'start_from' is not for method 'map-elites': it continues a "
                            "NEAT population")
@@ -186,19 +214,26 @@ class MapElitesProblem(SgrProblem):
 
 @dataclass
 class Elite:
-    """A genome in (or offered to) the archive: its phenotype, descriptors, and the sum and tags of
-    its scores (its fitness is their mean, summed in the order they came)."""
+    """A genome in (or offered to) the archive: its phenotype, descriptors, the sum and tags of its
+    scores (its fitness is their mean, summed in the order they came) and, when the run records
+    behaviour, the sum of its evaluations' behaviour features (its descriptors read their mean)."""
     genome: Any
     phenotype: Any
     measures: np.ndarray
     total: float
     tags: list[str]
     born: int  # the search's generation (from 0) it was made in
+    features_total: np.ndarray | None = None
 
     @property
     def fitness(self) -> float:
         """The mean of its scores."""
         return self.total / len(self.tags)
+
+    @property
+    def features(self) -> np.ndarray | None:
+        """The mean of its evaluations' behaviour features (None: not recorded)."""
+        return None if self.features_total is None else self.features_total / len(self.tags)
 
 
 class MapElitesSearch:
@@ -219,6 +254,7 @@ class MapElitesSearch:
         self.archive = GridArchive(solution_dim=1, dims=list(self.qd.resolution), ranges=list(self.qd.ranges),
                                    qd_score_offset=self.qd.score_offset, dtype=np.float64)
         self.elites: dict[int, Elite] = {}
+        self.curiosity: dict[int, float] = {}  # genome key of an elite -> its curiosity score
         self.best: dict | None = None
         gc = neat_config.genome_config
         if state is None:
@@ -260,7 +296,8 @@ class MapElitesSearch:
     def _step(self) -> dict:
         t0 = time.perf_counter()
         self.tracker.reset_generation()
-        children, n_invalid = self._breed()
+        bred, n_invalid = self._breed()
+        children = [(c, p) for c, p, _ in bred]
         t1 = time.perf_counter()
         again = self._to_rescore()
         g = self.generation
@@ -269,15 +306,25 @@ class MapElitesSearch:
         fit, episodes = self.problem.evaluate(phenotypes, tags) if phenotypes else (np.zeros(0), 0)
         t2 = time.perf_counter()
         n = len(children)
-        for c, f, tag in zip(again, fit[n:], tags[n:], strict=True):
+        beh = self.problem.behaviour if self.qd.behaviour else None
+        rows = [None] * len(phenotypes) if beh is None else list(beh)
+        for c, f, tag, b in zip(again, fit[n:], tags[n:], rows[n:], strict=True):
             e = self.elites[c]
             if self.accumulate:
                 e.total, e.tags = e.total + float(f), [*e.tags, tag]
+                if b is not None:
+                    e.features_total = e.features_total + b
             else:
                 e.total, e.tags = float(f), [tag]
-        offered = [Elite(c, p, self.qd.measure(p.body), float(f), [tag], g)
-                   for (c, p), f, tag in zip(children, fit[:n], tags[:n], strict=True)]
+                if b is not None:
+                    e.features_total = b.copy()
+            if b is not None:  # what it does, measured again: it may move to another cell
+                e.measures = self.qd.measure(e.phenotype.body, e.features)
+        offered = [Elite(c, p, self.qd.measure(p.body, b), float(f), [tag], g,
+                         None if b is None else b.copy())
+                   for (c, p), f, tag, b in zip(children, fit[:n], tags[:n], rows[:n], strict=True)]
         self.insert(offered, keep=list(self.elites.values()))
+        self._credit(bred)
         fits = [e.fitness for e in self.elites.values()]
         stats = self.archive.stats
         row = {"generation": g,
@@ -285,7 +332,7 @@ class MapElitesSearch:
                "mean": statistics.fmean(fits) if fits else math.nan,
                "median": statistics.median(fits) if fits else math.nan,
                "n_valid": n, "n_invalid": n_invalid, "episodes": int(episodes),
-               "coverage": float(stats.coverage), "qd_score": float(stats.qd_score),
+               "coverage": float(stats.coverage), "qd_score": self.qd_score(),
                "n_elites": len(self.elites),
                "body_diversity": mean_pairwise_body_distance([e.phenotype.body
                                                               for e in self.elites.values()]),
@@ -294,13 +341,36 @@ class MapElitesSearch:
         self.generation += 1
         return row
 
-    def _breed(self) -> tuple[list[tuple[Any, Any]], int]:
-        """The generation's valid children (genome, phenotype) and the number of invalid ones made:
-        `initial` new genomes while the archive is empty, else `batch` children of two parents
-        drawn uniformly from the elites (crossover, then mutation); at most MAX_TRIES genomes per
-        child asked for."""
+    def qd_score(self) -> float:
+        """The archive's QD score: the sum over elites of max(0, fitness - score_offset), which never
+        falls as elites are added or improve (an elite below the offset adds nothing)."""
+        total = 0.0
+        for c in sorted(self.elites):
+            total += max(0.0, self.elites[c].fitness - self.qd.score_offset)
+        return total
+
+    def _parent(self, cells: list[int], exploit: bool) -> Any:
+        """One parent's genome: the fittest of TOURNAMENT elites drawn (`exploit`), else one drawn
+        uniformly or, with `selection: curiosity`, in proportion to its curiosity score shifted
+        to start at 1 (Cully & Demiris 2018)."""
+        if exploit:
+            drawn = random.sample(cells, min(TOURNAMENT, len(cells)))
+            return max((self.elites[c] for c in drawn), key=lambda e: (e.fitness, -e.genome.key)).genome
+        if self.qd.selection == "curiosity":
+            scores = [self.curiosity.get(self.elites[c].genome.key, 0.0) for c in cells]
+            low = min(scores)
+            return self.elites[random.choices(cells, weights=[v - low + 1.0 for v in scores])[0]].genome
+        return self.elites[random.choice(cells)].genome
+
+    def _breed(self) -> tuple[list[tuple[Any, Any, tuple[int, ...]]], int]:
+        """The generation's valid children (genome, phenotype, its parents' genome keys) and the
+        number of invalid ones made: `initial` new genomes while the archive is empty, else `batch`
+        children of two parents (crossover, then mutation), the first round(exploit x batch) of
+        them bred from tournament winners, the rest from parents drawn as `selection` says; at
+        most MAX_TRIES genomes per child asked for."""
         want = self.qd.batch if self.elites else self.qd.initial
         cells = sorted(self.elites)
+        exploiting = round(self.qd.exploit * want)
         gtype, gc = self.config.genome_type, self.config.genome_config
         out, invalid = [], 0
         for _ in range(MAX_TRIES * want):
@@ -308,19 +378,34 @@ class MapElitesSearch:
                 break
             child = gtype(self.next_key)
             self.next_key += 1
+            parents: tuple[int, ...] = ()
             if cells:
-                a = self.elites[random.choice(cells)].genome
-                b = self.elites[random.choice(cells)].genome
+                exploit = len(out) < exploiting
+                a, b = self._parent(cells, exploit), self._parent(cells, exploit)
                 child.configure_crossover(a, b, gc)
                 child.mutate(gc)
+                parents = (a.key, b.key)
             else:
                 child.configure_new(gc)
             p = self.decode(child)
             if p.valid:
-                out.append((child, p))
+                out.append((child, p, parents))
             else:
                 invalid += 1
         return out, invalid
+
+    def _credit(self, bred: list[tuple[Any, Any, tuple[int, ...]]]) -> None:
+        """Curiosity (`selection: curiosity`): each parent gains 1 for a child of its that entered the
+        archive and loses 0.5 for one that did not; the scores of genomes no longer elites go."""
+        if self.qd.selection != "curiosity":
+            return
+        inside = {e.genome.key for e in self.elites.values()}
+        for child, _, parents in bred:
+            gain = 1.0 if child.key in inside else -0.5
+            for key in parents:
+                if key in inside:
+                    self.curiosity[key] = self.curiosity.get(key, 0.0) + gain
+        self.curiosity = {k: v for k, v in sorted(self.curiosity.items()) if k in inside}
 
     def _to_rescore(self) -> list[int]:
         """The cells whose elites get another evaluation this generation, at most `rescore`: with
@@ -340,12 +425,12 @@ class MapElitesSearch:
     def insert(self, offered: list[Elite], keep: list[Elite] | None = None) -> None:
         """Rebuild the archive from `keep` (default: the elites as they are; each with its current
         fitness), then offer it `offered`: a cell takes the best of what falls in it when that
-        beats its elite (pyribs' rule). Entries with a NaN fitness are left out."""
+        beats its elite (pyribs' rule). Entries with a NaN fitness or descriptor are left out."""
         keep = list(self.elites.values()) if keep is None else keep
         self.archive.clear()
         pool: dict[int, Elite] = {}
         for group in (keep, offered):
-            entries = [e for e in group if math.isfinite(e.fitness)]
+            entries = [e for e in group if math.isfinite(e.fitness) and np.isfinite(e.measures).all()]
             if not entries:
                 continue
             pool.update((e.genome.key, e) for e in entries)
@@ -371,9 +456,19 @@ class MapElitesSearch:
         """An elite as `NeatSearch.best` holds the best genome (what champion records are made of),
         with its cell."""
         e = self.elites[index]
-        return {"fitness": e.fitness, "generation": e.born, "key": e.genome.key, "genome": e.genome,
-                "phenotype": e.phenotype, "tags": list(e.tags), "cell": self.cell(index),
-                "measures": dict(zip(self.qd.descriptors, e.measures.tolist(), strict=True))}
+        entry = {"fitness": e.fitness, "generation": e.born, "key": e.genome.key, "genome": e.genome,
+                 "phenotype": e.phenotype, "tags": list(e.tags), "cell": self.cell(index),
+                 "measures": dict(zip(self.qd.descriptors, e.measures.tolist(), strict=True))}
+        if e.features is not None:
+            entry["behaviour"] = dict(zip(FEATURES, e.features.tolist(), strict=True))
+        return entry
+
+    def entry_of_key(self, key: int) -> dict | None:
+        """`elite_entry` of the elite whose genome has `key` (None: no elite has it)."""
+        for index, e in self.elites.items():
+            if e.genome.key == key:
+                return self.elite_entry(index)
+        return None
 
     # ------------------------------------------------------------------ checkpoint state
     def state(self) -> dict:
@@ -390,8 +485,16 @@ class MapElitesSearch:
                                                in self.tracker.generation_innovations.items()]},
                 "random": encode_random(self._random_state),
                 "genomes": encode_genomes([self.elites[c].genome for c in cells]),
-                "elites": [{"cell": c, "total": self.elites[c].total, "tags": list(self.elites[c].tags),
-                            "born": self.elites[c].born} for c in cells]}
+                "elites": [self._elite_state(c) for c in cells],
+                **({"curiosity": [[k, v] for k, v in sorted(self.curiosity.items())]}
+                   if self.qd.selection == "curiosity" else {})}
+
+    def _elite_state(self, cell: int) -> dict:
+        e = self.elites[cell]
+        out = {"cell": cell, "total": e.total, "tags": list(e.tags), "born": e.born}
+        if e.features_total is not None:
+            out["features"] = e.features_total.tolist()
+        return out
 
     @staticmethod
     def decode_state(data, neat_config, path: str = "search") -> dict:
@@ -411,6 +514,11 @@ class MapElitesSearch:
             i, o, t, n = row(it, f"{path}.innovations.generation[{j}]", ("int", "int", "str", "int"))
             tracker.generation_innovations[(i, o, t)] = n
         out["tracker"] = tracker
+        out["curiosity"] = {}
+        if isinstance(data, dict) and "curiosity" in data:
+            for j, it in enumerate(get(data, "curiosity", path, "list")):
+                k, v = row(it, f"{path}.curiosity[{j}]", ("int", "float"))
+                out["curiosity"][k] = v
         genomes = decode_genomes(get(data, "genomes", path, "dict"), f"{path}.genomes",
                                  neat_config.genome_type, neat_config.genome_config)
         elites = get(data, "elites", path, "list")
@@ -422,8 +530,14 @@ class MapElitesSearch:
             tags = [check(t, f"{p}.tags", "str") for t in get(e, "tags", p, "list")]
             if not tags:
                 raise StateError(f"{p}.tags: an elite has at least one score")
+            features = None
+            if isinstance(e, dict) and "features" in e:
+                raw = get(e, "features", p, "list")
+                features = np.array([check(v, f"{p}.features", "float") for v in raw], dtype=np.float64)
+                if len(features) != len(FEATURES):
+                    raise StateError(f"{p}.features: {len(features)} features, expected {len(FEATURES)}")
             out["elites"].append((get(e, "cell", p, "int"), genome, get(e, "total", p, "float"), tags,
-                                  get(e, "born", p, "int")))
+                                  get(e, "born", p, "int"), features))
         return out
 
     def _restore(self, state: Mapping) -> None:
@@ -435,12 +549,19 @@ class MapElitesSearch:
         nxt = state["node_indexer"]
         self.config.genome_config.node_indexer = None if nxt is None else itertools.count(nxt)
         keep = []
-        for cell, genome, total, tags, born in state["elites"]:
+        for cell, genome, total, tags, born, features in state["elites"]:
             p = self.decode(genome)
             if not p.valid:
                 raise StateError(f"search.elites: the elite of cell {cell} decodes to an invalid body")
-            keep.append((cell, Elite(genome, p, self.qd.measure(p.body), total, list(tags), born)))
+            if self.qd.behaviour and features is None:
+                raise StateError(f"search.elites: the elite of cell {cell} has no behaviour features, "
+                                 "which the run's descriptors read (the run's qd settings changed?)")
+            e = Elite(genome, p, np.zeros(0), total, list(tags), born,
+                      features if self.qd.behaviour else None)
+            e.measures = self.qd.measure(p.body, e.features)
+            keep.append((cell, e))
         self.insert([], keep=[e for _, e in keep])
+        self.curiosity = dict(state.get("curiosity", {}))
         if sorted(self.elites) != sorted(c for c, _ in keep):
             raise StateError("search.elites: the elites do not fall in their recorded cells "
                              "(the run's qd settings changed?)")

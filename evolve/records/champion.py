@@ -50,8 +50,22 @@ def best_ever_record(cfg: dict, problem, best: dict) -> dict:
         evaluation["tags"] = list(best["tags"])
     else:
         evaluation["tag"] = f"{best['generation']}/{best['key']}"
-    return champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
-                           best["generation"] + 1, evaluation)
+    champ = champion_record(cfg, problem, best["genome"], best["phenotype"], best["fitness"],
+                            best["generation"] + 1, evaluation)
+    champ.update(archive_place(best))
+    return champ
+
+
+def archive_place(entry: dict | None) -> dict:
+    """champion.json's `archive` key for an elite of a map-elites archive (`MapElitesSearch.elite_entry`):
+    its cell, its descriptors and, when the run recorded behaviour, its behaviour features; {} for
+    anything else."""
+    if not entry or "cell" not in entry:
+        return {}
+    place = {"cell": list(entry["cell"]), "measures": dict(entry["measures"])}
+    if "behaviour" in entry:
+        place["behaviour"] = dict(entry["behaviour"])
+    return {"archive": place}
 
 
 def read_champion(run_dir: str | Path,

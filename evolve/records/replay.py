@@ -27,6 +27,7 @@ from evolve.records.champion import episode_steps, precision_of, read_champion
 from evolve.records.elites import parse_cell
 from evolve.rollout.episodes import rollout_policy
 from evolve.rollout.robust import MAX_EPISODES, NOISE_KINDS, EpisodeNoise, Perturbation, Robust, episode_keys
+from tasks.behaviour import FEATURES
 from tasks.env import obs_dim
 from tsim.body import build_body
 from tsim.errors import SgrError
@@ -174,14 +175,34 @@ def _exact() -> EpisodeNoise:
     return EpisodeNoise(Perturbation(), np.zeros(1, np.uint64), np.zeros(1, bool))
 
 
-def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise) -> np.ndarray:
+def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise, record: bool = False) -> np.ndarray:
     """Returns of len(noise.keys) episodes of the champion, each perturbed by its row of `noise`,
-    as one batch through evolution's own episode loop."""
+    as one batch through evolution's own episode loop (`record`: with their behaviour features,
+    `rollout_policy`)."""
     n = len(noise.keys)
     n_obs = obs_dim(champ["task"], build_body(body).n_points)
     return rollout_policy(champ["task"], [body] * n,
                           lambda env: _EachController([ctrl] * n, [n_obs] * n, env.sim.max_actuators),
-                          champ["episode_steps"], noise, precision=precision_of(champ))
+                          champ["episode_steps"], noise, precision=precision_of(champ), record=record)
+
+
+def _scored_noise(run_dir: str | Path, champ: dict) -> EpisodeNoise:
+    """The perturbations of the episodes the champion's fitness is the score of (`rescore_champion`)."""
+    evaluation = champ.get("evaluation") or {}
+    robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
+    if robust is None:
+        return _exact()
+    tags = evaluation["tags"] if "tags" in evaluation else [evaluation["tag"]]
+    return robust.noise(evaluation["seed"], tags)
+
+
+def champion_behaviour(run_dir: str | Path, cell=None) -> dict[str, float]:
+    """What the champion does: its behaviour features (tasks/behaviour.py), the mean over the
+    episodes its fitness scores (for a run scored by one exact episode, that episode), simulated
+    from champion.json alone. `cell`: a map-elites run's elite of that cell instead."""
+    champ, body, ctrl = read_champion(run_dir, cell)
+    rows = _replay(champ, body, ctrl, _scored_noise(run_dir, champ), record=True)
+    return dict(zip(FEATURES, rows[:, 1:].mean(axis=0).tolist(), strict=True))
 
 
 def rescore_champion(run_dir: str | Path, cell=None) -> float:

@@ -13,9 +13,11 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from evolve.records.elites import read_elites
-from evolve.report.gallery import body_image
+from evolve.report.gallery import VOXEL_RGB, body_image
 from evolve.report.plots import save_png
 from tsim.files import make_folder
+
+MATERIALS = ("empty", "rigid", "soft", "horizontal actuator", "vertical actuator")  # evogym's voxel types
 
 
 def archive_grid(data: dict) -> tuple[np.ndarray, dict[tuple[int, int], dict]]:
@@ -58,10 +60,37 @@ def plot_archive(run_dir: str | Path, out: str | Path | None = None, bodies: boo
         ax.set_ylim(extent[2], extent[3])
     ax.set_xlabel(names[0])
     ax.set_ylabel(names[1] or "")
+    _cell_axes(ax, extent, n_i, n_j, one_row=len(data["resolution"]) == 1)
+    if bodies:
+        from matplotlib.patches import Patch
+
+        handles = [Patch(facecolor=VOXEL_RGB[k] / 255, edgecolor="0.4", label=label)
+                   for k, label in enumerate(MATERIALS) if k > 0]
+        fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=7, frameon=False)
+    offset = data.get("score_offset")
+    offset = f" (offset {offset:g})" if isinstance(offset, int | float) else ""
     ax.set_title(f"archive after generation {data['generation']}: {len(data['elites'])} elites, coverage "
-                 f"{data['coverage']:.1%}, QD score {data['qd_score']:.3f}", fontsize=9)
-    fig.tight_layout()
+                 f"{data['coverage']:.1%}, QD score {data['qd_score']:.3f}{offset}", fontsize=9, pad=18)
+    fig.tight_layout(rect=(0, 0.05 if bodies else 0, 1, 1))
     return save_png(fig, out or Path(run_dir) / "archive.png")
+
+
+def _cell_axes(ax, extent: tuple[float, ...], n_i: int, n_j: int, one_row: bool) -> None:
+    """Cell indices on the top and right axes, at each cell's centre (`sgr render RUN --cell I,J`)."""
+    def ticks(lo: float, hi: float, n: int) -> tuple[np.ndarray, int]:
+        step = max(1, int(np.ceil(n / 12)))  # at most ~12 labels
+        idx = np.arange(0, n, step)
+        return lo + (idx + 0.5) * (hi - lo) / n, idx
+
+    top = ax.secondary_xaxis("top")
+    at, idx = ticks(extent[0], extent[1], n_i)
+    top.set_ticks(at, labels=[str(i) for i in idx], fontsize=7)
+    top.set_xlabel("cell index i", fontsize=7)
+    if not one_row:
+        right = ax.secondary_yaxis("right")
+        at, idx = ticks(extent[2], extent[3], n_j)
+        right.set_ticks(at, labels=[str(j) for j in idx], fontsize=7)
+        right.set_ylabel("cell index j", fontsize=7)
 
 
 def spread_elites(run_dir: str | Path, n: int = 6) -> list[dict]:

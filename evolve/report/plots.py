@@ -355,3 +355,20 @@ def _finish(fig: Figure, ax: Axes, title: str, ylabel: str, out: str | Path) -> 
     _style(ax, title, ylabel)
     fig.tight_layout()
     return save_png(fig, out)
+
+
+def band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
+    """The mean over runs per generation (each run's values from generation 1) with a ± sd band;
+    non-finite values count as missing."""
+    n = max(len(c) for c in curves)
+    table = np.full((len(curves), n), np.nan)
+    for j, c in enumerate(curves):
+        table[j, :len(c)] = np.where(np.isfinite(c), c, np.nan)
+    seen = ~np.all(np.isnan(table), axis=0)
+    if not seen.any():
+        return
+    g = np.arange(1, n + 1)[seen]
+    t = table[:, seen]
+    mean, sd = np.nanmean(t, axis=0), np.nanstd(t, axis=0)
+    ax.plot(g, mean, color=color, label=label)
+    ax.fill_between(g, mean - sd, mean + sd, color=color, alpha=0.2, linewidth=0)

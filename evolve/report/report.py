@@ -39,7 +39,17 @@ from evolve.records.rundir import champion_of
 from evolve.records.segments import backend_summary
 from evolve.report.gallery import champion_figure
 from evolve.report.groups import episode_length
-from evolve.report.plots import read_generations, save_png
+from evolve.report.plots import band, read_generations, save_png
+from evolve.report.qd import (
+    BEHAVIOUR_COLUMNS,
+    QD_COLUMNS,
+    behaviour_markdown,
+    behaviour_row,
+    plot_qd_curves,
+    qd_curves_html,
+    qd_markdown,
+    qd_row,
+)
 from tsim.errors import SgrError
 from tsim.files import CONFIG_CAP, read_text
 
@@ -178,8 +188,10 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         for g in CHECKPOINTS:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
+        row.update(qd_row(d, cols))  # a map-elites run's archive
         if robustness and (d / "champion.json").is_file():
             row.update(champion_robustness(d, replays, levels))
+            row.update(behaviour_row(d))
             if verdict_rule.EPS in levels:  # the gallery's caption says it too
                 row["verdict"] = row.get("headline_verdict") or _verdict(row).label
         rows.append(row)
@@ -330,6 +342,8 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
                 cells.append(f"**{'holds' if _holds(r) else 'knife-edge'}**")
             out.write(f"| {r['run']} | {champion_figure(r):.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
+    out.write(qd_markdown(rows))
+    out.write(behaviour_markdown(rows))
     out.write(bodies_markdown(rows))
     out.write(backends_markdown(rows))
     return out.getvalue()
@@ -522,9 +536,12 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
     """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
     then the settings of each run's group (SETTING_COLUMNS, where the rows have them), then
     `backend` (where the run ran: `backend_summary`), then BODY_COLUMNS: missing values empty, other
-    keys dropped."""
+    keys dropped; then QD_COLUMNS and BEHAVIOUR_COLUMNS where some row has them (evolve/report/qd.py)."""
     setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
     columns = summary_columns(_levels(rows)) + list(setting) + ["backend"] + list(BODY_COLUMNS)
+    for extra in (QD_COLUMNS, BEHAVIOUR_COLUMNS):  # where some run has them
+        if any(extra[0] in r for r in rows):
+            columns += list(extra)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
@@ -596,10 +613,10 @@ def _plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path
         for method, series in sorted(by_task[task].items()):
             curves = series["best"]
             seeds = f"{len(curves)} seed{'s' if len(curves) != 1 else ''}"
-            _band(ax, curves, color[method], f"{method} ({seeds})")
+            band(ax, curves, color[method], f"{method} ({seeds})")
             for side, column in zip(sides, extra, strict=True):
                 if series[column]:
-                    _band(side, series[column], color[method], method)
+                    band(side, series[column], color[method], method)
         last = max(len(c) for m in by_task[task].values() for c in m["best"])
         for method in sorted(by_task[task]):  # the authors' figures at generations 1, 30, 100
             known = [(g, v) for g, v in zip(CHECKPOINTS, AUTHORS.get((classic[method], task), ())[:3],
@@ -622,23 +639,6 @@ def _plot_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path
                 a.legend(fontsize="small")
     fig.tight_layout()
     return save_png(fig, path, dpi=CURVES_DPI)
-
-
-def _band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
-    """The mean over runs per generation (each run's values from generation 1) with a ± sd band;
-    non-finite values count as missing."""
-    n = max(len(c) for c in curves)
-    table = np.full((len(curves), n), np.nan)
-    for j, c in enumerate(curves):
-        table[j, :len(c)] = np.where(np.isfinite(c), c, np.nan)
-    seen = ~np.all(np.isnan(table), axis=0)
-    if not seen.any():
-        return
-    g = np.arange(1, n + 1)[seen]
-    t = table[:, seen]
-    mean, sd = np.nanmean(t, axis=0), np.nanstd(t, axis=0)
-    ax.plot(g, mean, color=color, label=label)
-    ax.fill_between(g, mean - sd, mean + sd, color=color, alpha=0.2, linewidth=0)
 
 
 def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | None = None,
@@ -671,12 +671,15 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
             say(f"  {label} / {task}: {len(rs)} run{'s' if len(rs) != 1 else ''} "
                 f"({', '.join(r['run'] for r in rs)})")
     archives = write_archives({r["run"]: r["path"] for r in rows}, out.parent / "archives")
-    text = report_markdown(rows, skipped, pool) + archives_markdown(archives, out.parent)
+    main = report_markdown(rows, skipped, pool)
+    text = main + archives_markdown(archives, out.parent)
     atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
     curves = plot_curves(runs, out.parent / "curves.png", pool)
     shown = (write_gallery(gallery_entries(rows, {r["run"]: r["path"] for r in rows}), out.parent / "gallery")
              if gallery else [])
-    page = report_html(text, curves, shown, archives_html(archives))
+    qd_curves = plot_qd_curves(runs, out.parent / "qd-curves.png", pool)
+    page = report_html(main, curves, shown, qd_curves_html(qd_curves) + archives_html(archives))
+    # (the archives once: as HTML)
     atomic_write(out.parent / "report.html", page.encode())
     return out

@@ -12,6 +12,7 @@ import numpy as np
 
 from evolve.nn.dense import ControllerBatch, DenseController
 from evolve.rollout.robust import EpisodeNoise
+from tasks.behaviour import BehaviourRecorder
 from tasks.env import BatchEnv
 
 
@@ -23,9 +24,11 @@ class BatchPolicy(Protocol):
 
 def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callable[[BatchEnv], BatchPolicy],
                    episode_steps: int | str | None = None, noise: EpisodeNoise | None = None, *,
-                   precision: str | None = None) -> np.ndarray:
+                   precision: str | None = None, record: bool = False) -> np.ndarray:
     """Episode return of every body driven by the batched policy built for the env's layout;
-    `noise` perturbs each world's episode (robust evaluation, evolve/rollout/robust.py).
+    `noise` perturbs each world's episode (robust evaluation, evolve/rollout/robust.py). With
+    `record`, (B, 1 + len(FEATURES)): each return, then its behaviour features
+    (tasks/behaviour.py); without, the episode runs exactly as it always has.
 
     Every world's random stream starts from the same seed (0): a task with per-episode randomness
     (BidirectionalWalker-v0's goals) then gives every robot the same episode, so a robot's fitness
@@ -39,16 +42,23 @@ def rollout_policy(task: str, bodies: Sequence[np.ndarray], make_policy: Callabl
     policy = make_policy(env)
     obs = env.observe()  # the constructed env's episode: its stream's first draw, as in a replay
     total = np.zeros(env.n_worlds)
+    recorder = BehaviourRecorder(env) if record else None
     for t in range(env.episode_steps):
         act = policy.act(obs)
+        wanted = act
         if noise is not None:
             extra = noise.actions(t, act.shape[1])
             if extra is not None:
                 act = act + extra
-        obs, r, term, trunc, _ = env.step(act)
+        running = None if recorder is None else ~env.terminated
+        obs, r, term, trunc, info = env.step(act)
         total += r
+        if recorder is not None:
+            recorder.step(wanted, running & ~info["unstable"])
         if np.all(term | trunc):
             break
+    if recorder is not None:
+        return np.column_stack([total, recorder.features()])
     return total
 
 

@@ -28,6 +28,7 @@ from evolve.own_modules import child_env, python_command
 from evolve.rollout.episodes import BatchPolicy
 from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
+from tasks.behaviour import FEATURES
 from tasks.env import BatchEnv
 from tsim import runtime
 from tsim.errors import SgrError
@@ -76,11 +77,12 @@ def balanced_chunks(costs: Sequence[float], n: int) -> list[list[int]]:
 
 
 def chunk_job(task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-              episode_steps: int | str | None, noise: EpisodeNoise | None, chunk: list[int]) -> tuple:
+              episode_steps: int | str | None, noise: EpisodeNoise | None, chunk: list[int],
+              record: bool = False) -> tuple:
     """`run_chunk`'s arguments for the robots `chunk` of a batch (what a worker is sent); a task
     registered in this process's code travels with the job (`evolve.rollout.worker.spec_blob`)."""
     return (task, [bodies[i] for i in chunk], [items[i] for i in chunk], factory, episode_steps,
-            None if noise is None else noise.take(chunk), spec_blob(task))
+            None if noise is None else noise.take(chunk), spec_blob(task), record)
 
 
 class WorkerDied(RuntimeError):
@@ -95,10 +97,12 @@ class BasePool:
     _runs_here = False  # whether a width of 1 means "in this process" (local pools)
 
     def run(self, task: str, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
-            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None) -> np.ndarray:
+            episode_steps: int | str | None = None, noise: EpisodeNoise | None = None,
+            record: bool = False) -> np.ndarray:
         """Episode return of each body driven by its item (`factory(env, items)` builds the policy),
         in input order, each episode perturbed by its row of `noise` (if any); an exception raised
-        where a chunk was simulated is raised here."""
+        where a chunk was simulated is raised here. `record`: (n, 1 + len(FEATURES)), each return
+        then its behaviour features (tasks/behaviour.py)."""
         if len(bodies) != len(items):
             raise ValueError(f"{len(bodies)} bodies but {len(items)} policy items")
         if len(bodies) == 0:
@@ -106,10 +110,10 @@ class BasePool:
         with self._session():
             width = self._width()
             if width == 1 and self._runs_here:
-                return run_chunk(task, list(bodies), list(items), factory, episode_steps, noise)
+                return run_chunk(task, list(bodies), list(items), factory, episode_steps, noise, None, record)
             chunks = balanced_chunks([float(np.count_nonzero(b)) for b in bodies], width)
-            jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c) for c in chunks]
-            out = np.zeros(len(bodies))
+            jobs = [chunk_job(task, bodies, items, factory, episode_steps, noise, c, record) for c in chunks]
+            out = np.zeros((len(bodies), 1 + len(FEATURES)) if record else len(bodies))
             for c, returns in zip(chunks, self._run_jobs(jobs), strict=True):
                 out[c] = returns
             return out

@@ -28,12 +28,13 @@ from tsim.errors import SgrError
 
 
 def run_chunk(task: str, bodies: list[np.ndarray], items: Sequence, factory, episode_steps,
-              noise: EpisodeNoise | None = None, spec: bytes | None = None) -> np.ndarray:
+              noise: EpisodeNoise | None = None, spec: bytes | None = None,
+              record: bool = False) -> np.ndarray:
     """Episode returns of one chunk, simulated as one batch (`noise`: the chunk's perturbations);
     `spec` is a task registered in the parent's code (`spec_blob`), registered here
-    first."""
+    first. `record`: each row the return and its behaviour features (`rollout_policy`)."""
     load_spec_blob(spec)
-    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise)
+    return rollout_policy(task, bodies, lambda env: factory(env, items), episode_steps, noise, record=record)
 
 
 _SGR = ("tasks", "tsim", "evolve")

@@ -80,7 +80,7 @@ from evolve.config import (
     run_episodes,
 )
 from evolve.records import verdict as verdict_rule
-from evolve.records.champion import best_ever_record, champion_record
+from evolve.records.champion import archive_place, best_ever_record, champion_record
 from evolve.records.files import atomic_write, record_json
 from evolve.records.replay import record_headline
 from evolve.records.selection import describe, explain, passes  # noqa: F401  (the console's words)
@@ -166,6 +166,8 @@ def select_champion(exp, settings: FinalSelection) -> dict:
     genome = cands[i][1]
     champ = champion_record(cfg, problem, genome, phenotypes[i], fit, search.generation,
                             {"robust": fit_robust.to_json(), "seed": cfg.seed, "tag": fit_tag})
+    entry_of_key = getattr(search, "entry_of_key", None)  # an archive's: the champion's cell
+    champ.update(archive_place(entry_of_key(cands[i][0]) if entry_of_key else None))
     rows = [{"key": k, "recorded": float(g.fitness) if g.fitness is not None else None,
              "score": float(s), "nominal": float(n), "passes": bool(h)}
             for (k, g), s, n, h in zip(cands, scores, nominal, passing, strict=True)]

@@ -140,11 +140,15 @@ def elites_record(cfg, problem, search) -> dict:
     elites = []
     for index in sorted(search.elites):
         entry = search.elite_entry(index)
+        record = best_ever_record(cfg, problem, entry)
+        record.pop("archive", None)  # (the entry says it)
         elites.append({"cell": list(entry["cell"]), "measures": entry["measures"],
-                       "champion": best_ever_record(cfg, problem, entry)})
+                       **({"behaviour": entry["behaviour"]} if "behaviour" in entry else {}),
+                       "champion": record})
     return {"format": ELITES_FORMAT, "generation": search.generation, "descriptors": list(qd.descriptors),
             "ranges": [list(r) for r in qd.ranges], "resolution": list(qd.resolution),
-            "coverage": float(stats.coverage), "qd_score": float(stats.qd_score), "elites": elites}
+            "coverage": float(stats.coverage), "qd_score": search.qd_score(),
+            "score_offset": qd.score_offset, "elites": elites}
 
 
 class Checkpointer:

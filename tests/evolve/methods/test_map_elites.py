@@ -13,6 +13,7 @@ import yaml
 
 from evolve.cli import main
 from evolve.methods.map_elites import Elite, MapElitesProblem, MapElitesSearch, require_ribs
+from evolve.methods.qd_floors import FLOORS
 from evolve.runs.config import config_from_dict
 from evolve.search.neat_ini import neat_config_from_text, neat_ini_text
 from tsim.errors import SgrError
@@ -57,7 +58,8 @@ def test_an_insertion_keeps_the_better_elite_of_a_cell():
     assert keys(s) == {low: 5, right: 2}
     assert s.best["key"] == 5 and s.best["fitness"] == 3.0 and s.best["cell"] == (0, 0)
     assert s.elites[low].genome.fitness == 3.0  # what crossover and final selection read
-    assert s.archive.stats.num_elites == 2 and s.archive.stats.qd_score == pytest.approx(3.0 + 0.2)
+    assert s.archive.stats.num_elites == 2
+    assert s.qd_score() == pytest.approx(3.0 + 0.2 - 2 * s.qd.score_offset)
 
 
 def test_a_rescored_elite_that_falls_is_replaced_by_a_newcomer_it_used_to_beat():
@@ -91,7 +93,10 @@ def test_a_rescored_elite_that_falls_is_replaced_by_a_newcomer_it_used_to_beat()
     ({"initial": 2.5}, "key 'qd.initial' must be an int from 1 to 1,000,000, got 2.5"),
     ({"batch": 10**9}, "key 'qd.batch' must be an int from 1 to 1,000,000, got 1000000000"),
     ({"rescore": -1}, "key 'qd.rescore' must be an int from 0 to 1,000,000, got -1"),
-    ({"score_offset": "low"}, "key 'qd.score_offset' must be a number"),
+    ({"score_offset": "low"}, "key 'qd.score_offset' must be a number or 'auto'"),
+    ({"selection": "greedy"}, "key 'qd.selection' must be one of uniform, curiosity"),
+    ({"exploit": 1.5}, "key 'qd.exploit' must be a share from 0 to 1"),
+    ({"descriptors": ["gait", "contact"]}, "key 'qd.descriptors': unknown descriptor 'gait'"),
 ])
 def test_a_bad_qd_key_is_one_line_naming_it(tmp_path, capsys, qd, named):
     """Through `sgr evolve --config`: exit 2 and one line on stderr naming the key; nothing is run."""
@@ -110,7 +115,9 @@ def test_the_defaults_fill_every_qd_key():
     p = search_of({}).qd
     assert (p.descriptors, p.resolution) == (("actuator", "rigid"), (10, 10))
     assert p.ranges == ((0.0, 1.0), (0.0, 1.0))
-    assert (p.batch, p.initial, p.rescore, p.score_offset) == (128, 128, 32, 0.0)
+    assert (p.batch, p.initial, p.rescore) == (128, 128, 32)
+    assert (p.selection, p.exploit) == ("uniform", 0.0)  # the search of runs made before they existed
+    assert p.score_offset == FLOORS["Walker-v0"] < 0  # the task's floor (evolve/methods/qd_floors.py)
     w = search_of({"descriptors": ["width"]}).qd
     assert w.resolution == (5,) and w.ranges == ((0.5, 5.5),)
     assert search_of({"batch": 3}).qd.rescore == 1  # a small batch still re-scores: honest by default
@@ -197,3 +204,85 @@ def test_an_archive_too_big_to_allocate_is_one_line_naming_qd_resolution(tmp_pat
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "key 'qd.resolution' makes" in err, err
     assert not (tmp_path / "run").exists()
+
+
+def test_every_task_has_a_floor_at_or_below_zero():
+    """qd_floors.py states a floor for each of the 32 tasks, never above 0 (an elite's share of the
+    QD score is max(0, fitness - floor))."""
+    from tasks.specs import BUILTIN
+
+    assert set(FLOORS) == set(BUILTIN) and all(f <= 0 for f in FLOORS.values())
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_the_qd_score_never_falls_as_elites_are_added(seed):
+    """Property: offering random elites one batch after another (fitness below and above the offset,
+    some NaN), the QD score after each insertion is at least the one before, and it is the sum of
+    max(0, fitness - offset) over the elites."""
+    needs_ribs()
+    rng = np.random.default_rng(seed)
+    s = search_of({"resolution": [4, 4], "score_offset": -1.0})
+    last, key = 0.0, 0
+    for _ in range(30):
+        batch = []
+        for _ in range(int(rng.integers(1, 6))):
+            key += 1
+            fit = float(rng.normal(0.0, 2.0)) if rng.random() > 0.1 else float("nan")
+            batch.append(elite(key, fit, tuple(rng.random(2))))
+        s.insert(batch)
+        score = s.qd_score()
+        assert score >= last
+        assert score == pytest.approx(sum(max(0.0, e.fitness + 1.0) for e in s.elites.values()))
+        last = score
+    assert last > 0
+
+
+def test_behaviour_descriptors_read_the_episode_s_features():
+    """A behaviour descriptor reads the features the rollout recorded, a body descriptor the body; the
+    problem then asks the rollout to record, and a body-only archive does not."""
+    needs_ribs()
+    from evolve.methods.descriptors import measure
+    from tasks.behaviour import FEATURES
+
+    s = search_of({"descriptors": ["actuator", "gait_frequency"]})
+    assert s.problem.record_behaviour and not search_of({}).problem.record_behaviour
+    features = np.arange(len(FEATURES), dtype=float)
+    body = np.array([[3, 3], [1, 0]])
+    got = measure(["actuator", "gait_frequency", "contact"], body, features)
+    assert got.tolist() == [2 / 3, FEATURES.index("gait_frequency"), FEATURES.index("contact")]
+    with pytest.raises(ValueError, match="describes behaviour"):
+        measure(["gait_frequency"], body, None)
+
+
+def test_curiosity_credits_the_parents_of_children_that_entered():
+    """`selection: curiosity`: each parent of a child that took a cell gains 1, of one that did not
+    loses 0.5 (Cully & Demiris 2018); parents are then drawn in proportion to their score shifted
+    to start at 1, so an elite whose children keep entering is drawn more often."""
+    needs_ribs()
+    s = search_of({"resolution": [2, 2], "selection": "curiosity"})
+    s.insert([elite(1, 1.0, (0.1, 0.1)), elite(2, 1.0, (0.9, 0.1))])
+    kids = [(neat.DefaultGenome(3), None, (1, 1)), (neat.DefaultGenome(4), None, (1, 2))]
+    s.insert([elite(3, 0.5, (0.1, 0.9)), elite(4, 0.1, (0.2, 0.2))])  # 3 enters, 4 does not
+    s._credit(kids)
+    assert s.curiosity == {1: 2.0 - 0.5, 2: -0.5}
+    cells = sorted(s.elites)
+    with s._own_random():
+        drawn = [s._parent(cells, exploit=False).key for _ in range(3000)]
+    # weights: key 1: 1.5 - (-0.5) + 1 = 3, key 2: 1, key 3 (no score yet, 0): 1.5
+    share = drawn.count(1) / len(drawn)
+    assert share == pytest.approx(3 / 5.5, abs=0.03)
+
+
+def test_an_exploiting_parent_is_the_fittest_of_a_tournament():
+    """`exploit`: its parents are the fittest of TOURNAMENT elites drawn; with every elite drawn (as
+    many elites as the tournament), always the best."""
+    needs_ribs()
+    from evolve.methods.map_elites import TOURNAMENT
+
+    s = search_of({"resolution": [2, 2], "exploit": 0.5})
+    corners = [(0.1 + 0.5 * (k % 2), 0.1 + 0.5 * (k // 3)) for k in range(1, 1 + TOURNAMENT)]
+    s.insert([elite(k, float(k), m) for k, m in enumerate(corners, start=1)])
+    cells = sorted(s.elites)
+    assert len(cells) == TOURNAMENT
+    with s._own_random():
+        assert {s._parent(cells, exploit=True).key for _ in range(50)} == {TOURNAMENT}

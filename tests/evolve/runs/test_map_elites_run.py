@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 import yaml
 
-from evolve.records.replay import load_champion, rescore_champion
+from evolve.methods.qd_floors import FLOORS
+from evolve.records.replay import champion_behaviour, load_champion, rescore_champion
 from evolve.records.rundir import RunDir
 from evolve.runs.checkpoint import load_checkpoint
 from evolve.runs.experiment import Experiment
@@ -64,7 +65,11 @@ def test_a_run_writes_its_archive_rows_and_champion(tiny):
     last = tiny.rows()[-1]
     assert len(tiny.rows()) == 4 and float(last["coverage"]) == len(data["elites"]) / 9 == data["coverage"]
     fits = [e["champion"]["fitness"] for e in data["elites"]]
-    assert float(last["qd_score"]) == pytest.approx(sum(fits)) and float(last["best"]) == max(fits)
+    offset = data["score_offset"]
+    assert offset == FLOORS["Walker-v0"]  # the default: the task's floor
+    assert float(last["qd_score"]) == data["qd_score"]
+    assert data["qd_score"] == pytest.approx(sum(max(0.0, f - offset) for f in fits))
+    assert float(last["best"]) == max(fits)
     assert tiny.champion()["fitness"] == max(fits) and tiny.champion()["method"] == "map-elites"
     assert max(len(e["champion"]["evaluation"]["tags"]) for e in data["elites"]) > 1
 
@@ -92,11 +97,18 @@ def test_one_and_two_workers_give_the_same_archive(tmp_path, tiny):
     assert elites(two) == elites(tiny) and rows(two) == rows(tiny)
 
 
+# an archive over what the robots do, parents by curiosity and tournaments: the state grows by each
+# elite's behaviour features and every elite's curiosity
+BEHAVIOUR_QD = {"descriptors": ["gait_frequency", "contact"], "resolution": [4, 3], "batch": 8, "rescore": 4,
+                "selection": "curiosity", "exploit": 0.25}
+
+
 @pytest.mark.subprocess
-def test_a_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path):
+@pytest.mark.parametrize("qd", [TINY["qd"], BEHAVIOUR_QD], ids=["body", "behaviour"])
+def test_a_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path, qd):
     """Killed after generation 5 or later, resumed from its newest checkpoint by a new process: the
     rows, the archive, the champion and the last checkpoint are the uninterrupted run's."""
-    raw = {**TINY, "generations": 10, "checkpoint_every": 2, "episode_steps": 60}
+    raw = {**TINY, "generations": 10, "checkpoint_every": 2, "episode_steps": 60, "qd": qd}
     cfg = tmp_path / "me.yaml"
     cfg.write_text(yaml.safe_dump(raw))
     crashed = RunDir(tmp_path / "crashed")
@@ -164,7 +176,30 @@ def test_the_report_shows_the_archive_and_elites_across_the_map(tiny, tmp_path):
     assert chosen[0]["cell"] == best["cell"] and len({tuple(c["cell"]) for c in chosen}) == len(chosen)
     for c in chosen:
         assert (out.parent / "archives" / f"run-elite-{c['cell'][0]}-{c['cell'][1]}.png").is_file()
-    assert "archive of run" in (out.parent / "report.html").read_text()
+    page = (out.parent / "report.html").read_text()
+    assert "archive of run" in page
+    assert page.count("Archives (map-elites)") == 1 and "![archive" not in page  # once, as HTML
+
+
+def test_the_report_states_coverage_qd_score_and_best_elite(tiny, tmp_path):
+    """report.md's "Quality diversity" row and summary.csv's columns are the run's last generation's
+    coverage and QD score and its archive's best elite; qd-curves.png is drawn and inlined."""
+    import csv
+
+    from evolve.report.report import write_report
+
+    out = write_report([tiny.path], tmp_path / "rep" / "report.md", robustness=False, gallery=False)
+    last, data = tiny.rows()[-1], elites(tiny)
+    best = max(e["champion"]["fitness"] for e in data["elites"])
+    row = next(csv.DictReader((out.parent / "summary.csv").open()))
+    assert float(row["coverage"]) == float(last["coverage"]) and float(row["qd_score"]) == data["qd_score"]
+    assert float(row["best_elite"]) == best and int(row["n_elites"]) == len(data["elites"])
+    assert row["descriptors"] == "actuator x rigid" and float(row["score_offset"]) == FLOORS["Walker-v0"]
+    text = out.read_text()
+    line = next(x for x in text.splitlines() if x.startswith("| map-elites") and "actuator x rigid" in x)
+    assert f"{100 * float(last['coverage']):.1f} %" in line and f"{best:.2f} |" in line
+    assert (out.parent / "qd-curves.png").is_file()
+    assert "alt='QD curves'" in (out.parent / "report.html").read_text()
 
 
 @pytest.mark.parametrize("damage, named", [
@@ -190,3 +225,25 @@ def test_a_damaged_archive_checkpoint_is_refused_naming_the_field(tiny, damage, 
     with pytest.raises(StateError, match=named.replace("[", "\\[").replace("]", "\\]")):
         state = decode_checkpoint(data, cfg, nc)
         MapElitesSearch(MapElitesProblem(cfg, nc), nc, seed=cfg.seed, state=state)
+
+
+@pytest.fixture(scope="module")
+def by_behaviour(tmp_path_factory) -> RunDir:
+    return run_tiny(tmp_path_factory.mktemp("me") / "behaviour", qd=BEHAVIOUR_QD, episode_steps=60)
+
+
+def test_an_archive_of_behaviour_places_each_elite_by_what_it_did(by_behaviour):
+    """Over gait frequency x contact: each elite of elites.json holds its behaviour features (the mean
+    over its scored episodes), its descriptors are those features, and its record replayed from the
+    file does that again; champion.json says the champion's cell, descriptors and behaviour."""
+    data = elites(by_behaviour)
+    assert data["descriptors"] == ["gait_frequency", "contact"] and len(data["elites"]) >= 2
+    for e in data["elites"]:
+        b = e["behaviour"]
+        assert e["measures"] == {"gait_frequency": b["gait_frequency"], "contact": b["contact"]}
+        again = champion_behaviour(by_behaviour.path, cell=tuple(e["cell"]))
+        assert again == pytest.approx(b, abs=1e-12)
+    champ = by_behaviour.champion()
+    best = max(data["elites"], key=lambda e: e["champion"]["fitness"])
+    assert champ["archive"] == {"cell": best["cell"], "measures": best["measures"],
+                                "behaviour": best["behaviour"]}
