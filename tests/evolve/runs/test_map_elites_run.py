@@ -247,3 +247,16 @@ def test_an_archive_of_behaviour_places_each_elite_by_what_it_did(by_behaviour):
     best = max(data["elites"], key=lambda e: e["champion"]["fitness"])
     assert champ["archive"] == {"cell": best["cell"], "measures": best["measures"],
                                 "behaviour": best["behaviour"]}
+
+
+def test_a_run_extended_with_more_generations_is_the_longer_run(tmp_path):
+    """A finished 4-generation run extended to 6 (`sgr evolve --resume RUN --generations 6`) has the
+    rows and archive of a run asked for 6 from the start: the search does not depend on the run's
+    length (the QD study reads SGR's budget and twice it from one run)."""
+    from evolve.cli import main
+
+    qd = {**BEHAVIOUR_QD}
+    straight = run_tiny(tmp_path / "six", qd=qd, episode_steps=60, generations=6)
+    extended = run_tiny(tmp_path / "four", qd=qd, episode_steps=60, generations=4)
+    assert main(["evolve", "--resume", str(extended.path), "--generations", "6", "--quiet"]) == 0
+    assert rows(extended) == rows(straight) and elites(extended) == elites(straight)

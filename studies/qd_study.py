@@ -1,0 +1,123 @@
+"""The quality-diversity study (issue 58): map-elites over the body against map-elites over behaviour
+against SGR, at SGR's episode budget and twice it.
+
+Arms, per task (Walker-v0, Climber-v2, UpStepper-v0) and seed (0-2), each the packaged map-elites
+config (configs/map-elites/<task>.yaml: honest evaluation, 64 children a generation, up to 24
+elites re-scored) with parents by curiosity and half the children from tournaments
+(`qd.selection: curiosity`, `qd.exploit: 0.5`, docs/EVOLVE.md "MAP-Elites"):
+
+- ``body``: the archive over the body's actuator x rigid shares (10 x 10), as issue 49's;
+- ``behaviour``: the archive over what the robot does, its gait frequency (0-10 Hz) x its share of
+  steps touching the ground (10 x 10; tasks/behaviour.py);
+- ``sgr``: SGR's packaged config for 100 generations (its episode budget: ~8,600 episodes). For
+  Walker-v0 and Climber-v2 these are results/robust-fast/runs (the same config), not run again.
+
+A map-elites run goes to 100 generations (SGR's budget: final selection picks its champion, kept
+as ``<run>-g100``), then is extended to 200 (twice it: `sgr evolve --resume RUN --generations 200`;
+the search does not depend on the run's length, so the first 100 generations are the 200-generation
+run's). Runs are ordinary run folders under ``--out``, run or resumed as in every study
+(studies/study_runs.py), seeds outermost; finished records are copied to ``--records``.
+
+    python studies/qd_study.py                 # 18 map-elites runs and 3 SGR runs: ~8 h on 2 cores
+    python studies/qd_study.py --table         # docs: the table from the records
+    sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
+"""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+import sys
+from pathlib import Path
+
+import yaml
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from studies.study_runs import RECORDS, evolve, finished, keep  # noqa: E402 (after sgr's folder is on the path)
+
+TASKS = ("Walker-v0", "Climber-v2", "UpStepper-v0")
+SEARCH = {"selection": "curiosity", "exploit": 0.5}
+ARCHIVES = {
+    "body": {"descriptors": ["actuator", "rigid"], "resolution": [10, 10]},
+    "behaviour": {"descriptors": ["gait_frequency", "contact"], "resolution": [10, 10],
+                  "ranges": {"gait_frequency": [0.0, 10.0], "contact": [0.0, 1.0]}},
+}
+BUDGET, TWICE = 100, 200
+SGR_RUNS = ROOT / "results" / "robust-fast" / "runs"
+ARCHIVE_RECORDS = RECORDS + ("elites.json", "archive.png")
+
+
+def config(arm: str, task: str, folder: Path) -> Path:
+    """The arm's config for `task`, written into `folder`: the packaged config with the arm's
+    archive (map-elites) or SGR's budget of 100 generations (sgr)."""
+    method = "sgr" if arm == "sgr" else "map-elites"
+    packaged = ROOT / "configs" / method / f"{task}.yaml"
+    raw = yaml.safe_load(packaged.read_text())
+    raw["neat_config"] = str((packaged.parent / raw["neat_config"]).resolve())
+    if arm == "sgr":
+        raw["generations"] = BUDGET
+    else:
+        raw["qd"] = {**raw["qd"], **ARCHIVES[arm], **SEARCH}
+        raw["generations"] = BUDGET
+    folder.mkdir(parents=True, exist_ok=True)
+    out = folder / f"{arm}-{task}.yaml"
+    out.write_text(yaml.safe_dump(raw, sort_keys=False))
+    return out
+
+
+def sgr_run(records: Path, task: str, seed: int) -> Path:
+    """SGR's run of `task` and `seed`: robust-fast's where it has one, else this study's."""
+    known = SGR_RUNS / f"sgr-{task}-s{seed}"
+    return known if known.is_dir() else records / f"sgr-{task}-s{seed}"
+
+
+def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: int) -> None:
+    """One arm's run to its end (and, for map-elites, its snapshot at SGR's budget, then twice it)."""
+    run = out / f"{arm}-{task}-s{seed}"
+    cfg = config(arm, task, out / "configs")
+    args = ["--config", str(cfg), "--seed", str(seed)]
+    if arm == "sgr":
+        if (SGR_RUNS / f"sgr-{task}-s{seed}").is_dir():
+            return
+        evolve(run, args, workers)
+        if finished(run):
+            keep(run, records)
+        return
+    snapshot = out / f"{run.name}-g{BUDGET}"
+    if not snapshot.is_dir():
+        evolve(run, args, workers)  # to SGR's budget (or resumed there)
+        if finished(run) and int(yaml.safe_load((run / "config.yaml").read_text())["generations"]) == BUDGET:
+            shutil.copytree(run, snapshot, ignore=shutil.ignore_patterns("checkpoints"))
+    keep(snapshot, records, ARCHIVE_RECORDS)
+    if not finished(run) or int(yaml.safe_load((run / "config.yaml").read_text())["generations"]) < TWICE:
+        import subprocess
+
+        from studies.study_runs import SGR
+
+        cmd = SGR + ["evolve", "--quiet", "--workers", str(workers), "--resume", str(run),
+                     "--generations", str(TWICE)]
+        print("+", " ".join(cmd[2:]), flush=True)
+        subprocess.run(cmd, check=True, cwd=ROOT)
+    if finished(run):
+        keep(run, records, ARCHIVE_RECORDS)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", nargs="+", default=list(TASKS))
+    ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    ap.add_argument("--arms", nargs="+", default=["behaviour", "body", "sgr"])
+    ap.add_argument("--out", type=Path, default=ROOT / "runs" / "qd")
+    ap.add_argument("--records", type=Path, default=ROOT / "results" / "qd" / "runs")
+    ap.add_argument("--workers", type=int, default=1)
+    a = ap.parse_args()
+    for seed in a.seeds:
+        for task in a.tasks:
+            for arm in a.arms:
+                run_arm(arm, task, seed, a.out, a.records, a.workers)
+
+
+if __name__ == "__main__":
+    main()
