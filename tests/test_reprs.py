@@ -27,8 +27,9 @@ BODY = np.array([[3, 3, 3, 3, 3], [3, 3, 3, 3, 3], [3, 3, 0, 3, 3], [3, 3, 0, 3,
 ])
 def test_a_champion_or_elite_prints_as_one_short_line_naming_its_task_body_and_fitness(run, cell, controller):
     if cell == "best":  # an elite of the map: its best cell
-        import json
-        elites = json.loads((ROOT / run / "elites.json").read_text())["elites"]
+        from evolve.records.elites import read_elites
+
+        elites = read_elites(ROOT / run)["elites"]
         cell = max(elites, key=lambda e: e["champion"]["fitness"])["cell"]
     champ = load_champion(ROOT / run, cell=cell)
     text = repr(champ)

@@ -16,21 +16,32 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.records.rundir import ELITES_FILE
+from evolve.records.rundir import ELITES_FILE, ELITES_GZ
 from tsim.errors import SgrError
-from tsim.files import RECORD_CAP, read_text
+from tsim.files import RECORD_CAP, read_gzip, read_text
 
 FORMAT = "sgr-elites-1"
 
 
+def elites_file(run_dir: str | Path) -> Path | None:
+    """A run's archive file: elites.json, or in a results folder that keeps it compact elites.json.gz;
+    None when it has neither."""
+    for name in (ELITES_FILE, ELITES_GZ):
+        f = Path(run_dir) / name
+        if f.is_file():
+            return f
+    return None
+
+
 def read_elites(run_dir: str | Path) -> dict:
-    """A run's elites.json as read; SgrError when there is none or it is not one."""
-    f = Path(run_dir) / ELITES_FILE
-    if not f.is_file():
+    """A run's elites.json (or elites.json.gz) as read; SgrError when there is none or it is not one."""
+    f = elites_file(run_dir)
+    if f is None:
         raise SgrError(f"{run_dir} has no {ELITES_FILE}: only a map-elites run keeps an archive of elites")
     try:
-        data = json.loads(read_text(f, RECORD_CAP))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        text = read_gzip(f, RECORD_CAP).decode() if f.name == ELITES_GZ else read_text(f, RECORD_CAP)
+        data = json.loads(text)
+    except (json.JSONDecodeError, UnicodeDecodeError, EOFError) as exc:
         raise SgrError(f"{f}: not valid JSON ({exc})") from None
     if not isinstance(data, dict) or data.get("format") != FORMAT or not isinstance(data.get("elites"), list):
         raise SgrError(f"{f}: not an archive of elites (format {FORMAT})")

@@ -54,6 +54,8 @@ COLUMNS = ["generation", "best", "mean", "median", "n_species", "n_valid", "n_in
 QD_COLUMNS = [*COLUMNS, "coverage", "qd_score"]
 KEEP_CHECKPOINTS = 2
 ELITES_FILE = "elites.json"
+# an archive kept compact in a results folder (gzip of elites.json; read, never written, by sgr)
+ELITES_GZ = "elites.json.gz"
 CHECKPOINT = re.compile(r"gen-(\d{5,})\.json\.gz")  # what sgr writes and loads
 CHECKPOINT_FORMAT = "sgr-checkpoint"
 CHECKPOINT_VERSION = 1

@@ -114,12 +114,12 @@ def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict
     with its cell, fitness, descriptors and body picture)."""
     import imageio.v3 as iio
 
+    from evolve.records.elites import elites_file
     from evolve.records.files import atomic_write
-    from evolve.records.rundir import ELITES_FILE
 
     out = []
     for name, run in runs.items():
-        if not (Path(run) / ELITES_FILE).is_file():
+        if elites_file(run) is None:
             continue
         make_folder(folder, folder.parent)  # a planted link named archives/ is refused, not followed
         safe = str(name).replace("/", "-")

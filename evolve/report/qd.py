@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-from evolve.records.rundir import ELITES_FILE
 from tasks.behaviour import FEATURES
 
 # summary.csv's columns of a map-elites run's archive at its last generation: its coverage, QD score
@@ -30,9 +29,9 @@ def qd_row(run_dir: Path, cols: dict[str, np.ndarray]) -> dict:
     """A run's QD_COLUMNS: its last generation's coverage and QD score (generations.csv), its
     archive's elites and best elite, offset and descriptors (elites.json); {} for a run without an
     archive."""
-    from evolve.records.elites import read_elites
+    from evolve.records.elites import elites_file, read_elites
 
-    if not (Path(run_dir) / ELITES_FILE).is_file() or "coverage" not in cols or not len(cols["coverage"]):
+    if elites_file(run_dir) is None or "coverage" not in cols or not len(cols["coverage"]):
         return {}
     data = read_elites(run_dir)
     fits = [float(e["champion"]["fitness"]) for e in data["elites"]]
@@ -126,10 +125,11 @@ def plot_qd_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Pa
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
+    from evolve.records.elites import elites_file
     from evolve.report.groups import group_of_each_run
     from evolve.report.plots import band, matplotlib_colors, read_generations, save_png
 
-    with_archive = [d for d in runs if (Path(d) / ELITES_FILE).is_file()]
+    with_archive = [d for d in runs if elites_file(d) is not None]
     if not with_archive:
         return None
     group_of = group_of_each_run(with_archive, pool)

@@ -56,3 +56,36 @@ def test_a_cell_that_is_not_integer_indices_is_refused(tmp_path, cell):
     assert elite_record(run, __import__("numpy").array([0, 0])) == GOOD_ELITE["champion"]
     with pytest.raises(SgrError, match="a cell is a tuple of integer indices"):
         elite_record(run, cell)
+
+
+def test_a_compact_archive_elites_json_gz_reads_as_its_json(tmp_path, monkeypatch):
+    """A results folder keeps its archive as elites.json.gz: it reads as the JSON it holds; one that
+    would inflate past the record cap is refused in one line, without inflating it whole."""
+    import gzip
+
+    import evolve.records.elites as elites_module
+    from evolve.records.elites import read_elites
+    from tsim.errors import SgrError
+
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "elites.json.gz").write_bytes(gzip.compress(json.dumps(GOOD).encode(), mtime=0))
+    assert read_elites(run) == GOOD and elite_record(run, "0,0") == GOOD_ELITE["champion"]
+    bomb = tmp_path / "bomb"
+    bomb.mkdir()
+    (bomb / "elites.json.gz").write_bytes(gzip.compress(b" " * (3 * 2**20), mtime=0))
+    monkeypatch.setattr(elites_module, "RECORD_CAP", 2**20)
+    with pytest.raises(SgrError, match="uncompressed"):
+        read_elites(bomb)
+
+
+def test_the_committed_archives_read(repo_root):
+    """results/map-elites keeps its six archives gzipped: each reads whole (100 generations, 60+
+    elites)."""
+    from evolve.records.elites import read_elites
+
+    runs = sorted((repo_root / "results" / "map-elites" / "runs").iterdir())
+    assert len(runs) == 6
+    for run in runs:
+        data = read_elites(run)
+        assert len(data["elites"]) >= 60 and data["generation"] == 100
