@@ -49,6 +49,9 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--cell", metavar="I,J",
                    help="a map-elites run's elite of that cell of its archive (elites.json) instead of its "
                         "champion; default --out RUN_DIR/elite-I-J.gif")
+    r.add_argument("--elites", type=positive(int, 24), metavar="N",
+                   help="a map-elites run's N elites chosen across its archive, the best first, side by "
+                        "side in one GIF (their exact episodes); default --out RUN_DIR/elites.gif")
     r.set_defaults(fn=run)
     return r
 
@@ -73,6 +76,16 @@ def run(args: argparse.Namespace) -> int:
                            "its run's episode")
         if args.exact and args.replay is not None:
             raise SgrError("give either --exact or --replay I, not both")
+        if args.elites is not None:
+            if args.cell or args.replay is not None:
+                raise SgrError("--elites shows several elites' exact episodes: leave out --cell and --replay")
+            from evolve.report.archive import elite_strip
+
+            width = args.width if args.width != 640 else 200  # (the defaults are a single champion's)
+            height = args.height if args.height != 320 else 140
+            out = elite_strip(args.run_dir, args.out, args.elites, width=width, height=height, fps=args.fps)
+            print(f"wrote {out}: {args.elites} elites across the archive, their exact episodes")
+            return 0
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay
         out = champion_gif(args.run_dir, args.out, width=args.width, height=args.height, fps=args.fps,
                            replay=replay, eps=args.noise, kind=args.noise_kind, offset=args.offset,
@@ -85,8 +98,9 @@ def run(args: argparse.Namespace) -> int:
         print(f"wrote {out}{also}: {which}{line}")
         return 0
     else:
-        if args.cell:
-            raise SgrError("--cell renders an elite of a map-elites run: give RUN_DIR")
+        if args.cell or args.elites is not None:
+            raise SgrError(f"{'--cell' if args.cell else '--elites'} renders elites of a map-elites run: "
+                           "give RUN_DIR")
         if not (args.task and args.body):
             raise SgrError("sgr render needs RUN_DIR, or --task and --body")
         if args.replay or args.exact:

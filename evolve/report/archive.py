@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from evolve.records.elites import read_elites
 from evolve.report.gallery import VOXEL_RGB, body_image
 from evolve.report.plots import save_png
+from tsim.errors import SgrError
 from tsim.files import make_folder
 
 MATERIALS = ("empty", "rigid", "soft", "horizontal actuator", "vertical actuator")  # evogym's voxel types
@@ -105,6 +106,40 @@ def spread_elites(run_dir: str | Path, n: int = 6) -> list[dict]:
         rest = [e for e in elites if e not in chosen]
         chosen.append(max(rest, key=gap) if chosen else rest[0])
     return chosen
+
+
+def elite_strip(run_dir: str | Path, out: str | Path | None = None, n: int = 6, *, width: int = 200,
+                height: int = 140, fps: float = 20.0, every: int = 4) -> Path:
+    """One GIF of `n` elites chosen across the map (`spread_elites`, the best first) side by side,
+    each its exact episode (a frame every `every` steps; one that ends early holds its last frame),
+    captioned with its cell and return so far. Default `out`: RUN/elites.gif. Returns its path."""
+    from evolve.records.champion import precision_of, read_champion
+    from tasks.render_episode import render_episode
+    from tsim.render import write_animation
+
+    panels = []
+    for e in spread_elites(run_dir, n):
+        cell = tuple(e["cell"])
+        champ, body, ctrl = read_champion(run_dir, cell)
+        label = ",".join(map(str, cell))
+
+        def line(t: int, total: float, label: str = label) -> str:
+            return f"cell {label}  {total:.2f}"
+
+        panels.append(render_episode(champ["task"], body, lambda t, obs, ctrl=ctrl: ctrl.act(obs),
+                                     champ["episode_steps"], width, height, every=every, indexed=True,
+                                     precision=precision_of(champ), caption=line))
+    if not panels:
+        raise SgrError(f"{run_dir}: the archive has no elite to show")
+    length = max(len(p) for p in panels)
+    gap = np.zeros((height, 2), dtype=panels[0][0].dtype)  # PALETTE 0: the background
+    frames = []
+    for k in range(length):
+        row = []
+        for p in panels:
+            row += [p[min(k, len(p) - 1)], gap]
+        frames.append(np.concatenate(row[:-1], axis=1))
+    return write_animation(frames, out or Path(run_dir) / "elites.gif", fps=fps)
 
 
 def write_archives(runs: dict[str, Path], folder: Path, n: int = 6) -> list[dict]:

@@ -260,3 +260,20 @@ def test_a_run_extended_with_more_generations_is_the_longer_run(tmp_path):
     extended = run_tiny(tmp_path / "four", qd=qd, episode_steps=60, generations=4)
     assert main(["evolve", "--resume", str(extended.path), "--generations", "6", "--quiet"]) == 0
     assert rows(extended) == rows(straight) and elites(extended) == elites(straight)
+
+
+def test_sgr_render_elites_shows_elites_across_the_map_side_by_side(tiny, tmp_path, capsys):
+    """`sgr render RUN --elites 3`: one GIF of three elites' panels side by side (2-pixel gaps), each
+    its exact episode; without a run it is one error line."""
+    import imageio.v3 as iio
+
+    from evolve.cli import main
+
+    gif = tmp_path / "strip.gif"
+    assert main(["render", str(tiny.path), "--elites", "3", "--width", "64", "--height", "48",
+                 "--out", str(gif)]) == 0
+    assert "3 elites across the archive" in capsys.readouterr().out
+    frames = iio.imread(gif)
+    assert frames.shape[1:3] == (48, 3 * 64 + 2 * 2) and len(frames) >= 2
+    assert main(["render", "--elites", "3", "--task", "Walker-v0", "--body", "33,33"]) == 2
+    assert "give RUN_DIR" in capsys.readouterr().err
