@@ -12,10 +12,11 @@ elites re-scored) with parents by curiosity and half the children from tournamen
 - ``sgr``: SGR's packaged config for 100 generations (its episode budget: ~8,600 episodes). For
   Walker-v0 and Climber-v2 these are results/robust-fast/runs (the same config), not run again.
 
-A map-elites run goes to 100 generations (SGR's budget: final selection picks its champion, kept
-as ``<run>-g100``), then is extended to 200 (twice it: `sgr evolve --resume RUN --generations 200`;
-the search does not depend on the run's length, so the first 100 generations are the 200-generation
-run's). Runs are ordinary run folders under ``--out``, run or resumed as in every study
+Every run first goes to 100 generations (SGR's budget; final selection picks a map-elites run's
+champion, and the run is kept as ``<run>-g100``); then each map-elites run is extended to 200 (twice
+it: `sgr evolve --resume RUN --generations 200`; the search does not depend on the run's length, so
+its first 100 generations are the 100-generation run's, tests/evolve/runs/test_map_elites_run.py).
+Runs are ordinary run folders under ``--out``, run or resumed as in every study
 (studies/study_runs.py), seeds outermost; finished records are copied to ``--records``.
 
     python studies/qd_study.py                 # 18 map-elites runs and 3 SGR runs: ~8 h on 2 cores
@@ -73,35 +74,43 @@ def sgr_run(records: Path, task: str, seed: int) -> Path:
     return known if known.is_dir() else records / f"sgr-{task}-s{seed}"
 
 
-def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: int) -> None:
-    """One arm's run to its end (and, for map-elites, its snapshot at SGR's budget, then twice it)."""
+def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: int, twice: bool) -> None:
+    """One arm's run: to SGR's budget (kept as ``<run>-g100`` for map-elites), or with `twice`
+    extended to twice it (map-elites only; SGR's runs stop at its budget)."""
+    import subprocess
+
+    from studies.study_runs import SGR
+
     run = out / f"{arm}-{task}-s{seed}"
-    cfg = config(arm, task, out / "configs")
-    args = ["--config", str(cfg), "--seed", str(seed)]
     if arm == "sgr":
-        if (SGR_RUNS / f"sgr-{task}-s{seed}").is_dir():
+        if twice or (SGR_RUNS / f"sgr-{task}-s{seed}").is_dir():
             return
-        evolve(run, args, workers)
+        evolve(run, ["--config", str(config(arm, task, out / "configs")), "--seed", str(seed)], workers)
         if finished(run):
             keep(run, records)
         return
     snapshot = out / f"{run.name}-g{BUDGET}"
+    if not twice:
+        if not snapshot.is_dir():
+            evolve(run, ["--config", str(config(arm, task, out / "configs")), "--seed", str(seed)], workers)
+            if finished(run) and _generations(run) == BUDGET:
+                shutil.copytree(run, snapshot, ignore=shutil.ignore_patterns("checkpoints"))
+        if snapshot.is_dir():
+            keep(snapshot, records, ARCHIVE_RECORDS)
+        return
     if not snapshot.is_dir():
-        evolve(run, args, workers)  # to SGR's budget (or resumed there)
-        if finished(run) and int(yaml.safe_load((run / "config.yaml").read_text())["generations"]) == BUDGET:
-            shutil.copytree(run, snapshot, ignore=shutil.ignore_patterns("checkpoints"))
-    keep(snapshot, records, ARCHIVE_RECORDS)
-    if not finished(run) or int(yaml.safe_load((run / "config.yaml").read_text())["generations"]) < TWICE:
-        import subprocess
-
-        from studies.study_runs import SGR
-
+        return  # (its first part is not done)
+    if not (finished(run) and _generations(run) == TWICE):
         cmd = SGR + ["evolve", "--quiet", "--workers", str(workers), "--resume", str(run),
                      "--generations", str(TWICE)]
         print("+", " ".join(cmd[2:]), flush=True)
         subprocess.run(cmd, check=True, cwd=ROOT)
     if finished(run):
         keep(run, records, ARCHIVE_RECORDS)
+
+
+def _generations(run: Path) -> int:
+    return int(yaml.safe_load((run / "config.yaml").read_text())["generations"])
 
 
 def main() -> None:
@@ -113,10 +122,11 @@ def main() -> None:
     ap.add_argument("--records", type=Path, default=ROOT / "results" / "qd" / "runs")
     ap.add_argument("--workers", type=int, default=1)
     a = ap.parse_args()
-    for seed in a.seeds:
-        for task in a.tasks:
-            for arm in a.arms:
-                run_arm(arm, task, seed, a.out, a.records, a.workers)
+    for twice in (False, True):  # every run to SGR's budget first, then each to twice it
+        for seed in a.seeds:
+            for task in a.tasks:
+                for arm in a.arms:
+                    run_arm(arm, task, seed, a.out, a.records, a.workers, twice)
 
 
 if __name__ == "__main__":

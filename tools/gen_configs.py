@@ -123,11 +123,14 @@ max_weight: 1.0
 checkpoint_every: 5
 render_champion: true
 qd:
-  descriptors: [actuator, rigid]  # shares of the body's voxels (evolve/methods/descriptors.py)
+  descriptors: [actuator, rigid]  # shares of the body's voxels; or what it does, e.g. [gait_frequency, contact]
   resolution: [10, 10]            # cells per descriptor
-  batch: 64                       # valid children per generation, parents drawn uniformly from the elites
+  batch: 64                       # valid children per generation
   initial: 64                     # valid random genomes of the first generation
   rescore: 24                     # elites re-scored per generation at most (fewest scores first)
+  selection: curiosity            # parents: elites whose children entered the archive drawn more often
+  exploit: 0.5                    # half the children: parents the fittest of 4 elites drawn
+  score_offset: auto              # the QD score counts fitness above the task's floor (qd_floors.py)
 # Honest by default (docs/EVOLVE.md "Robust evaluation"): every action carries uniform(±1e-3)
 # actuator noise; one episode per child, an elite's fitness the mean of its scores so far (re-scored
 # until it has 8: settle); the champion chosen at the end among the archive's best elites
