@@ -47,6 +47,7 @@ ARCHIVES = {
 }
 BUDGET, TWICE = 100, 200
 SGR_RUNS = ROOT / "results" / "robust-fast" / "runs"
+UNIFORM_RUNS = ROOT / "results" / "map-elites" / "runs"  # issue 49's: the same archive, parents uniform
 ARCHIVE_RECORDS = RECORDS + ("elites.json", "archive.png")
 
 
@@ -113,6 +114,71 @@ def _generations(run: Path) -> int:
     return int(yaml.safe_load((run / "config.yaml").read_text())["generations"])
 
 
+def best_under_noise(run: Path) -> float | None:
+    """The best noisy score among the run's final-selection candidates: the mean return of 32
+    episodes under the run's noise (uniform ±1e-3) of each of its best elites (map-elites) or final
+    genomes (SGR), passing the holds rule or not; None without a final selection."""
+    import json
+
+    f = run / "champion.json"
+    if not f.is_file():
+        return None
+    selection = json.loads(f.read_text()).get("selection")
+    return max(float(c["score"]) for c in selection["candidates"]) if selection else None
+
+
+def _spread(xs: list[float], digits: int = 2) -> str:
+    import statistics
+
+    if not xs:
+        return "-"
+    sd = statistics.stdev(xs) if len(xs) > 1 else 0.0
+    each = " / ".join(f"{x:.{digits}f}" for x in xs)
+    return f"{statistics.fmean(xs):.{digits}f} ± {sd:.{digits}f} ({each})"
+
+
+def cells(runs: list[Path]) -> dict[str, str]:
+    """A table's cells for an arm's runs (those finished): its champions' verdicts (20 replays under
+    uniform ±1e-3, `studies.big_study.arm_cell`), the best candidate under noise, and for an archive
+    its coverage and QD score at the run's last generation."""
+    from evolve.report.plots import read_generations
+    from studies.big_study import arm_cell
+
+    have = [d for d in runs if (d / "champion.json").is_file()]
+    out = {"n": f"{len(have)}", "champion": arm_cell(have) if have else "-",
+           "best": _spread([b for d in have if (b := best_under_noise(d)) is not None])}
+    gens = [read_generations(d) for d in have if (d / "generations.csv").is_file()]
+    if gens and "coverage" in gens[0]:
+        out["coverage"] = _spread([100 * float(g["coverage"][-1]) for g in gens], 1)
+        out["qd_score"] = _spread([float(g["qd_score"][-1]) for g in gens], 1)
+    return out
+
+
+def table(records: Path, seeds: list[int], tasks: list[str]) -> str:
+    """The study's table, from the committed records alone: per task and arm, at SGR's budget
+    (map-elites: its ``-g100`` records) and at twice it."""
+    lines = ["| task | arm | budget | runs | champion under ±1e-3 (verdict) | best candidate under ±1e-3 | "
+             "coverage % | QD score |", "|---" * 8 + "|"]
+    for task in tasks:
+        for arm in ("sgr", "body, uniform (issue 49)", "body", "behaviour"):
+            for budget, suffix in (("1x", f"-g{BUDGET}"), ("2x", "")):
+                if arm.startswith("body, uniform"):  # issue 49's runs: uniform parents, 1x only
+                    old = [UNIFORM_RUNS / f"map-elites-{task}-s{s}" for s in seeds]
+                    if budget == "2x" or not any(d.is_dir() for d in old):
+                        continue
+                    runs = old
+                elif arm == "sgr":
+                    if budget == "2x":
+                        continue
+                    runs = [sgr_run(records, task, s) for s in seeds]
+                else:
+                    runs = [records / f"{arm}-{task}-s{s}{suffix}" for s in seeds]
+                c = cells(runs)
+                lines.append(f"| {task} | {arm} | {budget} | {c['n']} of {len(seeds)} | {c['champion']} | "
+                             f"{c['best']} | {c.get('coverage', '-')} | {c.get('qd_score', '-')} |")
+    return "\n".join(lines)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
@@ -121,7 +187,11 @@ def main() -> None:
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "qd")
     ap.add_argument("--records", type=Path, default=ROOT / "results" / "qd" / "runs")
     ap.add_argument("--workers", type=int, default=1)
+    ap.add_argument("--table", action="store_true", help="only print the study's table from RECORDS")
     a = ap.parse_args()
+    if a.table:
+        print(table(a.records, a.seeds, a.tasks))
+        return
     for twice in (False, True):  # every run to SGR's budget first, then each to twice it
         for seed in a.seeds:
             for task in a.tasks:
