@@ -123,7 +123,7 @@ max_weight: 1.0
 checkpoint_every: 5
 render_champion: true
 qd:
-  descriptors: [actuator, rigid]  # shares of the body's voxels; or what it does, e.g. [gait_frequency, contact]
+  descriptors: [actuator, rigid]  # the body's voxel shares; or behaviour: [gait_frequency, contact]
   resolution: [10, 10]            # cells per descriptor
   batch: 64                       # valid children per generation
   initial: 64                     # valid random genomes of the first generation

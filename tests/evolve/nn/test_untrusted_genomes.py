@@ -21,7 +21,7 @@ from evolve.nn.feedforward import FeedForward, Node, compile_genome, feed_forwar
 from evolve.records.files import atomic_write
 from evolve.records.rundir import RunDir, checkpoint_bytes, read_checkpoint_file
 from tests.evolve.attack import Attack
-from tests.evolve.runs.conftest import unfinished_run
+from tests.evolve.conftest import unfinished_run
 
 pytestmark = pytest.mark.slow
 

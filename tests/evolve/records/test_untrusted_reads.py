@@ -25,7 +25,7 @@ import yaml
 
 from evolve.records.rundir import RunDir
 from tests.evolve.attack import Attack
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.conftest import TINY
 from tsim.errors import SgrError
 
 pytestmark = [pytest.mark.slow]

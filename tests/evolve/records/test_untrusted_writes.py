@@ -19,7 +19,7 @@ import pytest
 
 from evolve.records.rundir import RunDir
 from tests.evolve.attack import Attack, tree
-from tests.evolve.runs.conftest import tiny_run
+from tests.evolve.conftest import tiny_run
 from tsim.errors import SgrError
 from tsim.files import atomic_write, make_folder, open_no_follow, refuse_links
 

@@ -1,7 +1,7 @@
 """report.html reads at a normal size: its text at 15 px or more, its curves' text as large on the
 page as a plain matplotlib figure's, its gallery robots 480 pixels wide, and no status line unless
 an image failed (a third-week user found small curves, tiny robots and a stray "5 of 5 images
-loaded" line). The page in a real browser: tests/evolve/runs/test_report_html.py."""
+loaded" line). The page in a real browser: tests/evolve/report/test_report_html.py."""
 
 from __future__ import annotations
 
@@ -37,7 +37,7 @@ def test_the_curves_text_is_scaled_to_read_at_the_pages_width(tmp_path, monkeypa
     10 pt x 1980 / 1200 so that it shows as 10 pt."""
     from matplotlib.figure import Figure
 
-    from tests.evolve.runs.test_report_groups import make_run
+    from tests.evolve.report.test_report_groups import make_run
 
     saved: list[Figure] = []
     real = Figure.savefig

@@ -1,6 +1,6 @@
 """Ray on one local instance (2 CPUs) for the module: the sweep backend's sizing and failed tasks, and
 one run's rollouts on Ray actors, which give exactly the results of local processes, also when an
-actor is killed mid-generation. Losing whole nodes: tests/evolve/runs/test_ray_nodes.py."""
+actor is killed mid-generation. Losing whole nodes: tests/evolve/sweeps/test_ray_nodes.py."""
 
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ def fitness(run_path) -> list[tuple]:
 
 
 # ---------------------------------------------------------------------------------- sweep backend
-# (a sweep's results on Ray against the local backend's: tests/evolve/runs/test_ray_nodes.py, on a
+# (a sweep's results on Ray against the local backend's: tests/evolve/sweeps/test_ray_nodes.py, on a
 # real multi-node cluster)
 def test_ray_backend_sizes_runs_by_the_nodes_cpus_and_reports_failed_tasks(tmp_path):
     one = RayBackend(1)

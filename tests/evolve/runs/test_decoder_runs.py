@@ -16,7 +16,7 @@ from evolve.records.replay import load_champion, rescore_champion
 from evolve.records.rundir import RunDir
 from evolve.runs.checkpoint import load_checkpoint
 from evolve.runs.experiment import Experiment
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.conftest import TINY
 from tests.evolve.runs.test_resume import fitness_rows, genomes_and_species, kill_when, sgr, write_config
 from tsim.body import is_connected
 from tsim.errors import SgrError

@@ -13,7 +13,7 @@ import pytest
 
 from evolve.runs.experiment import Experiment
 from evolve.search.body_distance import body_distance, mean_pairwise_body_distance
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.conftest import TINY
 
 
 def test_three_bodies_worked_by_hand():

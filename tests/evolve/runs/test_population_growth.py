@@ -3,7 +3,7 @@ elites whatever pop_size says, so the population (and each generation's cost) gr
 bound, as the first 10x10 SGR run's did before the body distance was scaled to 5x5."""
 
 from evolve.runs.experiment import Experiment
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.conftest import TINY
 
 
 def test_a_population_past_pop_size_is_reported_once(tmp_path, capsys):

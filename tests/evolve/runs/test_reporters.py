@@ -268,7 +268,7 @@ def test_the_consoles_seconds_go_on_after_a_resume(tmp_path, capsys):
     (the generations' total_s in generations.csv): it restarted from 0 on every resume."""
     import csv
 
-    from tests.evolve.runs.conftest import TINY as TWO_GENERATIONS
+    from tests.evolve.conftest import TINY as TWO_GENERATIONS
 
     with Experiment.from_config({"method": "direct", **TWO_GENERATIONS}, tmp_path / "run", quiet=True) as exp:
         exp.run_all()

@@ -15,7 +15,7 @@ import yaml
 
 from evolve.runs.experiment import Experiment
 from tests.evolve.attack import Attack
-from tests.evolve.runs.conftest import unfinished_run
+from tests.evolve.conftest import unfinished_run
 
 pytestmark = pytest.mark.slow
 

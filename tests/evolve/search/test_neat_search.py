@@ -224,7 +224,7 @@ def test_a_generations_build_s_is_the_time_its_genomes_took_to_decode(tmp_path, 
 
     from evolve.methods.sgr import SgrProblem
     from evolve.runs.experiment import Experiment
-    from tests.evolve.runs.conftest import TINY
+    from tests.evolve.conftest import TINY
 
     real = SgrProblem.decode
 

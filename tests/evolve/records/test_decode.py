@@ -12,7 +12,7 @@ from evolve.cli import main
 from evolve.records.decode import write_decoded
 from evolve.records.replay import load_champion, rescore_champion
 from evolve.runs.experiment import Experiment
-from tests.evolve.runs.conftest import TINY, tiny_run
+from tests.evolve.conftest import TINY, tiny_run
 from tsim.body import check_robot, has_actuator, is_connected
 
 

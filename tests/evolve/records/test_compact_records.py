@@ -21,7 +21,7 @@ from evolve.records.files import record_json
 from evolve.records.replay import load_champion, rescore_champion
 from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
-from tests.evolve.runs.conftest import tiny_run
+from tests.evolve.conftest import tiny_run
 from tsim.errors import SgrError
 
 OLD = Path(__file__).resolve().parents[2] / "data" / "champions"

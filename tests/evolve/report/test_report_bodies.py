@@ -19,7 +19,7 @@ from evolve.records.rundir import champion_of
 from evolve.report.gallery import report_html
 from evolve.report.report import BODY_COLUMNS, write_report
 from evolve.runs.experiment import Experiment
-from tests.evolve.runs.conftest import TINY
+from tests.evolve.conftest import TINY
 
 ROOT = Path(__file__).resolve().parents[3]
 # a run of an older sgr (generations.csv without body_diversity, rows counted from 0), committed
