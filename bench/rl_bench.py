@@ -11,7 +11,7 @@ what limits the figure.
 
     python bench/rl_bench.py                       # 1, 16, 64, 256 envs
     python bench/rl_bench.py --envs 64 --timesteps 65536
-    python bench/rl_bench.py --record docs/records/rl.json   # (a clean tree's commit in it)
+    python bench/rl_bench.py --record docs/records/rl-ppo-speed.json   # (a clean tree's commit in it)
 
 Needs the rl extra: pip install 'sgr[rl]'.
 """

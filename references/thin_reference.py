@@ -1,8 +1,9 @@
 """Thin the full evogym recordings of tests/data/traces and tests/data/returns to what travels.
 
-Their recorder (tools/evogym_ref/make_returns.py of the data's authors) is not in this repository;
-the full files are, in git history (FULL_COMMIT). This keeps every value evogym recorded except the
-per-step states between strides, and writes byte-reproducible files (references/npz_io.py):
+Their recorder (the data authors' make_returns.py, in their own evogym_ref tools) is not in this
+repository; the full files are, in git history (FULL_COMMIT). This keeps every value evogym
+recorded except the per-step states between strides, and writes byte-reproducible files
+(references/npz_io.py):
 
 - traces/caseNN_*.npz: `robot_pos`, `robot_vel`, `box_pos`, `box_vel` and `obs` at steps 0..50
   (what the 50-step checks compare), every 50th and the last (`state_steps`); `com`, `reward`,

@@ -1,7 +1,7 @@
 """Summarise evolution runs (per method and task: best fitness at generation 0 and at the last
 generation, mean over seeds) as a markdown table, and draw the comparison plot.
 
-    python studies/paper_results.py runs/paper/* --plot docs/img/ot_curves.png
+    python studies/paper_results.py runs/paper/* --plot runs/paper/ot_curves.png
 """
 
 from __future__ import annotations

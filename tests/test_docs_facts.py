@@ -366,3 +366,49 @@ def test_a_bench_scripts_record_option_writes_a_record_of_its_figures(script, tm
         values = figure_values(record, key)
         assert values and all(isinstance(v, int | float) for v in values), (key, values)
 
+
+
+# paths the code names that are not this repository's files, each with why
+NOT_OURS = {
+    "tests/screen_free/test_baseline_envs.py": "evogym's own test, which tests/sgr/evogym ports",
+    "tests/screen_free/test_img_render_modes.py": "evogym's own test, which tests/sgr/evogym ports",
+    "tests/screen_free/test_utils.py": "evogym's own test, which tests/sgr/evogym ports",
+    "tests/requires_screen/test_screen_render_modes.py": "evogym's own test, which tests/sgr/evogym ports",
+    "bench/x.py": "a made-up name in a test or an example", "bench/no_such_bench.py": "a test's missing file",
+    "evolve/x.py": "a test's made-up module",
+    "results/qd/runs": "studies/qd_study.py writes it",
+    "tsim/kernels.py": "the stale pointer test_the_code_path_check_can_fail looks for",
+    **THE_READERS,
+}
+
+
+def code_paths(text: str) -> set[str]:
+    """The repository paths a source file names anywhere (docstrings, comments, strings), as
+    `named_paths` reads a page's code spans; examples/ is evogym's (this repository has none)."""
+    found = set()
+    for m in PATH.finditer(text):
+        path = m.group(1)
+        if path.startswith(("../shared", "examples/")) or re.match(r"-?[<{]", text[m.end():m.end() + 2]):
+            continue
+        if not re.search(r"[*<>{}]|\.\.\.|[A-Z]{3,}_?[A-Z]*/|/[A-Z_]{3,}(?:/|$)", path):
+            found.add(path.split("::")[0].rstrip("."))
+    return found
+
+
+def test_every_repository_path_the_code_names_exists():
+    """No stale pointer in the code: every path of the repository that a docstring, comment or
+    string of a tracked .py or .sh file names is a file or folder here (or in NOT_OURS, with why)."""
+    import subprocess
+
+    tracked = subprocess.run(["git", "ls-files", "*.py", "*.sh"], cwd=ROOT, capture_output=True, text=True,
+                             check=True).stdout.split()
+    assert len(tracked) > 300
+    missing = sorted(f"{p} (in {f})" for f in tracked for p in code_paths((ROOT / f).read_text())
+                     if not (ROOT / p).exists() and p not in NOT_OURS)
+    assert not missing, f"the code names paths that do not exist: {missing}"
+
+
+def test_the_code_path_check_can_fail():
+    named = code_paths("see tsim/kernels.py and evolve/report/qd.py")
+    assert named == {"tsim/kernels.py", "evolve/report/qd.py"}
+    assert not (ROOT / "tsim/kernels.py").exists()

@@ -14,8 +14,8 @@ Adding a precision: one `Precision` row in `PRECISIONS` (its numpy and Taichi ty
 `Tolerances`); the CLI's choices, the run config's check, tsim.runtime and the kernels follow.
 Adding a backend: one `Arch` row in `ARCHS` (the Taichi archs it tries, what is missing without
 it, whether it has f64, and its launch path: a key of tsim/launch.py's `LAUNCHERS`, to which a
-backend that launches its step differently, e.g. the GPU lanes kernel of
-docs/notes, adds its launcher).
+backend that launches its step differently, e.g. the GPU lanes kernel of tsim/lanes.py, adds its
+launcher).
 """
 
 from __future__ import annotations

@@ -13,9 +13,10 @@ the formula is within 2 ulp of the correctly rounded tanh on the arguments of
 tests/tsim/test_vulkan.py (its `k * _LN2_HI` is then not exact, which matters only near 1).
 
 The formula (within 3 units in the last place of the correctly rounded tanh over |x| < 25, 81 %
-of arguments exact; tests/tsim/test_portable.py): tanh(a) = -m / (2 + m) with m = expm1(-2a), a =
-|x|, and expm1 by the usual reduction y = k ln 2 + r, |r| <= ln 2 / 2, a degree-14 Taylor polynomial
-for expm1(r) and 2^k built by exact repeated squaring (no 64-bit integers or ldexp needed).
+of arguments exact; tests/tsim/test_vulkan.py, `test_tanh_formula_is_within_3_ulp_of_libm`):
+tanh(a) = -m / (2 + m) with m = expm1(-2a), a = |x|, and expm1 by the usual reduction
+y = k ln 2 + r, |r| <= ln 2 / 2, a degree-14 Taylor polynomial for expm1(r) and 2^k built by exact
+repeated squaring (no 64-bit integers or ldexp needed).
 """
 
 import math

@@ -49,7 +49,8 @@ REPO_CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 
 def configs_dir() -> Path:
     """The configs shipped with sgr: the repository's configs/ in a checkout or an editable
-    install, evolve/configs (mapped there at build time, see pyproject.toml) in an installed one."""
+    install, the package's configs folder (mapped there at build time, see pyproject.toml) in an
+    installed one."""
     if REPO_CONFIGS.is_dir():
         return REPO_CONFIGS
     return Path(__file__).resolve().parents[1] / "configs"

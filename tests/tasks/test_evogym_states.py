@@ -77,7 +77,7 @@ def translate(env: BatchEnv, name: str, dx: float, dy: float) -> None:
 def revert_now(env: BatchEnv) -> None:
     """evogym's `Sim.revert(now)` right after a move: the snapshot just saved is reloaded, with
     every point's last position set to its position and its true velocity to its velocity
-    (our state columns pos 0:2, vel 2:4, pos_last 4:6, vel_true 6:8, tsim/kernels.py)."""
+    (our state columns pos 0:2, vel 2:4, pos_last 4:6, vel_true 6:8, tsim/kernels/layout.py)."""
     s = env.sim.state[0]
     s[:, 4:6] = s[:, 0:2]
     s[:, 6:8] = s[:, 2:4]
