@@ -15,6 +15,7 @@ from matplotlib.figure import Figure
 from evolve.records.elites import read_elites
 from evolve.report.gallery import VOXEL_RGB, body_image
 from evolve.report.plots import save_png
+from evolve.report.sections import Section, SectionPart, register_section
 from tsim.errors import SgrError
 from tsim.files import make_folder
 
@@ -207,3 +208,11 @@ def archives_html(entries: list[dict]) -> list[str]:
                   f"<figcaption>{html.escape(_caption(e))}</figcaption></figure>" for e in a["elites"]]
         parts.append("</div>")
     return parts
+
+
+def _archives_part(rows: list[dict], runs: list[Path], folder: Path, pool) -> SectionPart:
+    entries = write_archives({r["run"]: r["path"] for r in rows}, folder / "archives")
+    return SectionPart(archives_markdown(entries, folder), archives_html(entries))
+
+
+register_section(Section("archives", part=_archives_part))

@@ -14,6 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
+from evolve.report.sections import Section, SectionPart, register_section
 from tasks.behaviour import FEATURES
 
 # summary.csv's columns of a map-elites run's archive at its last generation: its coverage, QD score
@@ -116,7 +117,7 @@ def qd_curves_html(path: Path | None) -> list[str]:
     import base64
 
     uri = "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode()
-    return [f"<h2>Quality diversity</h2><img alt='QD curves' src='{uri}' width='100%'>"]
+    return [f"<img alt='QD curves' src='{uri}' width='100%'>"]
 
 
 def plot_qd_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path | None:
@@ -163,3 +164,25 @@ def plot_qd_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Pa
                 ax.legend(fontsize="small")
     fig.tight_layout()
     return save_png(fig, path, dpi=110)
+
+
+def _qd_part(rows: list[dict], runs: list[Path], folder: Path, pool: Sequence[str]) -> SectionPart:
+    """The "Quality diversity" table, and in report.html qd-curves.png under it."""
+    from evolve.report.gallery import markdown_html
+
+    text = qd_markdown(rows)
+    curves = plot_qd_curves(runs, folder / "qd-curves.png", pool) if text else None
+    if curves is None:
+        return SectionPart(text)
+    return SectionPart(text + "\nqd-curves.png: the coverage and QD score per generation.\n",
+                       [markdown_html(text), *qd_curves_html(curves)])
+
+
+def _behaviour_row(run_dir: Path, cols: dict[str, np.ndarray], replayed: bool) -> dict:
+    return behaviour_row(run_dir) if replayed else {}
+
+
+register_section(Section("quality diversity", QD_COLUMNS, lambda d, cols, replayed: qd_row(d, cols),
+                         _qd_part))
+register_section(Section("behaviour", BEHAVIOUR_COLUMNS, _behaviour_row,
+                         lambda rows, runs, folder, pool: SectionPart(behaviour_markdown(rows))))

@@ -40,18 +40,11 @@ from evolve.records.segments import backend_summary
 from evolve.report.gallery import champion_figure
 from evolve.report.groups import episode_length
 from evolve.report.plots import band, read_generations, save_png
-from evolve.report.qd import (
-    BEHAVIOUR_COLUMNS,
-    QD_COLUMNS,
-    behaviour_markdown,
-    behaviour_row,
-    plot_qd_curves,
-    qd_curves_html,
-    qd_markdown,
-    qd_row,
-)
+from evolve.report.sections import SECTIONS, builtin_sections
 from tsim.errors import SgrError
 from tsim.files import CONFIG_CAP, read_text
+
+builtin_sections()  # the report's own sections (quality diversity, behaviour, archives)
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.
@@ -188,12 +181,14 @@ def summarize(runs: list[Path], robustness: bool = True, levels: Sequence[float]
         for g in CHECKPOINTS:
             row[f"best_gen{g}"] = float(best[g - 1]) if len(best) >= g else math.nan
         row["best_final"] = float(best[-1]) if len(best) else math.nan
-        row.update(qd_row(d, cols))  # a map-elites run's archive
-        if robustness and (d / "champion.json").is_file():
+        replayed = robustness and (d / "champion.json").is_file()
+        if replayed:
             row.update(champion_robustness(d, replays, levels))
-            row.update(behaviour_row(d))
             if verdict_rule.EPS in levels:  # the gallery's caption says it too
                 row["verdict"] = row.get("headline_verdict") or _verdict(row).label
+        for section in SECTIONS.values():  # (evolve/report/sections.py)
+            if section.row is not None:
+                row.update(section.row(d, cols, replayed))
         rows.append(row)
     return rows
 
@@ -342,8 +337,6 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
                 cells.append(f"**{'holds' if _holds(r) else 'knife-edge'}**")
             out.write(f"| {r['run']} | {champion_figure(r):.3f} | {r['nominal']:.3f} | "
                       + " | ".join(cells) + " |\n")
-    out.write(qd_markdown(rows))
-    out.write(behaviour_markdown(rows))
     out.write(bodies_markdown(rows))
     out.write(backends_markdown(rows))
     return out.getvalue()
@@ -536,12 +529,12 @@ def write_summary_csv(rows: list[dict], path: Path) -> None:
     """Write `rows` to `path` (replaced) with `summary_columns` of the rows' noise levels in order,
     then the settings of each run's group (SETTING_COLUMNS, where the rows have them), then
     `backend` (where the run ran: `backend_summary`), then BODY_COLUMNS: missing values empty, other
-    keys dropped; then QD_COLUMNS and BEHAVIOUR_COLUMNS where some row has them (evolve/report/qd.py)."""
+    keys dropped; then each registered section's columns where some row has them."""
     setting = SETTING_COLUMNS if any("settings" in r for r in rows) else ()
     columns = summary_columns(_levels(rows)) + list(setting) + ["backend"] + list(BODY_COLUMNS)
-    for extra in (QD_COLUMNS, BEHAVIOUR_COLUMNS):  # where some run has them
-        if any(extra[0] in r for r in rows):
-            columns += list(extra)
+    for section in SECTIONS.values():  # where some run has them (evolve/report/sections.py)
+        if section.columns and any(section.columns[0] in r for r in rows):
+            columns += list(section.columns)
     buf = io.StringIO()
     w = csv.DictWriter(buf, fieldnames=columns, lineterminator="\n", extrasaction="ignore")
     w.writeheader()
@@ -652,8 +645,7 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
     seed's champion per group as a GIF and a body picture in gallery/, inlined in report.html;
     a map-elites run's archive and elites chosen across it in archives/ (evolve/report/archive.py).
     `say` gets one line per path skipped and per group."""
-    from evolve.report.archive import archives_html, archives_markdown, write_archives
-    from evolve.report.gallery import gallery_entries, report_html, write_gallery
+    from evolve.report.gallery import gallery_entries, markdown_html, report_html, write_gallery
 
     folders = [folder] if isinstance(folder, str | Path) else list(folder)
     runs, skipped = find_report_runs(folders)
@@ -670,16 +662,16 @@ def write_report(folder: str | Path | Sequence[str | Path], out: str | Path | No
         for (label, task), rs in groups.items():
             say(f"  {label} / {task}: {len(rs)} run{'s' if len(rs) != 1 else ''} "
                 f"({', '.join(r['run'] for r in rs)})")
-    archives = write_archives({r["run"]: r["path"] for r in rows}, out.parent / "archives")
     main = report_markdown(rows, skipped, pool)
-    text = main + archives_markdown(archives, out.parent)
+    parts = [s.part(rows, runs, out.parent, pool) for s in SECTIONS.values() if s.part is not None]
+    text = main + "".join(p.markdown for p in parts)
     atomic_write(out, text.encode())
     write_summary_csv(rows, out.parent / "summary.csv")
     curves = plot_curves(runs, out.parent / "curves.png", pool)
     shown = (write_gallery(gallery_entries(rows, {r["run"]: r["path"] for r in rows}), out.parent / "gallery")
              if gallery else [])
-    qd_curves = plot_qd_curves(runs, out.parent / "qd-curves.png", pool)
-    page = report_html(main, curves, shown, qd_curves_html(qd_curves) + archives_html(archives))
-    # (the archives once: as HTML)
+    extra = [h for p in parts for h in (p.html if p.html is not None else [markdown_html(p.markdown)])
+             if h]  # (a section's text once: as its own HTML where it has some, e.g. inlined pictures)
+    page = report_html(main, curves, shown, extra)
     atomic_write(out.parent / "report.html", page.encode())
     return out
