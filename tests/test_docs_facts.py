@@ -36,8 +36,7 @@ PATH = re.compile(r"(?<![\w./-])((?:\.\./shared|bench|references|studies|device|
                   r"/[\w./*-]*[\w/*])")
 SPAN = re.compile(r"`([^`\n]+)`")
 # files a how-to asks the reader to write (they are the reader's, not the repository's)
-THE_READERS = {"tasks/suite/hopper.py": "TASKS.md: how to add a task", "evolve/methods/gait.py": "EVOLVE.md: "
-               "how to add a method"}
+THE_READERS = {"tasks/suite/hopper.py": "TASKS.md: how to add a task"}
 # `sgr CMD` at the start of a command line (after `VAR=value`s, `&&`, `|`), not `sgr` in prose
 COMMAND = re.compile(r"(?:^|(?:&&|\|)\s*)(?:[A-Z_]+=\S*\s+)*sgr\s+([a-z][\w-]*)")
 # `python SCRIPT.py` of the repository's scripts, and an option on a command line

@@ -1,5 +1,6 @@
 """Methods behind one contract (`Problem`, evolve/methods/base.py) and their registry: a method is
-one file and one line here."""
+one file and one registration, a line here for sgr's own, `register(MyProblem)` in a module of
+your own that a config's `imports:` names (docs/EVOLVE.md "Adding a method")."""
 
 from __future__ import annotations
 
@@ -18,6 +19,23 @@ METHODS: dict[str, type[Problem]] = {p.name: p for p in (
     MapElitesProblem,
     GaPpoProblem,
 )}
+BUILTIN = frozenset(METHODS)  # sgr's own
+
+
+def register(problem: type[Problem]) -> type[Problem]:
+    """Make `problem` the method of configs whose `method` is its `name` (usable as a class
+    decorator); a name registered again by a module of the user's is replaced.
+
+    Raises:
+        SgrError: when it is not a named Problem subclass, or the name is one of sgr's own methods.
+    """
+    name = getattr(problem, "name", None)
+    if not (isinstance(problem, type) and issubclass(problem, Problem) and isinstance(name, str) and name):
+        raise SgrError(f"register: a method is a Problem subclass with a name, got {problem!r}")
+    if name in BUILTIN and METHODS[name] is not problem:
+        raise SgrError(f"register: {name!r} is one of sgr's own methods; give yours another name")
+    METHODS[name] = problem
+    return problem
 
 
 def method(name: str) -> type[Problem]:
@@ -30,4 +48,4 @@ def method(name: str) -> type[Problem]:
 
 
 __all__ = ["METHODS", "DirectProblem", "GaPpoProblem", "MapElitesProblem", "NestedProblem", "Problem",
-           "SgrProblem", "method"]
+           "SgrProblem", "method", "register"]

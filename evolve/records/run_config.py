@@ -121,6 +121,8 @@ def check_run_config(raw: Mapping, source: Path | str, *, load_task: Callable[[d
         SgrError: one line naming `source` and the key.
     """
     method = raw.get("method")
+    if isinstance(method, str) and method not in METHODS and load_task is not None:
+        load_task(dict(raw), method=True)  # a method of the user's: its imports, when trusted
     if not isinstance(method, str) or method not in METHODS:
         raise SgrError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got "
                        f"{short_repr(method)}")

@@ -323,16 +323,23 @@ class RunDir:
         atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode(),
                      inside=self.path)
 
-    def load_task(self, raw: dict) -> None:
+    def load_task(self, raw: dict, method: bool = False) -> None:
         """Register the run's own task in this process, unless it is sgr's or registered already:
         import the modules its config names (`imports:`), else the file its task reference names
         (a script's); either only after --trust-imports (tasks/registry.py). Reading the folder
         runs nothing: SgrError in one line, saying how to allow it, when the task may not be
-        loaded or is still unknown."""
+        loaded or is still unknown. `method`: the run's method is not registered here, so the
+        modules its config names are imported (under the same rule) whatever its task."""
         from tasks.registry import OLD_TASK_FILE, TASK_FILE, import_tasks, load_task_reference
         from tasks.specs import TASKS, unknown_task
 
         named_in = self.path / "config.yaml"
+        if method:
+            refs = raw.get("imports")
+            for ref in refs if isinstance(refs, list) else ():
+                if isinstance(ref, str):
+                    import_tasks(ref, named_in=named_in)
+            return
         task = raw.get("task")
         if not isinstance(task, str) or task in TASKS:
             return

@@ -66,6 +66,13 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values")
     method = raw.get("method")
+    if isinstance(method, str) and method not in METHODS and isinstance(raw.get("imports"), list):
+        check_imports(raw["imports"], source)  # a method of the user's: its module registers it
+        for ref in raw["imports"]:
+            try:
+                import_tasks(ref, named_in=named_in)
+            except ValueError as exc:
+                raise SgrError(f"{source}: key 'imports': {exc}") from None
     if not isinstance(method, str) or method not in METHODS:
         raise SgrError(f"{source}: key 'method' must be one of {', '.join(METHODS)}, got {method!r}"
                        f"{closest(method, METHODS)}")
