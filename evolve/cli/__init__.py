@@ -15,6 +15,7 @@ import traceback
 
 from evolve.cli import decode, evolve_cmd, explain, migrate, plot, render, report, select_champion, sweep
 from evolve.cli.common import (
+    IMPORT_HELP,
     ClosedStdoutTolerant,
     add_import_file,
     add_trust_imports,
@@ -44,7 +45,9 @@ def build_parser() -> argparse.ArgumentParser:
     dc = decode.register(sub)
     for parser in (e, sw, rp, r, sc, dc):
         add_trust_imports(parser)
-    for parser in (e, rp, r, sc, dc):  # the commands that read one run's task.json
+    add_import_file(e, IMPORT_HELP + "; with --method, a module of your own that registers the method "
+                       "(docs/EVOLVE.md \"Adding a method\"), imported and named in the run's imports:")
+    for parser in (rp, r, sc, dc):  # the commands that read one run's task.json
         add_import_file(parser)
     register_task_commands(sub)
     for parser in sub.choices.values():  # `sgr evolve ... --debug` as well as `sgr --debug evolve ...`

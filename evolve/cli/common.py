@@ -69,11 +69,11 @@ IMPORT_HELP = ("a copy of the script that registered the run's task (task.json):
                "when its sha256 is the one recorded, and no other code (repeat for more files)")
 
 
-def add_import_file(parser: argparse.ArgumentParser) -> None:
+def add_import_file(parser: argparse.ArgumentParser, help: str = IMPORT_HELP) -> None:
     """--import FILE, for every command that reads a run folder: the user names the script a run's
     task.json refers to (tasks/registry.py, `name_imports`)."""
     parser.add_argument("--import", dest="import_files", action="append", metavar="FILE", default=None,
-                        help=IMPORT_HELP)
+                        help=help)
 
 
 def resume_dir(path: str) -> str:

@@ -77,7 +77,8 @@ def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None
         return configs_dir() / "sgr" / "quick.yaml"
     method = args.method or "sgr"
     if method not in METHODS:
-        raise SgrError(unknown_name("method", method, METHODS))
+        raise SgrError(unknown_name("method", method, METHODS) + " (a method of your own: --import FILE "
+                       "with the module that registers it)")
     sized = configs_dir() / method / f"{args.task}-{shape[0]}x{shape[1]}.yaml" if shape else None
     if sized is not None and sized.is_file():
         return sized
@@ -87,6 +88,15 @@ def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None
     if args.task not in TASKS:
         raise SgrError(f"{unknown_task(args.task)} (a task of your own: --config FILE with "
                        "task: and imports:, docs/TASKS.md)")
+    own = METHODS[method].default_config(args.task)  # a method of the user's: its own defaults
+    if own is not None:
+        import tempfile
+
+        import yaml
+
+        path = Path(tempfile.mkdtemp(prefix="sgr-config-")) / f"{args.task}.yaml"
+        path.write_text(yaml.safe_dump({**own, "method": method, "task": args.task}, sort_keys=False))
+        return path
     shipped = sorted(f.stem for f in (configs_dir() / method).glob("*.yaml"))
     raise SgrError(f"no packaged config for {method} on {args.task} (there are: {', '.join(shipped)}); "
                    "write one and give --config FILE")
@@ -122,6 +132,13 @@ def run(args: argparse.Namespace) -> int:
                  "robot_shape": list(shape) if shape else None, "body_decoder": args.body_decoder,
                  "episode_steps": args.episode_steps}
         overrides = {k: v for k, v in flags.items() if v is not None}  # the flags given
+        if getattr(args, "import_files", None) and not args.config and not args.start_from:
+            # --import FILE with --method: the user's module registers the method (or the task)
+            from tasks.registry import import_tasks
+
+            overrides["imports"] = [str(Path(f).resolve()) for f in args.import_files]
+            for f in overrides["imports"]:
+                import_tasks(f)
         if args.start_from:
             config, name = continuation(args, overrides)
         else:

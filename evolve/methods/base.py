@@ -77,6 +77,12 @@ class Problem:
         """INI values the method fixes, by section (e.g. the network's input and output counts)."""
         return {}
 
+    @classmethod
+    def default_config(cls, task: str) -> dict | None:
+        """The config `sgr evolve --method NAME --task TASK` runs where sgr ships no
+        configs/NAME/TASK.yaml (a method of the user's), beyond `method` and `task`; None: none."""
+        return None
+
     def decode(self, genome) -> Phenotype:
         """One genome -> its phenotype, without simulating; must be deterministic and side-effect
         free: the search caches it by genome key and decodes again after a resume."""

@@ -76,3 +76,21 @@ def test_register_refuses_what_is_not_a_method_and_sgr_s_own_names():
     with pytest.raises(SgrError, match="a Problem subclass with a name"):
         register(dict)
     assert "sgr" in BUILTIN and METHODS["sgr"] is not Sgr
+
+
+def test_sgr_evolve_method_task_import_runs_the_method_s_defaults(gain_files, capsys):
+    """`sgr evolve --method gain --task Walker-v0 --import gain.py`: the module named on the command
+    line registers the method, its `default_config` is the run's, and config.yaml names the module in
+    its imports: (what a resume imports, when trusted)."""
+    import yaml
+
+    run = gain_files / "cli"
+    assert main(["evolve", "--method", "gain", "--task", "Walker-v0", "--import", str(gain_files / "gain.py"),
+                 "--out", str(run), "--quiet"]) == 0
+    raw = yaml.safe_load((run / "config.yaml").read_text())
+    assert raw["method"] == "gain" and raw["generations"] == 3 and raw["pop_size"] == 8
+    assert raw["imports"] == [str((gain_files / "gain.py").resolve())]
+    METHODS.pop("gain")
+    capsys.readouterr()
+    assert main(["evolve", "--method", "gain", "--task", "Walker-v0", "--out", str(gain_files / "x")]) == 2
+    assert "--import FILE" in capsys.readouterr().err
