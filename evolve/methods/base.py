@@ -53,6 +53,18 @@ class Problem:
     # it), and the last rollout's, (n, len(FEATURES)), when it did
     record_behaviour: bool = False
     behaviour: np.ndarray | None = None
+    # what the method can do, declared here so that no other module names it
+    starts_from_runs: ClassVar[bool] = False  # `start_from`/`--from`: its genomes continue a run of it
+    keeps_archive: ClassVar[bool] = False  # its search keeps an archive (elites.json, archive.png)
+
+    @classmethod
+    def decode_refusal(cls, cfg: RunConfig, shape: tuple[int, int]) -> str | None:
+        """Why a run's champion genome cannot be decoded at `shape` (`sgr decode`), None when it
+        can: a method without NEAT genomes cannot; the others can at any size unless they say."""
+        if not cls.uses_neat:
+            return (f"a {cls.name} run's champion is a body and a controller trained for it, no genome to "
+                    "decode at another size (decode sgr runs)")
+        return None
 
     def __init__(self, cfg: RunConfig | Mapping, neat_config, pool: RolloutPool | None = None):
         """`cfg` is the run's config (`RunConfig`; a resolved config mapping is read as one);

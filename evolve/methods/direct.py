@@ -83,6 +83,16 @@ class DirectProblem(Problem):
     }
     default_files = {"neat_config": "direct.ini"}
 
+
+    @classmethod
+    def decode_refusal(cls, cfg, shape):
+        """Direct NEAT's network is sized to its run's body: it decodes at that size only."""
+        if tuple(shape) == tuple(cfg.robot_shape):
+            return None
+        return (f"direct NEAT's network reads the observation of a full {cfg.robot_shape[0]}x"
+                f"{cfg.robot_shape[1]} body (and, in its default layout, has one output per cell): its "
+                f"controller decodes at that size only, not at {shape[0]}x{shape[1]}")
+
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.gc = neat_config.genome_config

@@ -179,6 +179,8 @@ class MapElitesProblem(SgrProblem):
                    "qd": "The archive: its descriptors and cells, the batch of children, parent choice "
                          "and score_offset (docs/EVOLVE.md \"MAP-Elites\")."}
     absent_before = {}
+    starts_from_runs = False  # (its search is an archive, not a NEAT population)
+    keeps_archive = True
 
     def __init__(self, cfg, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)

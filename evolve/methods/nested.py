@@ -97,6 +97,13 @@ class NestedProblem(Problem):
     absent_before = {"inner_keep_generations": None}  # an older run never forgot an inner search
     reevaluate_elites = True  # a body's fitness is its inner search's best, which goes on improving
 
+
+    @classmethod
+    def decode_refusal(cls, cfg, shape):
+        """A nested run's champion controller is an inner population's genome for one body."""
+        return ("a nested run's champion controller is one genome of an inner population evolved for its "
+                "body alone; it has no meaning at another size (decode sgr runs)")
+
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)
         self.gc = neat_config.genome_config

@@ -50,6 +50,7 @@ class SgrProblem(Problem):
     }
     default_files = {"neat_config": "sgr.ini"}
     absent_before = {"body_distance_weight": 0.0}  # an older run speciated by the genome alone
+    starts_from_runs = True  # its CPPNs are free of the body's size: a run may start from another's
 
     def __init__(self, cfg: dict, neat_config, pool: RolloutPool | None = None):
         super().__init__(cfg, neat_config, pool)

@@ -47,16 +47,8 @@ def decoded_champion(run_dir: str | Path, shape: tuple[int, int]) -> dict:
     shape = (int(shape[0]), int(shape[1]))
     own = shape == cfg.robot_shape
     size = f"{shape[0]}x{shape[1]}"
-    if cfg.method == "nested":
-        raise SgrError(f"{run_dir}: a nested run's champion controller is one genome of an inner population "
-                       "evolved for its body alone; it has no meaning at another size (decode sgr runs)")
-    if not METHODS[cfg.method].uses_neat:
-        raise SgrError(f"{run_dir}: a {cfg.method} run's champion is a body and a controller trained for it, "
-                       "no genome to decode at another size (decode sgr runs)")
-    if cfg.method == "direct" and not own:
-        raise SgrError(f"{run_dir}: direct NEAT's network reads the observation of a full "
-                       f"{cfg.robot_shape[0]}x{cfg.robot_shape[1]} body (and, in its default layout, has "
-                       f"one output per cell): its controller decodes at that size only, not at {size}")
+    if (why := METHODS[cfg.method].decode_refusal(cfg, shape)) is not None:  # what the method says
+        raise SgrError(f"{run_dir}: {why}")
     if (why := body_fit_problem(cfg.task, shape)) is not None:
         raise SgrError(f"--shape {size}: {why}")
     record, _, _ = read_champion(run.path)

@@ -19,6 +19,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from evolve.config import RunConfig
+from evolve.methods import METHODS
 from evolve.methods.decoders import DEFAULT, body_decoder
 from evolve.records.rundir import RunDir, checkpoint_generation, read_checkpoint_file
 from evolve.search.state_codec import decode_search_state
@@ -32,7 +33,7 @@ def check_start_from(cfg: RunConfig, source: str) -> dict:
     start = cfg.start_from
     if set(start) - {"run", "generation"} or not isinstance(start.get("run"), str):
         raise SgrError(f"{key} must be {{run: PATH, generation: G}} (generation optional), got {start!r}")
-    if cfg.method != "sgr":
+    if not METHODS[cfg.method].starts_from_runs:
         raise SgrError(f"{key}: only sgr runs start from another run's population (its genomes are "
                        f"CPPNs, free of the body's size); a {cfg.method} run continues with "
                        "sgr evolve --resume")
@@ -40,8 +41,8 @@ def check_start_from(cfg: RunConfig, source: str) -> dict:
     if not (run.path / "config.yaml").is_file():
         raise SgrError(f"{key}: {start['run']} is not a run folder (no config.yaml)")
     src = run.config()
-    if src.get("method") != "sgr":
-        raise SgrError(f"{key}: {start['run']} is a {src.get('method')} run, not an sgr one")
+    if src.get("method") != cfg.method:
+        raise SgrError(f"{key}: {start['run']} is a {src.get('method')} run, not an {cfg.method} one")
     theirs, ours = cppn_outputs(src), cppn_outputs({"cppn_outputs": cfg.cppn_outputs,
                                                      "body_decoder": cfg.body_decoder})
     if theirs != ours:

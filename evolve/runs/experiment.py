@@ -110,7 +110,7 @@ class Experiment:
             state=state, reevaluate=method.reevaluate_elites or (robust is not None and robust.reevaluate),
             accumulate=robust is not None and robust.accumulate,
             race=robust.race if robust else 0, settle=robust.settle if robust else 0)
-        if hasattr(self.search, "elites"):  # an archive: elites.json after champion.json
+        if method.keeps_archive:  # an archive: elites.json after champion.json
             self.reporters.insert_after(ChampionFile, ArchiveFiles())
 
     @classmethod
