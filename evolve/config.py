@@ -24,8 +24,8 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from types import MappingProxyType
 from typing import Any
 
+from evolve.nn.genome_record import MAX_POP  # noqa: F401 (the config's bound, kept with the INI's)
 from evolve.rollout.robust import MAX_EPISODES, STATISTICS, Robust, config_dataclass
-from evolve.search.genome_record import MAX_POP  # noqa: F401 (the config's bound, kept with the INI's)
 from tasks.specs import MAX_STEPS, TASKS
 from tsim.backend import DEFAULT_PRECISION
 from tsim.errors import SgrError

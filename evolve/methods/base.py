@@ -17,9 +17,9 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 
 from evolve.config import RunConfig
+from evolve.nn.genome_record import genome_json
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
-from evolve.search.genome_record import genome_json
 from evolve.search.state_codec import decode_search_state, encode_search_state
 from tasks.behaviour import FEATURES
 from tsim.errors import SgrError

@@ -24,9 +24,9 @@ from evolve.methods.sgr_decoder import is_valid_robot
 from evolve.methods.substrate import N_TYPES, cell_coordinates
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.genome_record import genome_json
 from evolve.nn.graph import DERIVED_FORMAT, FORMAT, GraphController, graph_of_record
 from evolve.rollout.pool import RolloutPool
-from evolve.search.genome_record import genome_json
 from tasks.env import obs_dim
 from tsim.body import build_body
 from tsim.errors import SgrError

@@ -24,7 +24,7 @@ from evolve.methods.decoders import DEFAULT, body_decoder
 from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, controller_from_cppn
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import DenseController
-from evolve.search.genome_record import GenomeKeys, genome_from_record, genome_json
+from evolve.nn.genome_record import GenomeKeys, genome_from_record, genome_json
 
 FORMAT = "sgr-hyperneat-controller-1"
 CPPN_INPUTS = 7  # x1, y1, z1, x2, y2, z2, bias

@@ -19,7 +19,7 @@ import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, to_action
 from evolve.nn.feedforward import compile_genome
-from evolve.search.genome_record import GenomeKeys, genome_from_record
+from evolve.nn.genome_record import GenomeKeys, genome_from_record
 
 FORMAT = "sgr-graph-controller-1"
 DERIVED_FORMAT = "sgr-genome-graph-controller-1"

@@ -12,10 +12,10 @@ import numpy as np
 from evolve.config import MAX_EPISODE_STEPS
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
+from evolve.nn.genome_record import record_size_problem
 from evolve.nn.graph import GraphController
 from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
-from evolve.search.genome_record import record_size_problem
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
 from tsim import runtime

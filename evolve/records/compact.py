@@ -22,9 +22,9 @@ from pathlib import Path
 from evolve.methods import METHODS, sgr_record
 from evolve.methods.formats import controller_of
 from evolve.nn.dense import DenseController
+from evolve.nn.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 from evolve.nn.graph import GraphController
 from evolve.records.files import atomic_write, read_regular, read_yaml, record_json
-from evolve.search.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 
 MALFORMED = (KeyError, TypeError, ValueError, IndexError)
 

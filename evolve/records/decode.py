@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 
 from evolve.methods import METHODS
+from evolve.nn.genome_record import genome_from_record
 from evolve.records.champion import champion_record, precision_of, read_champion
 from evolve.records.run_config import read_run_config
 from evolve.records.rundir import RunDir
-from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tasks.specs import body_fit_problem
 from tsim.backend import get as get_backend

@@ -12,8 +12,8 @@ from pathlib import Path
 
 import neat
 
+from evolve.nn.genome_record import MAX_GENOME_NODES, MAX_POP
 from evolve.search.genome import BodyAwareGenome, FlexibleReproduction
-from evolve.search.genome_record import MAX_GENOME_NODES, MAX_POP
 from tsim.errors import SgrError
 
 SECTIONS = {"DefaultGenome": BodyAwareGenome.__name__,
@@ -104,7 +104,7 @@ def _check_numbers(ini_path: Path, source: str | Path) -> None:
 def check_sizes(config: neat.Config, source: str | Path) -> None:
     """SgrError naming `source` and the key unless the INI's population and genome sizes are in
     bounds: pop_size 1..MAX_POP (as the YAML config's), the pins and initial hidden nodes of a
-    genome within what sgr reads back of one (evolve/search/genome_record.py), fitness_threshold
+    genome within what sgr reads back of one (evolve/nn/genome_record.py), fitness_threshold
     a number. A new run's INI and a run folder's neat.ini (a stranger's) are checked alike."""
     gc = config.genome_config
     bounds = (("pop_size", config.pop_size, 1, MAX_POP),

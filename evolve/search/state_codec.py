@@ -23,7 +23,7 @@ from operator import attrgetter
 import numpy as np
 
 from evolve.nn.activations import NEAT_ACTIVATIONS, NEAT_AGGREGATIONS
-from evolve.search.genome_record import genome_size_problem
+from evolve.nn.genome_record import genome_size_problem
 from tsim.errors import SgrError
 
 GENOME_ATTRS = {"key", "nodes", "connections", "fitness"}

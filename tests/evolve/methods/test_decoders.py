@@ -15,8 +15,8 @@ from evolve.methods.sgr import SgrProblem
 from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, decode
 from evolve.methods.substrate import cell_coordinates
 from evolve.nn.cppn import CompiledCPPN
+from evolve.nn.genome_record import genome_json
 from evolve.runs.config import config_from_dict
-from evolve.search.genome_record import genome_json
 from tsim.body import is_connected
 from tsim.errors import SgrError
 

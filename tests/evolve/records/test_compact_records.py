@@ -14,12 +14,12 @@ import pytest
 
 from evolve.methods.sgr_decoder import DecoderSettings, decode
 from evolve.nn.dense import DenseController
+from evolve.nn.genome_record import genome_from_record
 from evolve.nn.graph import GraphController
 from evolve.records.compact import compact_file
 from evolve.records.decode import write_decoded
 from evolve.records.files import record_json
 from evolve.records.replay import load_champion, rescore_champion
-from evolve.search.genome_record import genome_from_record
 from evolve.search.neat_ini import load_neat_config
 from tests.evolve.conftest import tiny_run
 from tsim.errors import SgrError

@@ -2,7 +2,7 @@
 (the order a compiled network sums in), and records of the older layout (an object per gene) read
 as the same genome."""
 
-from evolve.search.genome_record import as_columns, genome_from_record, genome_json
+from evolve.nn.genome_record import as_columns, genome_from_record, genome_json
 
 
 def genes_of(g) -> list:
