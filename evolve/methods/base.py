@@ -193,7 +193,7 @@ class Problem:
     def make_search(self, neat_config, seed: int, state: dict | None = None) -> Any | None:
         """The method's own search, or None for NEAT's (`NeatSearch`, built by the run). One of its
         own has NeatSearch's face: `generation`, `step()` -> the generation's row, `best`,
-        `population`, `decode` and `state()` (evolve/methods/map_elites.py)."""
+        `population`, `decode` and `state()` (evolve/search/archive.py)."""
         return None
 
     @classmethod

@@ -118,7 +118,7 @@ class ChampionFile:
 
 
 class ArchiveFiles:
-    """A map-elites run's archive (evolve/methods/map_elites.py): every elite's record in
+    """A map-elites run's archive (evolve/search/archive.py): every elite's record in
     elites.json after each generation (`load_champion(run, cell=...)`), written after
     champion.json and before the checkpoint; archive.png (evolve/report/archive.py) on the
     checkpoints' schedule (under a second) and with the end files."""
