@@ -94,13 +94,14 @@ def test_nothing_below_sgr_imports_it():
 # Inside evolve/, each layer imports only its own and the layers before it, lazy (in-function)
 # imports included (the walk reads whole files). The order, from the code: own_modules (what the
 # worker processes may import) < nn (the networks, and a genome as a JSON record, from which they
-# are compiled) < search (the NEAT search, its checkpoint state) < rollout (episodes, worker pools, robust evaluation's noise) <
-# config (the RunConfig: it parses `robust` with the rollout's Robust) < methods (they read the
-# config and simulate through the rollout) < records (what a run leaves on disk: the run folder,
-# champion.json and its replays, the verdict, segments, decoding, older formats) < report (reads
-# those records; a run draws its own fitness.png with it) < runs (a run's lifecycle, which writes
-# the records; `sgr migrate` is here: it restores old pickles into an Experiment) < sweeps (many
-# runs) < cli < the evolve package's face (evolve/__init__.py).
+# are compiled) < search (NEAT's search and MAP-Elites', their checkpoint state) < rollout
+# (episodes, worker pools, robust evaluation's noise) < config (the RunConfig: it parses `robust`
+# with the rollout's Robust) < methods (they read the config and simulate through the rollout) <
+# records (what a run leaves on disk: the run folder, champion.json and its replays, the verdict,
+# segments, decoding, older formats) < report (reads those records; a run draws its own
+# fitness.png with it) < runs (a run's lifecycle, which writes the records; `sgr migrate` is here:
+# it restores old pickles into an Experiment) < sweeps (many runs) < cli < the evolve package's
+# face (evolve/__init__.py).
 EVOLVE_LAYERS = ("evolve.own_modules", "evolve.nn", "evolve.search", "evolve.rollout", "evolve.config",
                  "evolve.methods", "evolve.records", "evolve.report", "evolve.runs", "evolve.sweeps",
                  "evolve.cli", "evolve")
