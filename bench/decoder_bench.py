@@ -1,4 +1,4 @@
-"""Decoding time per genome by body decoder (`body_decoder`, evolve/methods/decoders/; not run by CI).
+"""Decoding time per genome by body decoder (`body_decoder`, evolve/methods/sgr/decoders/; not run by CI).
 
     python bench/decoder_bench.py [--shape 10x10] [--genomes 100] [--mutations 6] [--task Walker-v0]
 
@@ -25,8 +25,8 @@ sys.path.insert(0, str(ROOT))
 import neat  # noqa: E402
 
 from evolve.cli.common import parse_shape  # noqa: E402
-from evolve.methods.decoders import DECODERS  # noqa: E402
-from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, decode, is_valid_robot  # noqa: E402
+from evolve.methods.sgr.decoder import DecoderSettings, body_from_cppn, decode, is_valid_robot  # noqa: E402
+from evolve.methods.sgr.decoders import DECODERS  # noqa: E402
 from evolve.nn.cppn import CompiledCPPN  # noqa: E402
 from evolve.search.neat_ini import load_neat_config, neat_ini_text  # noqa: E402
 

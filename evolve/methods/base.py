@@ -158,7 +158,7 @@ class Problem:
 
     def champion_of(self, genome, phenotype: Phenotype) -> dict:
         """`champion`'s keys for `genome`, decoded to `phenotype`: a method whose controller is a
-        function of the genome may record it as that (SGR: evolve/methods/sgr_record.py), since the
+        function of the genome may record it as that (SGR: evolve/methods/sgr/record.py), since the
         champion file holds the genome too."""
         return self.champion(phenotype)
 

@@ -7,7 +7,7 @@ record's genome), so adding a method, or a format, is one module: nothing here n
 shortest exact format is its Problem's `compact_controller` (evolve/runs/migrate.py uses it).
 
 The tags today: sgr-dense-controller-1 (SGR's dense layers in full; also an older sgr's untagged
-ones), sgr-hyperneat-controller-1 (SGR's, as its genome's decoding: evolve/methods/sgr_record.py),
+ones), sgr-hyperneat-controller-1 (SGR's, as its genome's decoding: evolve/methods/sgr/record.py),
 sgr-graph-controller-1 (direct's and nested's NEAT networks in full) and
 sgr-genome-graph-controller-1 (direct's, as its genome compiled: evolve/nn/graph.py)."""
 

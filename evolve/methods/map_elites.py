@@ -140,7 +140,7 @@ class QdSettings:
 
 
 class MapElitesProblem(SgrProblem):
-    """SGR genomes (one CPPN: body and controller, evolve/methods/sgr.py) searched by MAP-Elites
+    """SGR genomes (one CPPN: body and controller, evolve/methods/sgr/problem.py) searched by MAP-Elites
     (`MapElitesSearch`) instead of NEAT's speciated population."""
 
     name = "map-elites"

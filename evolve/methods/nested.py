@@ -24,8 +24,8 @@ import numpy as np
 
 from evolve.methods import formats
 from evolve.methods.base import Problem, positive
-from evolve.methods.sgr_decoder import is_valid_robot
-from evolve.methods.substrate import N_TYPES, cell_coordinates, controller_side
+from evolve.methods.sgr.decoder import is_valid_robot
+from evolve.methods.sgr.substrates import N_TYPES, cell_coordinates, controller_side
 from evolve.nn.batch import GraphPolicy, NetworkBatch
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.graph import FORMAT as GRAPH_FORMAT

@@ -3,7 +3,7 @@
 The record lists every node and connection (disabled ones included) in the genome's own order. That
 order matters: a compiled network sums a node's inputs in it, so a genome read back in the stored
 order decodes to the same numbers bit for bit (`sgr decode`, and SGR controllers recorded as a
-function of their genome, evolve/methods/sgr_record.py). Resuming uses the checkpoints, not this.
+function of their genome, evolve/methods/sgr/record.py). Resuming uses the checkpoints, not this.
 """
 
 from __future__ import annotations

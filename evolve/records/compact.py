@@ -4,7 +4,7 @@ Older champion files hold SGR's controller as JSON numbers (~45 KB at 5x5, ~0.5 
 direct NEAT's network node by node, and the genome as an object per gene, one value per line. They
 load as they are (`evolve.methods.formats.controller_of` reads every format). This rewrites them as
 sgr now writes them, for a tree that must stay small (tests/test_tree_size.py): the controller as
-its genome's decoding (SGR, evolve/methods/sgr_record.py) or compiled form (direct,
+its genome's decoding (SGR, evolve/methods/sgr/record.py) or compiled form (direct,
 `GraphController.to_derived_json`) where that gives it back exactly, the genome by columns, lists
 of plain values on one line (`record_json`). Every other key is kept as it is, and a controller that
 would not come back exactly stays in full, so a rewritten file loads as the same robot, bit for bit,
@@ -19,8 +19,9 @@ import json
 import sys
 from pathlib import Path
 
-from evolve.methods import METHODS, sgr_record
+from evolve.methods import METHODS
 from evolve.methods.formats import controller_of
+from evolve.methods.sgr import record as sgr_record
 from evolve.nn.dense import DenseController
 from evolve.nn.genome_record import CONNECTION_COLUMNS, NODE_COLUMNS, as_columns, genes
 from evolve.nn.graph import GraphController

@@ -20,7 +20,7 @@ from pathlib import Path
 
 from evolve.config import RunConfig
 from evolve.methods import METHODS
-from evolve.methods.decoders import DEFAULT, body_decoder
+from evolve.methods.sgr.decoders import DEFAULT, body_decoder
 from evolve.records.rundir import RunDir, checkpoint_generation, read_checkpoint_file
 from evolve.search.state_codec import decode_search_state
 from tsim.errors import SgrError

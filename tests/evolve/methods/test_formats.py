@@ -3,8 +3,9 @@ writes (evolve/methods/formats.py), and a champion's controller is read by its t
 
 import pytest
 
-from evolve.methods import formats, sgr_record
+from evolve.methods import formats
 from evolve.methods.formats import controller_of
+from evolve.methods.sgr import record as sgr_record
 from evolve.nn.dense import FORMAT as DENSE_FORMAT
 from evolve.nn.graph import DERIVED_FORMAT, FORMAT
 

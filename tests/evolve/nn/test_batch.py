@@ -25,7 +25,7 @@ def test_batched_networks_equal_neat_python_activate(neat_config, genomes):
 def test_per_cell_queries_match_the_json_controller(neat_config, genomes):
     """The direct baseline's per_cell layout: each actuator is a query with its cell's (x, y) in
     inputs 0-1; the batched policy and the champion's JSON controller give the same actions."""
-    from evolve.methods.substrate import cell_coordinates
+    from evolve.methods.sgr.substrates import cell_coordinates
     from evolve.nn.batch import GraphPolicy
     from evolve.nn.graph import GraphController
 

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from evolve.methods.sgr_decoder import DecoderSettings, decode
+from evolve.methods.sgr.decoder import DecoderSettings, decode
 from evolve.nn.dense import DenseController
 from evolve.nn.genome_record import genome_from_record
 from evolve.nn.graph import GraphController
@@ -169,7 +169,7 @@ def test_every_committed_sgr_champion_decodes_again_to_its_recorded_body_and_wei
     again from their genomes and checked against their recorded bodies and weights' SHA-256s:
     data written by the runs, over every body decoder and at 5x5, 10x5 and 10x10, so a change to
     any decoder's bits (or to the default's, which every older run used) fails here."""
-    from evolve.methods.sgr_record import FORMAT, rebuild
+    from evolve.methods.sgr.record import FORMAT, rebuild
 
     seen = set()
     root = OLD.parents[2]

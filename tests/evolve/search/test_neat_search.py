@@ -3,7 +3,7 @@
 import neat
 import numpy as np
 
-from evolve.methods.sgr_decoder import DecoderSettings, decode, is_valid_robot
+from evolve.methods.sgr.decoder import DecoderSettings, decode, is_valid_robot
 from evolve.search.body_distance import body_distance
 from evolve.search.neat_search import NeatSearch
 

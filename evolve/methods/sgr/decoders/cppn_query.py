@@ -19,9 +19,9 @@ from typing import Any
 
 import numpy as np
 
-from evolve.methods.decoders.base import BodyDecoder
-from evolve.methods.hyperneat import Expression
-from evolve.methods.substrate import cell_coordinates
+from evolve.methods.sgr.decoders.base import BodyDecoder
+from evolve.methods.sgr.hyperneat import Expression
+from evolve.methods.sgr.substrates import cell_coordinates
 from evolve.nn.cppn import CompiledCPPN
 
 Z_BODY = 1.0  # z2 of every body query: the body's side of the CPPN (the controller's is z2 <= -2)

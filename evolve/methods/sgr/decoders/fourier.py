@@ -18,9 +18,9 @@ from typing import Any
 
 import numpy as np
 
-from evolve.methods.decoders.base import BodyDecoder
-from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
-from evolve.methods.substrate import N_TYPES, Substrate, cell_coordinates, grid_layer
+from evolve.methods.sgr.decoders.base import BodyDecoder
+from evolve.methods.sgr.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.methods.sgr.substrates import N_TYPES, Substrate, cell_coordinates, grid_layer
 
 
 @cache

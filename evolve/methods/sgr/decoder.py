@@ -1,6 +1,6 @@
 """SGR decoding: one CPPN genome -> (body matrix, dense controller), HyperNEAT-style.
 
-The body is drawn by the run's body decoder (config key `body_decoder`, evolve/methods/decoders/;
+The body is drawn by the run's body decoder (config key `body_decoder`, evolve/methods/sgr/decoders/;
 the default, "substrate", is the paper's: the body network (z > 0) is evaluated on every cell of
 the body grid and each cell takes the argmax of its 5 material outputs); the controller network
 (z < 0) becomes a `DenseController` whose input grid is sized to the decoded body's observation.
@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from evolve.methods.decoders import DEFAULT, body_decoder
-from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
-from evolve.methods.substrate import controller_side, controller_substrate
+from evolve.methods.sgr.decoders import DEFAULT, body_decoder
+from evolve.methods.sgr.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.methods.sgr.substrates import controller_side, controller_substrate
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import DenseController
 from tasks.env import obs_dim

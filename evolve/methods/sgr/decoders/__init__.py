@@ -1,13 +1,13 @@
-"""Body decoders behind one contract (`BodyDecoder`, evolve/methods/decoders/base.py) and their
+"""Body decoders behind one contract (`BodyDecoder`, evolve/methods/sgr/decoders/base.py) and their
 registry by name (the config key `body_decoder`): a decoder is one module and one line here."""
 
 from __future__ import annotations
 
-from evolve.methods.decoders.base import BodyDecoder, Settings
-from evolve.methods.decoders.cppn_query import CppnQueryDecoder
-from evolve.methods.decoders.fourier import FourierDecoder
-from evolve.methods.decoders.growth import GrowthDecoder
-from evolve.methods.decoders.substrate import SubstrateDecoder
+from evolve.methods.sgr.decoders.base import BodyDecoder, Settings
+from evolve.methods.sgr.decoders.cppn_query import CppnQueryDecoder
+from evolve.methods.sgr.decoders.fourier import FourierDecoder
+from evolve.methods.sgr.decoders.growth import GrowthDecoder
+from evolve.methods.sgr.decoders.substrate import SubstrateDecoder
 from tsim.errors import SgrError
 
 DEFAULT = "substrate"  # the SGR paper's

@@ -1,4 +1,4 @@
-"""Body decoders (evolve/methods/decoders/): each draws (H, W) material grids from the genome's CPPN at
+"""Body decoders (evolve/methods/sgr/decoders/): each draws (H, W) material grids from the genome's CPPN at
 any shape, as its docstring says (checked here against slow one-query-at-a-time oracles and the
 growth rule's invariants); a good share of random mutated genomes draw valid robots, invalid ones
 are flagged invalid; the new decoders draw other bodies than the paper's substrate from the same
@@ -8,12 +8,12 @@ is one line."""
 import numpy as np
 import pytest
 
-from evolve.methods import sgr_record
-from evolve.methods.decoders import DECODERS, body_decoder
-from evolve.methods.decoders.growth import CHANNELS, NEIGHBOURS, grow
 from evolve.methods.sgr import SgrProblem
-from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, decode
-from evolve.methods.substrate import cell_coordinates
+from evolve.methods.sgr import record as sgr_record
+from evolve.methods.sgr.decoder import DecoderSettings, body_from_cppn, decode
+from evolve.methods.sgr.decoders import DECODERS, body_decoder
+from evolve.methods.sgr.decoders.growth import CHANNELS, NEIGHBOURS, grow
+from evolve.methods.sgr.substrates import cell_coordinates
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.genome_record import genome_json
 from evolve.runs.config import config_from_dict
@@ -111,7 +111,7 @@ def test_the_fourier_decoder_is_its_body_network_of_fourier_features(neat_config
 def test_the_growth_rules_weights_are_cppn_queries_on_its_own_substrate(neat_config, genomes):
     """The first input -> hidden weight (the cell itself, channel 0, at (0, 0, 4)) and a bias, asked
     of the CPPN one at a time, are those the decoder grows with."""
-    import evolve.methods.decoders.growth as growth
+    import evolve.methods.sgr.decoders.growth as growth
 
     cfg = neat_config()
     g = genomes(cfg, 1, seed=1)[0]

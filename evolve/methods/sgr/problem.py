@@ -6,11 +6,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from evolve.methods import formats, sgr_record
+from evolve.methods import formats
 from evolve.methods.base import Problem
-from evolve.methods.decoders import DEFAULT as DEFAULT_DECODER
-from evolve.methods.decoders import body_decoder
-from evolve.methods.sgr_decoder import DecoderSettings, Phenotype, decode
+from evolve.methods.sgr import record as sgr_record
+from evolve.methods.sgr.decoder import DecoderSettings, Phenotype, decode
+from evolve.methods.sgr.decoders import DEFAULT as DEFAULT_DECODER
+from evolve.methods.sgr.decoders import body_decoder
 from evolve.nn.dense import FORMAT as DENSE_FORMAT
 from evolve.nn.dense import DenseController
 from evolve.rollout.episodes import dense_policy
@@ -62,7 +63,7 @@ class SgrProblem(Problem):
         """`cppn_outputs` must be 1 (one output read by both networks) or 2 (body, controller);
         `max_weight` > 0, `weight_threshold` and `body_distance_weight` >= 0 (finite: every float
         key is);
-        `body_decoder` a registered decoder (evolve/methods/decoders/) and
+        `body_decoder` a registered decoder (evolve/methods/sgr/decoders/) and
         `body_decoder_settings` its settings."""
         if cfg.cppn_outputs not in (1, 2):
             raise SgrError(f"{source}: key 'cppn_outputs' must be 1 or 2, got {cfg.cppn_outputs}")
@@ -81,8 +82,8 @@ class SgrProblem(Problem):
         return {"DefaultGenome": {"num_inputs": "7", "num_outputs": str(outputs)}}
 
     def decode(self, genome) -> Phenotype:
-        """Body and dense controller from the CPPN (`sgr_decoder.decode`); an invalid body gets no
-        controller."""
+        """Body and dense controller from the CPPN (`evolve.methods.sgr.decoder.decode`); an invalid
+        body gets no controller."""
         return decode(genome, self.genome_config, self.cfg.task, self.settings)
 
     def evaluate(self, phenotypes: Sequence[Phenotype],

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from evolve.methods.hyperneat import Expression, substrate_queries
-from evolve.methods.substrate import (
+from evolve.methods.sgr.hyperneat import Expression, substrate_queries
+from evolve.methods.sgr.substrates import (
     body_substrate,
     cell_coordinates,
     controller_side,

@@ -1,6 +1,6 @@
 """The paper's body decoder ("substrate", the default): the CPPN queried on a fixed body substrate.
 
-The body network is a 2-3-5 perceptron (evolve/methods/substrate.py, `body_substrate`: inputs 1x2 at
+The body network is a 2-3-5 perceptron (evolve/methods/sgr/substrates.py, `body_substrate`: inputs 1x2 at
 z=1, hidden 1x3 at z=2 tanh, outputs 1x5 at z=3 identity) whose weights are CPPN output 0 at every
 link; it is evaluated on each cell's (x, y) and the cell takes the argmax of its 5 material outputs.
 """
@@ -13,9 +13,9 @@ from typing import Any
 
 import numpy as np
 
-from evolve.methods.decoders.base import BodyDecoder
-from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
-from evolve.methods.substrate import body_substrate, cell_coordinates
+from evolve.methods.sgr.decoders.base import BodyDecoder
+from evolve.methods.sgr.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.methods.sgr.substrates import body_substrate, cell_coordinates
 from evolve.nn.cppn import CompiledCPPN
 
 

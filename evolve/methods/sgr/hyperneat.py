@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from evolve.methods.substrate import Substrate
+from evolve.methods.sgr.substrates import Substrate
 
 
 @dataclass(frozen=True)

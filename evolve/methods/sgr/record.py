@@ -2,14 +2,14 @@
 settings (format sgr-hyperneat-controller-1).
 
 A decoded controller is a pure, deterministic function of the CPPN genome, the decoder settings,
-the body and the task (evolve/methods/sgr_decoder.py). Written out as JSON numbers its weights are
+the body and the task (evolve/methods/sgr/decoder.py). Written out as JSON numbers its weights are
 most of a champion file: ~45 KB at 5x5, ~500 KB at 10x10 (a 144 x 100 and a 100 x 100 matrix,
 97 % of them non-zero, so no sparse or binary encoding gets far below 200 KB). The genome that draws
 them is ~1 KB. So champion.json records the genome (its "genome" key, as before), the settings, the
 layers' shapes and activations, and a SHA-256 of the weights; reading the file decodes the genome
 again and checks the digest, so a champion read back is bit for bit the one evolution scored, or an
 error says it is not. Files holding the weights in full (sgr-dense-controller-1) still load as they
-are. A body decoder other than the paper's substrate (evolve/methods/decoders/) is recorded in the
+are. A body decoder other than the paper's substrate (evolve/methods/sgr/decoders/) is recorded in the
 settings as `body_decoder` and `body_decoder_settings`; a record without them (every one written
 before decoders were a choice) reads as the substrate's.
 """
@@ -20,8 +20,8 @@ import hashlib
 
 import numpy as np
 
-from evolve.methods.decoders import DEFAULT, body_decoder
-from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, controller_from_cppn
+from evolve.methods.sgr.decoder import DecoderSettings, body_from_cppn, controller_from_cppn
+from evolve.methods.sgr.decoders import DEFAULT, body_decoder
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import DenseController
 from evolve.nn.genome_record import GenomeKeys, genome_from_record, genome_json
@@ -30,11 +30,11 @@ FORMAT = "sgr-hyperneat-controller-1"
 CPPN_INPUTS = 7  # x1, y1, z1, x2, y2, z2, bias
 DOC = ("The dense controller (sgr-dense-controller-1: x = observation zero-padded by input_padding; for each "
        "layer x = activation(x @ weights + biases)) that SGR's HyperNEAT decoding of this file's 'genome' at "
-       "'decoder' gives for its body and task (evolve/methods/sgr_decoder.py); sha256 is that of its weights "
+       "'decoder' gives for its body and task (evolve/methods/sgr/decoder.py); sha256 is that of its weights "
        "and biases as little-endian float64, layer by layer (W then b, W row-major [in][out]). "
        "evolve.load_champion decodes it again and checks the digest.")
 DOC_DECODER = (" The body is the one that body decoder 'decoder'.body_decoder, with "
-               "'decoder'.body_decoder_settings, draws from the genome (evolve/methods/decoders/).")
+               "'decoder'.body_decoder_settings, draws from the genome (evolve/methods/sgr/decoders/).")
 
 
 def digest(ctrl: DenseController) -> str:

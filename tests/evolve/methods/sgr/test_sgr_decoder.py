@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from evolve.methods.sgr_decoder import DecoderSettings, body_from_cppn, decode, is_valid_robot
-from evolve.methods.substrate import cell_coordinates, controller_side
+from evolve.methods.sgr.decoder import DecoderSettings, body_from_cppn, decode, is_valid_robot
+from evolve.methods.sgr.substrates import cell_coordinates, controller_side
 from evolve.nn.cppn import CompiledCPPN
 from evolve.nn.dense import ControllerBatch, DenseController
 from tasks.env import obs_dim

@@ -28,9 +28,9 @@ from typing import Any
 
 import numpy as np
 
-from evolve.methods.decoders.base import BodyDecoder
-from evolve.methods.hyperneat import Expression, dense_layers, substrate_queries
-from evolve.methods.substrate import Substrate, grid_layer
+from evolve.methods.sgr.decoders.base import BodyDecoder
+from evolve.methods.sgr.hyperneat import Expression, dense_layers, substrate_queries
+from evolve.methods.sgr.substrates import Substrate, grid_layer
 
 CHANNELS = 8
 Z_INPUT, Z_HIDDEN, Z_OUTPUT = 0.25, 0.6, 0.8  # the rule's layers (module docstring)

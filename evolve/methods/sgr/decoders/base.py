@@ -1,12 +1,12 @@
 """The contract of a body decoder: a genome's compiled CPPN -> an (H, W) material grid, at any shape.
 
-SGR draws the body and the controller from one CPPN genome (evolve/methods/sgr_decoder.py). The
+SGR draws the body and the controller from one CPPN genome (evolve/methods/sgr/decoder.py). The
 controller is always the paper's HyperNEAT controller substrate (z < 0); how the body is drawn is a
 choice (config key `body_decoder`): a `BodyDecoder` reads the CPPN's first `body_outputs` output
 columns at queries of its own (all at z > 0 or otherwise apart from the controller's) and returns
 material codes 0-4 (empty, rigid, soft, H actuator, V actuator). Its few settings (config key
 `body_decoder_settings`) are declared in `settings` with their defaults; a champion records them.
-A decoder is one module and one line in evolve/methods/decoders/__init__.py's registry.
+A decoder is one module and one line in evolve/methods/sgr/decoders/__init__.py's registry.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from evolve.methods.hyperneat import Expression
+from evolve.methods.sgr.hyperneat import Expression
 from evolve.nn.cppn import CompiledCPPN
 from tsim.errors import SgrError
 
