@@ -1,6 +1,7 @@
-"""A researcher's first hour, as README.md and docs/TASKS.md tell it, from a folder outside the
-repository with sgr installed non-editably (`pip install --target`, no dependencies: they come from
-this environment). Slow-ish (~1 min): it builds the package and runs three real processes."""
+"""A researcher's first hour, as docs/FIRST_HOUR.md (and the README) and docs/TASKS.md tell it,
+from a folder outside the repository with sgr installed non-editably (`pip install --target`, no
+dependencies: they come from this environment). Slow-ish (~1 min): it builds the package and
+runs three real processes."""
 
 import os
 import re
@@ -19,13 +20,16 @@ def code_block(doc: Path, heading: str) -> str:
     return re.search(r"```python\n(.*?)```", text[text.index(heading):], re.S).group(1)
 
 
+FIRST_HOUR = ROOT / "docs" / "FIRST_HOUR.md"
+
+
 def test_readme_first_hour_reads_in_order():
-    text = (ROOT / "README.md").read_text()
+    text = FIRST_HOUR.read_text()
     steps = ["**1. Install**", "**2. Run**", "**3. Look**", "**4. Use your champion**",
              "**5. Your own task**"]
     where = [text.find(s) for s in steps]
     assert -1 not in where and where == sorted(where) and where[-1] < text.find("## What is here")
-    snippet = code_block(ROOT / "README.md", "**4. Use your champion**").strip().splitlines()
+    snippet = code_block(FIRST_HOUR, "**4. Use your champion**").strip().splitlines()
     assert snippet[0].startswith("from evolve import") and len(snippet) == 6  # an import, five lines
 
 
@@ -60,7 +64,8 @@ def test_evolve_a_task_then_use_the_champion_as_the_readme_says(installed):
     assert run_dir.startswith("runs/sgr-Climber-v2-seed0-")
     where = run([sys.executable, "-c", "import evolve; print(evolve.__file__)"], installed).stdout
     assert where.startswith(str(site)), where  # the installed copy, not the repository
-    snippet = code_block(ROOT / "README.md", "**4. Use your champion**")
+    snippet = code_block(FIRST_HOUR, "**4. Use your champion**")
+    assert snippet in (ROOT / "README.md").read_text()  # the README shows the same lines
     snippet = snippet.replace("runs/sgr-quick-seed0-<time>", run_dir)
     out = run([sys.executable, "-c", snippet], installed).stdout.split()
     assert out[0] == out[1]  # the recorded fitness, reproduced exactly (repr of the same float)

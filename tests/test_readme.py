@@ -1,6 +1,7 @@
-"""The README's Python blocks run as written: each ```python block is executed, in order, in one
-fresh process in an empty folder (`<time>` in a run folder's name, which stands for the time a
-run was started, is that of a tiny run made there first). A block that fails names itself."""
+"""The Python blocks of the README and docs/FIRST_HOUR.md run as written: each ```python block is
+executed, in order, in one fresh process in an empty folder (`<time>` in a run folder's name,
+which stands for the time a run was started, is that of a tiny run made there first). A block
+that fails names itself."""
 
 from __future__ import annotations
 
@@ -41,8 +42,10 @@ def python_blocks(text: str) -> list[str]:
 
 
 def test_the_readme_python_blocks_run_as_written(tmp_path):
-    blocks = [b.replace("<time>", "TEST") for b in python_blocks((ROOT / "README.md").read_text())]
-    assert len(blocks) >= 5  # use your champion, the API, BatchEnv, gymnasium, coming from evogym
+    """The README's blocks, then docs/FIRST_HOUR.md's (the first hour in full)."""
+    pages = [(ROOT / "README.md").read_text(), (ROOT / "docs" / "FIRST_HOUR.md").read_text()]
+    blocks = [b.replace("<time>", "TEST") for page in pages for b in python_blocks(page)]
+    assert len(blocks) >= 6  # use your champion (twice), the API, BatchEnv, gymnasium, coming from evogym
     env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_THREADS")}
     env["PYTHONPATH"] = str(ROOT)
     r = subprocess.run([sys.executable, "-c", RUNNER, json.dumps(blocks)], cwd=tmp_path, env=env,
