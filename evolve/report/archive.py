@@ -215,4 +215,4 @@ def _archives_part(rows: list[dict], runs: list[Path], folder: Path, pool) -> Se
     return SectionPart(archives_markdown(entries, folder), archives_html(entries))
 
 
-register_section(Section("archives", part=_archives_part))
+register_section(Section("archives", part=_archives_part, order=30))

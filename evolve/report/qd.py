@@ -183,6 +183,6 @@ def _behaviour_row(run_dir: Path, cols: dict[str, np.ndarray], replayed: bool) -
 
 
 register_section(Section("quality diversity", QD_COLUMNS, lambda d, cols, replayed: qd_row(d, cols),
-                         _qd_part))
+                         _qd_part, order=10))
 register_section(Section("behaviour", BEHAVIOUR_COLUMNS, _behaviour_row,
-                         lambda rows, runs, folder, pool: SectionPart(behaviour_markdown(rows))))
+                         lambda rows, runs, folder, pool: SectionPart(behaviour_markdown(rows)), order=20))

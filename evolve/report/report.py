@@ -37,14 +37,14 @@ from evolve.records import verdict as verdict_rule
 from evolve.records.files import atomic_write, load_yaml
 from evolve.records.rundir import champion_of
 from evolve.records.segments import backend_summary
+from evolve.report import archive as _archive  # noqa: F401 (registers the archives section)
+from evolve.report import qd as _qd  # noqa: F401 (registers quality diversity and behaviour)
 from evolve.report.gallery import champion_figure
 from evolve.report.groups import episode_length
 from evolve.report.plots import band, read_generations, save_png
-from evolve.report.sections import SECTIONS, builtin_sections
+from evolve.report.sections import SECTIONS
 from tsim.errors import SgrError
 from tsim.files import CONFIG_CAP, read_text
-
-builtin_sections()  # the report's own sections (quality diversity, behaviour, archives)
 
 CHECKPOINTS = (1, 30, 100)  # 1-based generations reported, plus the end
 # The authors' released logs (fhtanaka/SGR), mean best at generation 1 (their 0), 30, 100, end.

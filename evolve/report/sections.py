@@ -47,29 +47,26 @@ class Section:
             -> values for the run's row; {} for a run it has nothing to say about.
         part: (the rows, the run folders, the report's folder, the settings pooled) -> its part of
             report.md and report.html; it may draw pictures into the report's folder.
+        order: where it appears among the sections (lower first; sgr's own: 10 to 30).
     """
 
     name: str
     columns: tuple[str, ...] = ()
     row: Callable[[Path, dict[str, np.ndarray], bool], dict] | None = None
     part: Callable[[list[dict], list[Path], Path, Sequence[str]], SectionPart] | None = None
+    order: int = 50
 
 
 SECTIONS: dict[str, Section] = {}
-# sgr's own sections' modules, in the order they appear: quality diversity and behaviour, archives
-BUILTIN = ("evolve.report.qd", "evolve.report.archive")
 
 
 def register_section(section: Section) -> Section:
-    """Add `section` to every report from now on, after those registered before it."""
+    """Add `section` to every report from now on: sections appear by their `order`, then in the
+    order they were registered (sgr's own: quality diversity 10, behaviour 20, archives 30; evolve/
+    report/report.py imports their modules, which registers them)."""
     SECTIONS.pop(section.name, None)
     SECTIONS[section.name] = section
+    ranked = sorted(enumerate(SECTIONS.values()), key=lambda kv: (kv[1].order, kv[0]))
+    SECTIONS.clear()
+    SECTIONS.update((s.name, s) for _, s in ranked)
     return section
-
-
-def builtin_sections() -> None:
-    """Register sgr's own sections (once; importing their modules registers them)."""
-    import importlib
-
-    for module in BUILTIN:  # (by name: they import this module to register)
-        importlib.import_module(module)
