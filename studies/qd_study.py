@@ -17,11 +17,12 @@ champion, and the run is kept as ``<run>-g100``); then each map-elites run is ex
 it: `sgr evolve --resume RUN --generations 200`; the search does not depend on the run's length, so
 its first 100 generations are the 100-generation run's, tests/evolve/runs/test_map_elites_run.py).
 Runs are ordinary run folders under ``--out``, run or resumed as in every study
-(studies/study_runs.py), seeds outermost; finished records are copied to ``--records``.
+(studies/study_runs.py), seeds outermost; finished records are copied to ``--records`` (default
+runs/qd/records, beside the runs).
 
     python studies/qd_study.py                 # 18 map-elites runs and 3 SGR runs: ~8 h on 2 cores
     python studies/qd_study.py --table         # docs: the table from the records
-    sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
+    sgr report runs/qd/records --replays 20    # then the report (archives, QD curves)
 """
 
 from __future__ import annotations
@@ -185,7 +186,9 @@ def main() -> None:
     ap.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     ap.add_argument("--arms", nargs="+", default=["behaviour", "body", "sgr"])
     ap.add_argument("--out", type=Path, default=ROOT / "runs" / "qd")
-    ap.add_argument("--records", type=Path, default=ROOT / "results" / "qd" / "runs")
+    # (the records stay beside the runs until the study is done: what results/ keeps of them is
+    # chosen then, within the tree's budget)
+    ap.add_argument("--records", type=Path, default=ROOT / "runs" / "qd" / "records")
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--table", action="store_true", help="only print the study's table from RECORDS")
     a = ap.parse_args()

@@ -375,7 +375,6 @@ NOT_OURS = {
     "tests/requires_screen/test_screen_render_modes.py": "evogym's own test, which tests/sgr/evogym ports",
     "bench/x.py": "a made-up name in a test or an example", "bench/no_such_bench.py": "a test's missing file",
     "evolve/x.py": "a test's made-up module",
-    "results/qd/runs": "studies/qd_study.py writes it",
     "tsim/kernels.py": "the stale pointer test_the_code_path_check_can_fail looks for",
     **THE_READERS,
 }
