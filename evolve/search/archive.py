@@ -143,7 +143,8 @@ class MapElitesSearch:
         fit, episodes = self.problem.evaluate(phenotypes, tags) if phenotypes else (np.zeros(0), 0)
         t2 = time.perf_counter()
         n = len(children)
-        beh = self.problem.behaviour if self.qd.behaviour else None
+        # (nothing evaluated, e.g. no valid child: the problem's last behaviour is another batch's)
+        beh = self.problem.behaviour if self.qd.behaviour and phenotypes else None
         rows = [None] * len(phenotypes) if beh is None else list(beh)
         for c, f, tag, b in zip(again, fit[n:], tags[n:], rows[n:], strict=True):
             e = self.elites[c]

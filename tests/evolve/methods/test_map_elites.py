@@ -286,3 +286,15 @@ def test_an_exploiting_parent_is_the_fittest_of_a_tournament():
     assert len(cells) == TOURNAMENT
     with s._own_random():
         assert {s._parent(cells, exploit=True).key for _ in range(50)} == {TOURNAMENT}
+
+
+def test_a_generation_with_nothing_to_evaluate_ignores_the_last_batch_s_behaviour(monkeypatch):
+    """No valid child and no elite to re-score: nothing is simulated, and the problem's behaviour of
+    an earlier batch (here three stale rows) is not read as this generation's."""
+    needs_ribs()
+    s = search_of({"descriptors": ["gait_frequency", "contact"]})
+    s.problem.behaviour = np.zeros((3, 7))
+    monkeypatch.setattr(s, "_breed", lambda: ([], 5))
+    monkeypatch.setattr(s, "_to_rescore", lambda: [])
+    row = s.step()
+    assert (row["n_valid"], row["n_invalid"], row["episodes"], row["n_elites"]) == (0, 5, 0, 0)
