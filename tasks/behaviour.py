@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from tasks import observations as O
 from tasks.orientation import PI_EVOGYM, orientation
 from tsim import constants as C
 
@@ -68,7 +69,7 @@ class BehaviourRecorder:
         self._c0, self._tops = terrain_tops(np.asarray(terrain, dtype=np.float64))
         pos = self._points()
         self._pos0 = pos.copy()
-        self._com0 = self._com(pos)
+        self._com0 = O.com(pos, self._mask)
         B = env.n_worlds
         self._com_last = self._com0.copy()
         self._height_sum = np.zeros(B)
@@ -82,9 +83,6 @@ class BehaviourRecorder:
         """(B, N, 2) the robots' point positions now, float64, zero on padding."""
         pos = np.asarray(self.env.sim.read_state()[:, :self._n, 0:2], dtype=np.float64)
         return pos * self._mask[:, :, None]
-
-    def _com(self, pos: np.ndarray) -> np.ndarray:
-        return pos.sum(axis=1) / self.env.n_points[:, None]
 
     def _touching(self, pos: np.ndarray) -> np.ndarray:
         """(B,) whether any robot point touches a terrain top (`CONTACT_TOL`)."""
@@ -106,7 +104,7 @@ class BehaviourRecorder:
                 unstable after it).
         """
         pos = self._points()
-        com = self._com(pos)
+        com = O.com(pos, self._mask)
         ok = active & np.isfinite(com).all(axis=1)
         h = (com[:, 1] - self._com0[:, 1]) / C.CELL
         self._height_sum += np.where(ok, h, 0.0)

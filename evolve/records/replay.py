@@ -186,14 +186,15 @@ def _replay(champ: dict, body: np.ndarray, ctrl, noise: EpisodeNoise, record: bo
                           champ["episode_steps"], noise, precision=precision_of(champ), record=record)
 
 
-def _scored_noise(run_dir: str | Path, champ: dict) -> EpisodeNoise:
-    """The perturbations of the episodes the champion's fitness is the score of (`rescore_champion`)."""
+def _scored_episodes(run_dir: str | Path, champ: dict) -> tuple[Robust | None, list[str], EpisodeNoise]:
+    """How the champion's fitness was scored: its robust evaluation (None: one exact episode), the
+    tags of its evaluations, and the perturbations of their episodes."""
     evaluation = champ.get("evaluation") or {}
     robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
     if robust is None:
-        return _exact()
-    tags = evaluation["tags"] if "tags" in evaluation else [evaluation["tag"]]
-    return robust.noise(evaluation["seed"], tags)
+        return None, [], _exact()
+    tags = list(evaluation["tags"]) if "tags" in evaluation else [evaluation["tag"]]
+    return robust, tags, robust.noise(evaluation["seed"], tags)
 
 
 def champion_behaviour(run_dir: str | Path, cell=None) -> dict[str, float]:
@@ -201,7 +202,7 @@ def champion_behaviour(run_dir: str | Path, cell=None) -> dict[str, float]:
     episodes its fitness scores (for a run scored by one exact episode, that episode), simulated
     from champion.json alone. `cell`: a map-elites run's elite of that cell instead."""
     champ, body, ctrl = read_champion(run_dir, cell)
-    rows = _replay(champ, body, ctrl, _scored_noise(run_dir, champ), record=True)
+    rows = _replay(champ, body, ctrl, _scored_episodes(run_dir, champ)[2], record=True)
     return dict(zip(FEATURES, rows[:, 1:].mean(axis=0).tolist(), strict=True))
 
 
@@ -211,15 +212,13 @@ def rescore_champion(run_dir: str | Path, cell=None) -> float:
     episodes (the run's seed and the evaluation's tag give their noise). Must equal the recorded
     fitness. `cell`: a map-elites run's elite of that cell (elites.json) instead."""
     champ, body, ctrl = read_champion(run_dir, cell)
-    evaluation = champ.get("evaluation") or {}
-    robust = Robust.from_config(evaluation.get("robust"), f"{Path(run_dir) / 'champion.json'}: evaluation")
+    robust, tags, noise = _scored_episodes(run_dir, champ)
+    returns = _replay(champ, body, ctrl, noise)
     if robust is None:
-        return float(_replay(champ, body, ctrl, _exact())[0])
-    if "tags" not in evaluation:
-        returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], [evaluation["tag"]]))
+        return float(returns[0])
+    if "tags" not in champ["evaluation"]:
         return float(robust.score(returns[:, None])[0])
-    tags = evaluation["tags"]  # accumulated: each evaluation's score, summed in order, then the mean
-    returns = _replay(champ, body, ctrl, robust.noise(evaluation["seed"], tags))
+    # accumulated: each evaluation's score, summed in order, then the mean
     scores = robust.score(returns.reshape(robust.episodes, len(tags)))
     total = 0.0
     for s in scores:

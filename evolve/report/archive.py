@@ -5,7 +5,6 @@ gallery shows, chosen across the map. Read from elites.json alone (evolve/record
 
 from __future__ import annotations
 
-import base64
 import html
 from pathlib import Path
 
@@ -13,7 +12,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from evolve.records.elites import read_elites
-from evolve.report.gallery import VOXEL_RGB, body_image
+from evolve.report.gallery import VOXEL_RGB, body_image, data_uri
 from evolve.report.plots import save_png
 from evolve.report.sections import Section, SectionPart, register_section
 from tsim.errors import SgrError
@@ -190,10 +189,6 @@ def archives_markdown(entries: list[dict], base: Path) -> str:
     return "\n".join(lines)
 
 
-def _png_uri(path: Path) -> str:
-    return "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode()
-
-
 def archives_html(entries: list[dict]) -> list[str]:
     """report.html's parts on the archives, images inlined as data URIs."""
     if not entries:
@@ -202,9 +197,9 @@ def archives_html(entries: list[dict]) -> list[str]:
              "elites chosen across the map.</p>"]
     for a in entries:
         name = html.escape(a["name"])
-        parts.append(f"<h3>{name}</h3><img alt='archive of {name}' src='{_png_uri(a['archive'])}'"
+        parts.append(f"<h3>{name}</h3><img alt='archive of {name}' src='{data_uri(a['archive'])}'"
                      " width='100%'><div class='gallery'>")
-        parts += [f"<figure><img alt='{name} elite' src='{_png_uri(e['body'])}'>"
+        parts += [f"<figure><img alt='{name} elite' src='{data_uri(e['body'])}'>"
                   f"<figcaption>{html.escape(_caption(e))}</figcaption></figure>" for e in a["elites"]]
         parts.append("</div>")
     return parts

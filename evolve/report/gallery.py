@@ -86,7 +86,8 @@ def write_gallery(entries: Sequence[dict], folder: Path, *, width: int = 480, he
     return out
 
 
-def _data_uri(path: Path, mime: str) -> str:
+def data_uri(path: Path, mime: str = "image/png") -> str:
+    """A file's bytes as a data URI (report.html inlines every image)."""
     return f"data:{mime};base64,{base64.b64encode(Path(path).read_bytes()).decode()}"
 
 
@@ -151,7 +152,7 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Seq
     `extra`: more of its HTML, after the gallery (map-elites archives: evolve/report/archive.py)."""
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title>",
              f"<style>{STYLE}</style></head><body>", markdown_html(markdown),
-             "<h2>Curves</h2>", f"<img alt='curves' src='{_data_uri(curves, 'image/png')}' width='100%'>"]
+             "<h2>Curves</h2>", f"<img alt='curves' src='{data_uri(curves, 'image/png')}' width='100%'>"]
     if gallery:
         parts.append("<h2>Champions</h2><p>Per method and task, the seed with the best champion: "
                      "its body (orange: horizontal actuator, blue: vertical, dark: rigid, grey: soft) "
@@ -160,8 +161,8 @@ def report_html(markdown: str, curves: Path, gallery: Sequence[dict], extra: Seq
         for e in gallery:
             r, name = e["row"], html.escape(e["run"].name)
             parts.append(
-                f"<figure><img alt='{name} episode' src='{_data_uri(e['gif'], 'image/gif')}'>"
-                f"<img alt='{name} body' class='body' src='{_data_uri(e['body'], 'image/png')}'>"
+                f"<figure><img alt='{name} episode' src='{data_uri(e['gif'], 'image/gif')}'>"
+                f"<img alt='{name} body' class='body' src='{data_uri(e['body'], 'image/png')}'>"
                 f"<figcaption>{html.escape(str(r['method']))} · {html.escape(str(r['task']))} · seed "
                 f"{r['seed']} · {_figure_caption(r)}{_verdict_caption(r)}"
                 f"{_body_caption(r)}</figcaption></figure>")

@@ -14,8 +14,10 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import re
+import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -372,3 +374,15 @@ def band(ax, curves: list[np.ndarray], color: str, label: str) -> None:
     mean, sd = np.nanmean(t, axis=0), np.nanstd(t, axis=0)
     ax.plot(g, mean, color=color, label=label)
     ax.fill_between(g, mean - sd, mean + sd, color=color, alpha=0.2, linewidth=0)
+
+
+def mean_sd(values: Sequence[float], digits: int = 2) -> str:
+    """Mean ± sample sd of the finite values, "(n=k)" where some were not; one value alone has no sd
+    (a report table's cell)."""
+    v = [x for x in values if math.isfinite(x)]
+    if not v:
+        return "-"
+    if len(v) == 1:  # "± 0.00" would read as a measured spread
+        return f"{v[0]:.{digits}f}" + (" (n=1)" if len(values) != 1 else "")
+    return (f"{statistics.fmean(v):.{digits}f} ± {statistics.stdev(v):.{digits}f}"
+            + (f" (n={len(v)})" if len(v) != len(values) else ""))

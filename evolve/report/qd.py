@@ -7,13 +7,13 @@ report.md's "What the champions do").
 from __future__ import annotations
 
 import math
-import statistics
 from collections import defaultdict
 from collections.abc import Sequence
 from pathlib import Path
 
 import numpy as np
 
+from evolve.report.plots import mean_sd
 from evolve.report.sections import Section, SectionPart, register_section
 from tasks.behaviour import FEATURES
 
@@ -57,15 +57,6 @@ def behaviour_row(run_dir: Path) -> dict:
     return {f"behaviour_{k}": v for k, v in features.items()}
 
 
-def _ms(values: Sequence[float], digits: int = 2) -> str:
-    v = [x for x in values if isinstance(x, int | float) and math.isfinite(x)]
-    if not v:
-        return "-"
-    if len(v) == 1:
-        return f"{v[0]:.{digits}f}"
-    return f"{statistics.fmean(v):.{digits}f} ± {statistics.stdev(v):.{digits}f}"
-
-
 def qd_markdown(rows: list[dict]) -> str:
     """report.md's "Quality diversity": per (group, task) of map-elites runs, mean ± sd over seeds of
     the coverage, QD score and best elite at the last generation, with the descriptors and offset;
@@ -86,10 +77,11 @@ def qd_markdown(rows: list[dict]) -> str:
     for (method, task), rs in sorted(groups.items()):
         desc = sorted({str(r.get("descriptors", "")) for r in rs})
         offs = sorted({r["score_offset"] for r in rs if "score_offset" in r})
-        lines.append(f"| {method} | {task} | {len(rs)} | {', '.join(desc)} | "
-                     f"{', '.join(f'{o:g}' for o in offs) or '-'} | "
-                     f"{_ms([100 * r['coverage'] for r in rs], 1)} % | {_ms([r['qd_score'] for r in rs])} | "
-                     f"{_ms([r['n_elites'] for r in rs], 0)} | {_ms([r['best_elite'] for r in rs])} |")
+        coverage, score = mean_sd([100 * r["coverage"] for r in rs], 1), mean_sd([r["qd_score"] for r in rs])
+        elites, best = mean_sd([r["n_elites"] for r in rs], 0), mean_sd([r["best_elite"] for r in rs])
+        offset = ", ".join(f"{o:g}" for o in offs) or "-"
+        lines.append(f"| {method} | {task} | {len(rs)} | {', '.join(desc)} | {offset} | {coverage} % | "
+                     f"{score} | {elites} | {best} |")
     return "\n".join(lines) + "\n"
 
 
@@ -114,10 +106,9 @@ def qd_curves_html(path: Path | None) -> list[str]:
     """report.html's QD curves, the image inlined; [] without them."""
     if path is None:
         return []
-    import base64
+    from evolve.report.gallery import data_uri
 
-    uri = "data:image/png;base64," + base64.b64encode(Path(path).read_bytes()).decode()
-    return [f"<img alt='QD curves' src='{uri}' width='100%'>"]
+    return [f"<img alt='QD curves' src='{data_uri(path)}' width='100%'>"]
 
 
 def plot_qd_curves(runs: list[Path], path: Path, pool: Sequence[str] = ()) -> Path | None:

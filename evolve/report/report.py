@@ -26,7 +26,6 @@ import io
 import itertools
 import math
 import os
-import statistics
 from collections import defaultdict
 from collections.abc import Callable, Sequence
 from pathlib import Path
@@ -41,7 +40,7 @@ from evolve.report import archive as _archive  # noqa: F401 (registers the archi
 from evolve.report import qd as _qd  # noqa: F401 (registers quality diversity and behaviour)
 from evolve.report.gallery import champion_figure
 from evolve.report.groups import episode_length
-from evolve.report.plots import band, read_generations, save_png
+from evolve.report.plots import band, mean_sd, read_generations, save_png
 from evolve.report.sections import SECTIONS
 from tsim.errors import SgrError
 from tsim.files import CONFIG_CAP, read_text
@@ -216,17 +215,6 @@ def _levels(rows: list[dict]) -> list[float]:
     return out
 
 
-def _ms(values: list[float]) -> str:
-    """Mean ± sample sd of the finite values, "(n=k)" where some were not; one value alone has no sd."""
-    v = [x for x in values if math.isfinite(x)]
-    if not v:
-        return "-"
-    if len(v) == 1:  # "± 0.00" would read as a measured spread
-        return f"{v[0]:.2f}" + (" (n=1)" if len(values) != 1 else "")
-    return (f"{statistics.fmean(v):.2f} ± {statistics.stdev(v):.2f}"
-            + (f" (n={len(v)})" if len(v) != len(values) else ""))
-
-
 def _runs_and_seeds(rs: list[dict]) -> str:
     """The runs of a row and their seeds: "1 (seed 0)", "3 (seeds 0, 1, 2)" (a bare "0" read as
     zero seeds)."""
@@ -283,19 +271,19 @@ def report_markdown(rows: list[dict], skipped: Sequence = (), pool: Sequence[str
             shown = [x if g <= max(gens) else None for x, g in zip(authors, CHECKPOINTS, strict=False)]
             a = " / ".join(_fmt(x) for x in [*shown, None])
         rob = [r for r in rs if "nominal" in r]
-        cells = [_ms([champion_figure(r) for r in rob]) if rob else "-",
-                 _ms([r["nominal"] for r in rob]) if rob else "-"]
+        cells = [mean_sd([champion_figure(r) for r in rob]) if rob else "-",
+                 mean_sd([r["nominal"] for r in rob]) if rob else "-"]
         for e in levels:
             have = [r for r in rob if noise_column(e, "mean") in r]
-            cells.append(_ms([r[noise_column(e, "mean")] for r in have]) if have else "-")
+            cells.append(mean_sd([r[noise_column(e, "mean")] for r in have]) if have else "-")
             cells.append(f"{min(r[noise_column(e, 'min')] for r in have):.2f}" if have else "-")
         if judged:
             have = [r for r in rob if noise_column(verdict_rule.EPS, "mean") in r]
             cells.append(f"{sum(_holds(r) for r in have)} of {len(have)}" if have else "-")
         out.write(f"| {method} | {task} | {_runs_and_seeds(rs)} | "
                   f"{gens[0] if len(gens) == 1 else f'{gens[0]}-{gens[-1]}'} | "
-                  + "".join(_ms([r[f"best_gen{g}"] for r in rs]) + " | " for g in gen_cols)
-                  + f"{_ms([r['best_final'] for r in rs])} | " + (f"{a} | " if with_authors else "")
+                  + "".join(mean_sd([r[f"best_gen{g}"] for r in rs]) + " | " for g in gen_cols)
+                  + f"{mean_sd([r['best_final'] for r in rs])} | " + (f"{a} | " if with_authors else "")
                   + " | ".join(cells) + " |\n")
     off = [r for r in rows if "replay" in r and abs(r["replay"] - r["champion_fitness"]) > 1e-9]
     if off:  # champion.json alone must reproduce the fitness; say plainly where it does not
