@@ -13,9 +13,10 @@ elites re-scored) with parents by curiosity and half the children from tournamen
   Walker-v0 and Climber-v2 these are results/robust-fast/runs (the same config), not run again.
 
 Every run first goes to 100 generations (SGR's budget; final selection picks a map-elites run's
-champion, and the run is kept as ``<run>-g100``); then each map-elites run is extended to 200 (twice
-it: `sgr evolve --resume RUN --generations 200`; the search does not depend on the run's length, so
-its first 100 generations are the 100-generation run's, tests/evolve/runs/test_map_elites_run.py).
+champion, and the run is kept as ``<run>-g100``); then, before the next run starts, each map-elites
+run is extended to 200 (twice it: `sgr evolve --resume RUN --generations 200`; the search does not
+depend on the run's length, so its first 100 generations are the 100-generation run's,
+tests/evolve/runs/test_map_elites_run.py).
 Runs are ordinary run folders under ``--out``, run or resumed as in every study
 (studies/study_runs.py), seeds outermost; finished records are copied to ``--records`` (default
 runs/qd/records, beside the runs).
@@ -195,10 +196,10 @@ def main() -> None:
     if a.table:
         print(table(a.records, a.seeds, a.tasks))
         return
-    for twice in (False, True):  # every run to SGR's budget first, then each to twice it
-        for seed in a.seeds:
-            for task in a.tasks:
-                for arm in a.arms:
+    for seed in a.seeds:
+        for task in a.tasks:
+            for arm in a.arms:  # each run to SGR's budget, then on to twice it while its checkpoint is here
+                for twice in (False, True):
                     run_arm(arm, task, seed, a.out, a.records, a.workers, twice)
 
 
