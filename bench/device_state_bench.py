@@ -1,4 +1,4 @@
-"""The state kept on the device between env steps (tsim/mirror.py, issue 48 item 2) against the
+"""The state kept on the device between env steps (tsim/backend/mirror.py, issue 48 item 2) against the
 state passed as a numpy array to every launch (what a device backend did before: Taichi copies it
 in before each launch and out after), side by side, alternating, in this process's backend.
 
@@ -24,7 +24,7 @@ def run(task: str, bodies: list, steps: int, keep_on_device: bool) -> tuple[floa
     """(env robot-steps/s, state bytes per world) of `steps` env steps, state on the device or not."""
     import tsim.sim as sim_mod
     from tasks.env import BatchEnv
-    from tsim.mirror import HostArray, mirror
+    from tsim.backend.mirror import HostArray, mirror
 
     make = mirror if keep_on_device else (lambda host, on_host: HostArray(host))
     saved, sim_mod.mirror = sim_mod.mirror, make

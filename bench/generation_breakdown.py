@@ -136,7 +136,7 @@ def main() -> int:
     from evolve.rollout.episodes import dense_policy, rollout_policy  # noqa: F401
     from evolve.runs.experiment import Experiment
     from tasks.env import BatchEnv
-    from tsim import runtime
+    from tsim.backend import runtime
     from tsim.sampling import sample_robots
 
     runtime.init()

@@ -8,7 +8,7 @@ what it measured so far and says so), results written as they come:
 - throughput (one part per body shape, 5x5 and 10x10): 1,024 bodies (`tsim.sample_robots`) tiled
   to B = 8k, 32k, 64k, 128k; physics robot-steps/s (`BatchSim.step`) at each GPU block size
   (`BatchSim.choose_kernel(gpu_block=...)`: 32, 64, 128 worlds per thread block) and lanes per
-  world (`choose_kernel(lanes=L)`: 1 today's kernel; L > 1 the lanes kernel, tsim/lanes.py, a
+  world (`choose_kernel(lanes=L)`: 1 today's kernel; L > 1 the lanes kernel, tsim/backend/lanes.py, a
   world on one block of L threads, so measured once per batch size whatever the block size;
   skipped on a CPU, whose Taichi backend has no block barrier), and the env's (`BatchEnv.step`:
   observations, rewards, termination on the host) at the default block; the batch build per
@@ -175,7 +175,7 @@ def part_throughput(args, out: Path) -> dict:
         ptx.mkdir(parents=True, exist_ok=True)
         os.chdir(ptx)
         ti.init = functools.partial(ti.init, print_kernel_asm=True)
-    from tsim import runtime
+    from tsim.backend import runtime
     from tsim.sampling import sample_robots
     from tsim.sim import BatchSim
 

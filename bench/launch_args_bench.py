@@ -13,7 +13,7 @@ import numpy as np
 
 os.environ.setdefault("SGR_THREADS", "1")
 
-from tsim import runtime  # noqa: E402
+from tsim.backend import runtime  # noqa: E402
 
 ti = runtime.ti
 I2 = ti.types.ndarray(dtype=ti.i32, ndim=2)

@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 
 from tasks.bench import sinusoid  # noqa: E402
 from tasks.env import BatchEnv  # noqa: E402
-from tsim import runtime  # noqa: E402
+from tsim.backend import runtime  # noqa: E402
 from tsim.sampling import sample_robots  # noqa: E402
 
 

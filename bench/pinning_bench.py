@@ -2,7 +2,7 @@
 by side with others.
 
 A process that simulates by itself with as many Taichi threads as it may use CPUs pins each thread
-to its own CPU (tsim/runtime.py `pin_threads`; `SGR_PIN=0` turns it off). Pinning helps a lone
+to its own CPU (tsim/backend/runtime.py `pin_threads`; `SGR_PIN=0` turns it off). Pinning helps a lone
 process (Linux was slow to spread two freshly woken workers) but a pinned thread cannot move away
 from a CPU another process keeps busy. This measures both sides, each case pinned and unpinned in
 alternating rounds:

@@ -2,7 +2,7 @@
 
     python bench/precision_bench.py [--sizes 5 12] [--robots 16] [--steps 50] [--rounds 3]
 
-A process runs in one precision (tsim.runtime), so each measurement is a `bench/body_size_bench.py`
+A process runs in one precision (tsim.backend.runtime), so each measurement is a `bench/body_size_bench.py`
 subprocess on one Taichi thread (Walker-v0, the same random bodies, environment and physics timed
 together, compilation excluded), and the two precisions alternate: f64, f32, f64, f32, ... so
 that a shared machine's load falls on both alike. Prints each round and the medians, and the CPU

@@ -15,7 +15,7 @@ import time
 
 import numpy as np
 
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.body import build_body
 from tsim.sampling import sample_robot
 

@@ -31,11 +31,11 @@ MEDIAN_TOL = 1e-9  # the CPU's median |return - evogym| is <= 7e-11 on every tas
 
 def record(robots: int, steps: int, seed: int, tasks: list[str] | None = None, lanes: int = 1) -> dict:
     """{task: {"returns": [...], "final_x": [...]}} on this process's arch (every task, or
-    `tasks`); `lanes` > 1: on the lanes kernel (tsim/lanes.py, GPU and Vulkan only)."""
+    `tasks`); `lanes` > 1: on the lanes kernel (tsim/backend/lanes.py, GPU and Vulkan only)."""
     from tasks.bench import sinusoid
     from tasks.env import BatchEnv
     from tasks.specs import TASKS
-    from tsim import runtime
+    from tsim.backend import runtime
     from tsim.sampling import sample_robots
 
     arch = runtime.init()
@@ -84,7 +84,7 @@ def main() -> int:
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--tasks", nargs="+", help="these tasks only (default: all 32)")
     p.add_argument("--lanes", type=int, default=1, help="lanes per world: > 1 runs the lanes kernel "
-                   "(tsim/lanes.py; GPU and Vulkan only)")
+                   "(tsim/backend/lanes.py; GPU and Vulkan only)")
     p.add_argument("--out", help="write the record (JSON) here")
     p.add_argument("--compare", nargs=2, metavar="JSON", help="compare two records instead")
     p.add_argument("--tol", type=float, default=MEDIAN_TOL,

@@ -45,7 +45,7 @@ if ! "$PY" -c "import taichi, neat, gymnasium" >/dev/null 2>&1; then
   export PYTHONPATH="$SITE${PYTHONPATH:+:$PYTHONPATH}"
 fi
 export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
-SGR_ARCH=$GPU "$PY" -c "import tsim.runtime as r; print('taichi arch:', r.init())" | tee "$OUT/arch.txt"
+SGR_ARCH=$GPU "$PY" -c "import tsim.backend.runtime as r; print('taichi arch:', r.init())" | tee "$OUT/arch.txt"
 "$PY" -c "import numpy, taichi; print('python', __import__('sys').version.split()[0], 'numpy', numpy.__version__, 'taichi', taichi.__version__)" | tee -a "$OUT/arch.txt"
 command -v nvidia-smi >/dev/null && nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv | tee -a "$OUT/arch.txt" || true
 

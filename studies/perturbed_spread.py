@@ -18,7 +18,7 @@ import numpy as np
 
 from tasks.env import BatchEnv
 from tasks.specs import TASKS
-from tsim import runtime
+from tsim.backend import runtime
 
 FOLDER = "tests/data/evogym32"
 DELTAS = (1e-5, -1e-5, 1e-4, -1e-4)

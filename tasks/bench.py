@@ -7,7 +7,7 @@ import time
 import numpy as np
 
 from tasks.env import BatchEnv
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.sampling import sample_robots
 
 

@@ -18,7 +18,7 @@ from tsim import backend
 from tsim.errors import SgrError
 from tsim.files import atomic_write
 
-# the precisions' names (tsim/backend.py imports no Taichi, so a parser need not wait for it)
+# the precisions' names (tsim/backend/__init__.py imports no Taichi, so a parser need not wait for it)
 PRECISIONS = tuple(backend.PRECISIONS)
 PRECISION_HELP = "the simulator's real type: f64 (evogym's bits) or f32; default $SGR_PRECISION, else f64"
 
@@ -140,7 +140,8 @@ def _demo(args: argparse.Namespace) -> int:
 
 def _validate(args: argparse.Namespace) -> int:
     from tasks.validate import validate
-    from tsim import backend, runtime
+    from tsim import backend
+    from tsim.backend import runtime
 
     runtime.use_precision(args.precision)
     here = backend.get()  # one that cannot start fails here, in one line
@@ -164,7 +165,8 @@ def _validate(args: argparse.Namespace) -> int:
 
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
-    from tsim import backend, runtime
+    from tsim import backend
+    from tsim.backend import runtime
 
     runtime.use_precision(args.precision)
     here = backend.get()  # one that cannot start fails here, in one line

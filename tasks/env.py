@@ -21,8 +21,8 @@ from tasks import observations as O
 from tasks.spec import Measure
 from tasks.specs import task_spec, task_world
 from tsim import constants as C
+from tsim.backend.mirror import constant
 from tsim.body import Body
-from tsim.mirror import constant
 from tsim.sim import BatchSim
 
 UNSTABLE_PENALTY = -3.0

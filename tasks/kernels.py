@@ -21,8 +21,8 @@ The (B,)-sized rewards and terminations stay in numpy. Float constants that floa
 exactly come in as float64 arguments: in an f32 process Taichi makes a literal float32.
 """
 
+from tsim.backend.runtime import ti
 from tsim.kernels.layout import state_columns
-from tsim.runtime import ti
 
 REAL_1 = ti.types.ndarray(ndim=1)
 REAL_2 = ti.types.ndarray(ndim=2)

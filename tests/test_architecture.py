@@ -91,6 +91,21 @@ def test_nothing_below_sgr_imports_it():
     assert not bad, bad
 
 
+# tsim is physics first: its backend subpackage (tsim/backend/: the Backend seam, Taichi's start-up,
+# devices, launchers, host/device arrays) is reached only from the simulator and its kernels, so
+# that bodies, worlds, layouts, rendering and files stay numpy that any layer may use without Taichi.
+BACKEND_USERS = ("tsim.sim", "tsim.kernels")
+
+
+def test_only_the_simulator_and_its_kernels_import_tsim_backend():
+    g = graph()
+    assert "tsim.backend.runtime" in g and "tsim.layout" in g  # the walk found both sides
+    bad = [f"{m} imports {n}" for m, deps in g.items() if m.startswith("tsim.")
+           and not m.startswith(("tsim.backend",) + BACKEND_USERS) for n in deps
+           if n == "tsim.backend" or n.startswith("tsim.backend.")]
+    assert not bad, bad
+
+
 # Inside evolve/, each layer imports only its own and the layers before it, lazy (in-function)
 # imports included (the walk reads whole files). The order, from the code: own_modules (what the
 # worker processes may import) < nn (the networks, and a genome as a JSON record, from which they

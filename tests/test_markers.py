@@ -38,9 +38,9 @@ FAST_ANYWAY = {
         "Taichi starts one precision per process: the f32 side runs in one short process",
     "tests/tsim/test_precision.py::test_f32_pairs_sum_as_float64_does_and_segment_ends_resolve_what"
     "_quotients_cannot": "Taichi starts one precision per process: the f32 side runs in one short process",
-    "tests/tsim/test_vulkan.py::test_an_arch_without_its_device_fails_in_one_line":
+    "tests/tsim/backend/test_vulkan.py::test_an_arch_without_its_device_fails_in_one_line":
         "a process that fails at Taichi's start, in about a second",
-    "tests/tsim/test_vulkan.py::test_vulkan_without_a_driver_fails_in_one_line":
+    "tests/tsim/backend/test_vulkan.py::test_vulkan_without_a_driver_fails_in_one_line":
         "a process that fails at Taichi's start, in about a second",
     "tests/evolve/rollout/test_robust.py::test_accumulated_runs_do_not_depend_on_the_worker_count_and"
     "_their_champion_rescores_exactly": "two rollout workers for a run of a few tiny generations",

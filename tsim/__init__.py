@@ -5,6 +5,15 @@
 
 The simulator knows no task: tasks (placement, observations, rewards) live in the `tasks` package.
 
+Physics first, then where it runs:
+- `constants`, `body`, `bodybatch`, `sampling`, `world`: evogym's materials, bodies and worlds;
+- `layout`: a batch's padded arrays; `sim`: `BatchSim`, the batch stepped; `kernels/`: the step,
+  one physics stage per module; `rounding`: f32's initial placement;
+- `backend/`: where and how the kernels run: the `Backend` seam (`tsim.backend.get`), its tables of
+  archs and precisions, Taichi's start-up, devices, launchers (cached, SPIR-V, lanes) and arrays
+  kept on a device; only `sim` and `kernels/` import it (tests/test_architecture.py);
+- `render`, `files`: frames and GIFs; whole-or-nothing file writes.
+
 Shapes and units, the one convention for point arrays in tsim, tasks and evolve:
 - Units: world units (a voxel is 0.1 wide); velocities per unit of simulated time (dt = 1e-4 per
   substep, 30 substeps per env step); materials are evogym's codes 0-5.

@@ -16,16 +16,17 @@ import numpy as np
 from tsim import backend as backend_mod
 from tsim import constants as C
 from tsim import kernels as K
-from tsim import launch, spirv
+from tsim.backend import launch, spirv
+from tsim.backend.launch import CachedLaunch
+from tsim.backend.mirror import constant, mirror
 from tsim.body import Body, as_body_matrix, build_body, check_robot, is_connected, is_connected_batch
 from tsim.bodybatch import BodyBatch, build_bodies
 from tsim.kernels.reset import reset_worlds
-from tsim.launch import CachedLaunch
-from tsim.mirror import constant, mirror
+from tsim.layout import build_layout
 from tsim.rounding import rest, to_pair
 from tsim.world import World
 
-# the terrain's x and y columns (`_build`'s ter_f: corners TL, TR, BR, BL as x, y, then the box)
+# the terrain's x and y columns (`tsim.layout.Layout.ter_f`: corners TL, TR, BR, BL as x, y, then the box)
 TER_X, TER_Y = [0, 2, 4, 6, 8, 9], [1, 3, 5, 7, 10, 11]
 
 # a world's status codes (`BatchSim.status`): only RUNNING worlds advance
@@ -136,146 +137,17 @@ class BatchSim:
 
     # ------------------------------------------------------------------ layout
     def _build(self) -> None:
-        bodies, objs = self.bodies, self.free_objects
-        B = len(bodies)
-        obj_p = [o.body.n_points for o in objs]
-        obj_e = [o.body.n_edges for o in objs]
-        obj_v = [o.body.n_voxels for o in objs]
-        n_pts = bodies.n_points + sum(obj_p)
-        n_edges = bodies.n_edges + sum(obj_e)
-        n_vox = bodies.n_voxels + sum(obj_v)
-        self.n_robot_points = bodies.n_points.copy()
-        self.n_actuators = bodies.n_actuators.copy()
-        P, E, V = int(n_pts.max()), int(n_edges.max()), int(n_vox.max())
-        # actuated objects (sgr.evogym's further robots) read the action columns after the robot's
-        n_obj_act = sum(o.body.n_actuators for o in objs if o.actuated)
-        A = max(1, int(self.n_actuators.max()) + n_obj_act)
+        """The batch's arrays (`tsim.layout`), rounded for f32, then how its steps launch."""
+        lay = build_layout(self.bodies, self.free_objects, self.origin, self.world.terrain, self.dtype)
+        B, P = lay.pos0.shape[:2]
+        self.n_robot_points, self.n_actuators = lay.n_robot_points, lay.n_actuators
         self.max_actuators = int(self.n_actuators.max())
         self.max_robot_points = int(self.n_robot_points.max())
-
-        real = self.dtype
-        pos0 = np.zeros((B, P, 2))  # evogym's f64 placement, then in the real type (below)
-        edge_i = np.zeros((B, E, 4), dtype=np.int32)
-        edge_f = np.zeros((B, E, K.N_EDGE_F), dtype=real)
-        self._rest_f64 = np.zeros((B, E))
-        vox_i = np.zeros((B, V, K.N_VOX_I), dtype=np.int32)
-        # fixed points: corners of material-5 voxels of simulated objects (never the robot's)
-        fixed = [np.unique(o.body.voxel_points[o.body.voxel_type == C.FIXED]) for o in objs]
-        n_fix = sum(len(f) for f in fixed)
-        lists = np.zeros((B, max(V, n_fix), 3), dtype=np.int32)
-        counts = np.zeros((B, K.N_COUNTS), dtype=np.int32)
-
-        # the robots, all at once: each packed row goes to (its world, its index in its body)
-        a = bodies.arrays
-        wp, ip = _rows(bodies.n_points)
-        wv, iv = _rows(bodies.n_voxels)
-        x, y = self.origin  # `Body.place`, evaluated in the same order
-        start_x = x * C.CELL
-        max_y = y * C.CELL + bodies.n_rows * C.CELL
-        pos0[wp, ip, 0] = start_x + a["corner_cx"] * C.CELL
-        pos0[wp, ip, 1] = max_y[wp] - a["corner_ry"] * C.CELL
-        # edges and voxels as whole rows (one scatter of row-sized items each, the fastest numpy has)
-        fe = _flat_rows(bodies.n_edges, E)
-        rest_e = a["edge_rest"]
-        rows_i = np.empty((len(fe), 4), dtype=np.int32)
-        rows_i[:, 0] = a["edge_a"]
-        rows_i[:, 1] = a["edge_b"]
-        rows_i[:, 2:4] = a["edge_drivers"]
-        _scatter_rows(edge_i, fe, rows_i)
-        rows_f = np.empty((len(fe), K.N_EDGE_F), dtype=real)
-        rows_f[:, K.E_REST] = rest_e
-        rows_f[:, K.E_K] = a["edge_k"]
-        rows_f[:, K.E_GOAL] = rest_e
-        rows_f[:, K.E_LEQ] = rest_e
-        _scatter_rows(edge_f, fe, rows_f)
-        self._rest_f64.reshape(-1)[fe] = rest_e
-        rows_v = np.zeros((len(wv), K.N_VOX_I), dtype=np.int32)
-        rows_v[:, K.V_PTS:K.V_PTS + 4] = a["voxel_points"]
-        rows_v[:, K.V_OPEN:K.V_OPEN + 4] = a["voxel_open"]
-        rows_v[:, K.V_TYPE] = a["voxel_type"]
-        rows_v[:, K.V_ROW] = a["voxel_rc"][:, 0]
-        rows_v[:, K.V_COL] = a["voxel_rc"][:, 1]
-        _scatter_rows(vox_i, wv * V + iv, rows_v)
-        n_surf = _list_by_world(lists, 0, a["voxel_open"].any(axis=1), wv, iv, B)
-        counts[:, K.N_SURF_ROBOT] = n_surf
-        n_rigid = _list_by_world(lists, 1, a["voxel_type"] == C.RIGID, wv, iv, B)
-
-        # then each free object (the same in every world) at its world's offsets
-        rows = np.arange(B)[:, None]
-        p_off, e_off, v_off = self.n_robot_points.copy(), bodies.n_edges.copy(), bodies.n_voxels.copy()
-        a_off = self.n_actuators.copy()
-        n_fixed = 0
-        self._obj_offsets = []
-        for obj_id, obj in enumerate(objs, start=1):
-            part = obj.body
-            self._obj_offsets.append(p_off.copy())
-            pts = part.place(*obj.cell)
-            pcols = p_off[:, None] + np.arange(part.n_points)
-            pos0[rows, pcols] = pts.T
-            ecols = e_off[:, None] + np.arange(part.n_edges)
-            edge_i[rows, ecols, 0] = part.edge_a + p_off[:, None]
-            edge_i[rows, ecols, 1] = part.edge_b + p_off[:, None]
-            if obj.actuated:
-                d = part.edge_drivers
-                edge_i[rows, ecols, 2:4] = np.where(d >= 0, d + a_off[:, None, None], -1)
-                a_off += part.n_actuators
-            else:
-                edge_i[rows, ecols, 2:4] = -1
-            edge_f[rows, ecols, K.E_REST] = part.edge_rest
-            self._rest_f64[rows, ecols] = part.edge_rest
-            edge_f[rows, ecols, K.E_K] = part.edge_k
-            edge_f[rows, ecols, K.E_GOAL] = part.edge_rest
-            edge_f[rows, ecols, K.E_LEQ] = part.edge_rest
-            vcols = v_off[:, None] + np.arange(part.n_voxels)
-            vox_i[rows, vcols, K.V_PTS:K.V_PTS + 4] = part.voxel_points + p_off[:, None, None]
-            vox_i[rows, vcols, K.V_OPEN:K.V_OPEN + 4] = part.voxel_open
-            vox_i[rows, vcols, K.V_TYPE] = part.voxel_type
-            vox_i[rows, vcols, K.V_OBJ] = obj_id
-            vox_i[rows, vcols, K.V_ROW] = part.voxel_rc[:, 0]
-            vox_i[rows, vcols, K.V_COL] = part.voxel_rc[:, 1]
-            s_idx = np.nonzero(part.voxel_is_surface)[0]
-            lists[rows, n_surf[:, None] + np.arange(len(s_idx)), 0] = s_idx + v_off[:, None]
-            n_surf = n_surf + len(s_idx)
-            r_idx = np.nonzero(part.voxel_type == C.RIGID)[0]
-            lists[rows, n_rigid[:, None] + np.arange(len(r_idx)), 1] = r_idx + v_off[:, None]
-            n_rigid = n_rigid + len(r_idx)
-            f_idx = fixed[obj_id - 1]
-            lists[rows, n_fixed + np.arange(len(f_idx)), 2] = f_idx + p_off[:, None]
-            n_fixed += len(f_idx)
-            p_off += part.n_points
-            e_off += part.n_edges
-            v_off += part.n_voxels
-        counts[:, K.N_FIXED] = n_fixed
-        counts[:, K.N_PTS] = p_off
-        counts[:, K.N_EDGES] = e_off
-        counts[:, K.N_VOX] = v_off
-        counts[:, K.N_SURF] = n_surf
-        counts[:, K.N_RIGID] = n_rigid
-        counts[:, K.N_ACT] = self.n_actuators
-
-        t = self.world.terrain
-        nt = max(1, len(t.corners))
-        ter_f = np.zeros((nt, 12))  # f64, then in the real type as the points are (below)
-        ter_i = np.zeros((nt, 4), dtype=np.int32)
-        if len(t.corners):
-            ter_f[:, :8] = t.corners.reshape(-1, 8)
-            ter_f[:, 8] = t.corners[:, :, 0].min(axis=1)
-            ter_f[:, 9] = t.corners[:, :, 0].max(axis=1)
-            ter_f[:, 10] = t.corners[:, :, 1].min(axis=1)
-            ter_f[:, 11] = t.corners[:, :, 1].max(axis=1)
-            ter_i[:] = t.open
+        self._obj_offsets, self._rest_f64 = lay.obj_offsets, lay.rest_f64
+        real, pos0, counts = self.dtype, lay.pos0, lay.counts
         # f32: the terrain as float32 pairs hi + lo, rounded once (`tsim.rounding.to_pair`), each
         # world's bodies against it (`_round_world`); f64: evogym's placement itself
-        self._ter_fixed = []  # per axis (f32): the terrain's rests x - hi and their float32 lo
-        if real != np.float64:
-            # the corners' low parts go to the K.TER_LO columns (the boxes keep their hi alone)
-            ter_r = np.zeros((nt, K.N_TER_F_PAIRS), dtype=real)
-            for cols in (TER_X, TER_Y):
-                hi, lo = to_pair(ter_f[:, cols], real)
-                ter_r[:, cols] = hi
-                ter_r[:, [K.TER_LO + c for c in cols[:4]]] = lo[:, :4]
-                self._ter_fixed.append((rest(ter_f[:, cols], hi).reshape(-1), lo.reshape(-1)))
-            ter_f = ter_r
+        ter_f = self._round_terrain(lay.ter_f)
         self._pos0_f64 = pos0
         self._pos0 = pos0 if real == np.float64 else np.zeros(pos0.shape, dtype=real)
         # f32: the placement's low parts (its rest below float32, `_round_world`), and the
@@ -288,25 +160,55 @@ class BatchSim:
             self._pos0_lo_of = np.zeros(pos0.shape, dtype=real)
         self._counts0 = counts
         self.counts = counts.copy()  # the running counts; `reset` restores them in place
-        self.edge_f = edge_f
-        self.edge_i = edge_i
-        self.vox_i = vox_i
-        self.lists = lists
+        self.edge_f, self.edge_i, self.vox_i, self.lists = lay.edge_f, lay.edge_i, lay.vox_i, lay.lists
         self.ter_f = ter_f
         if real != np.float64:
             self._round_placement(range(B))
-        self.ter_i = ter_i
-        self.ter_grid = np.ascontiguousarray(t.grid.astype(np.int32))
+        self.ter_i = lay.ter_i
+        self.ter_grid = np.ascontiguousarray(self.world.terrain.grid.astype(np.int32))
         # the state: on a device kept there between steps, copied to the host when it reads
-        # (`tsim.mirror`); on the CPU the numpy array the kernels write in place
+        # (`tsim.backend.mirror`); on the CPU the numpy array the kernels write in place
         self._state_m = mirror(np.zeros((B, P, K.state_columns()), dtype=real), self.backend.on_host)
-        self.actions = np.ones((B, A), dtype=real)
+        self.actions = np.ones((B, lay.n_actions), dtype=real)
         # (B, max_actuators): which action columns are a robot's actuators (the rest is padding)
         self._actuator_mask = np.arange(self.max_actuators)[None, :] < self.n_actuators[:, None]
+        self._choose_launch()
+        # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
+        # that they stay on the device instead of crossing the bus at every launch. On the CPU the
+        # numpy arrays themselves are passed (flattened once, so every step passes the same
+        # objects): a cached launch (tsim/backend/launch.py) sets a numpy array's address once, where a
+        # Taichi ndarray must be set again at every launch (~1 us each). So the numpy edge_i,
+        # edge_f, vox_i, lists and ter_* are read-only after construction
+        static = (self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists,
+                  self.ter_f, self.ter_i, self.ter_grid)
+        self._static = tuple(constant(a, self.backend.cached_launch) for a in static)
+        self._edge_f_stale = False  # the copy above is current (`_round_placement`)
+
+    def _round_terrain(self, ter_f: np.ndarray) -> np.ndarray:
+        """The terrain's (T, 12) float64 columns in the kernels' real type: f64 as they are; f32 as
+        float32 pairs hi + lo (the corners' low parts in the K.TER_LO columns, the boxes keep their
+        hi alone), keeping each axis's rests for `_round_world`."""
+        self._ter_fixed = []  # per axis (f32): the terrain's rests x - hi and their float32 lo
+        real = self.dtype
+        if real == np.float64:
+            return ter_f
+        ter_r = np.zeros((len(ter_f), K.N_TER_F_PAIRS), dtype=real)
+        for cols in (TER_X, TER_Y):
+            hi, lo = to_pair(ter_f[:, cols], real)
+            ter_r[:, cols] = hi
+            ter_r[:, [K.TER_LO + c for c in cols[:4]]] = lo[:, :4]
+            self._ter_fixed.append((rest(ter_f[:, cols], hi).reshape(-1), lo.reshape(-1)))
+        return ter_r
+
+    def _choose_launch(self) -> None:
+        """How this batch's steps launch: the kernels' capacity tier, the serial CPU path, the
+        contact sweep and pair list, and the launcher (`choose_kernel` overrides each)."""
+        counts, lists, vox_i, pos0 = self._counts0, self.lists, self.vox_i, self._pos0_f64
         # the smallest local-array capacity tier that holds every world (a compiled kernel each)
         n_surf = int(counts[:, K.N_SURF].max())
+        sizes = (pos0.shape[1], self.edge_i.shape[1], n_surf)
         self.capacity_tier = 0
-        while any(n > c for n, c in zip((P, E, n_surf), K.capacity(self.capacity_tier), strict=True)):
+        while any(n > c for n, c in zip(sizes, K.capacity(self.capacity_tier), strict=True)):
             self.capacity_tier += 1
         # one CPU thread: run on the calling thread, skipping the thread pool's hand-off
         self._serial = self.backend.on_host and (self.backend.threads == 1 or self.n_worlds == 1)
@@ -318,19 +220,9 @@ class BatchSim:
         # and whether a substep may test only the pairs listed at an earlier one (the same pairs
         # act): in the kernel that lists pairs only when some world is large enough to gain
         self.pair_list = K.LIST_AUTO if n_surf >= K.LIST_MIN else K.LIST_OFF
-        self._spirv = self.backend.launch_path == "spirv"  # see tsim/spirv.py
-        self._spirv_launcher = spirv.Launcher(B)
-        self._launcher = self._make_launcher()  # how `step` launches the kernels (tsim/launch.py)
-        # the arrays no step changes. On a GPU they are copied once into Taichi's own ndarrays, so
-        # that they stay on the device instead of crossing the bus at every launch. On the CPU the
-        # numpy arrays themselves are passed (flattened once, so every step passes the same
-        # objects): a cached launch (tsim/launch.py) sets a numpy array's address once, where a
-        # Taichi ndarray must be set again at every launch (~1 us each). So the numpy edge_i,
-        # edge_f, vox_i, lists and ter_* are read-only after construction
-        static = (self.edge_i.reshape(-1), self.edge_f.reshape(-1), self.vox_i, self.lists,
-                  self.ter_f, self.ter_i, self.ter_grid)
-        self._static = tuple(constant(a, self.backend.cached_launch) for a in static)
-        self._edge_f_stale = False  # the copy above is current (`_round_placement`)
+        self._spirv = self.backend.launch_path == "spirv"  # see tsim/backend/spirv.py
+        self._spirv_launcher = spirv.Launcher(self.n_worlds)
+        self._launcher = self._make_launcher()  # how `step` launches the kernels (tsim/backend/launch.py)
 
     def _round_world(self, w: int) -> tuple[np.ndarray, np.ndarray]:
         """World w's float64 placement as float32 pairs hi + lo (f32 only, `tsim.rounding.to_pair`):
@@ -555,15 +447,15 @@ class BatchSim:
         compare them; every variant gives the same bits): `serial` runs on the calling thread
         (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
         arrays that many tiers bigger than needed; `spirv_launch` takes (True) or leaves (False)
-        the SPIR-V backends' launch (tsim/spirv.py) on any backend, and `substeps_per_launch`
+        the SPIR-V backends' launch (tsim/backend/spirv.py) on any backend, and `substeps_per_launch`
         splits its env steps into launches of that many substeps. `gpu_block` sets the worlds per
         thread block on a GPU (default `GPU_BLOCK`, 64; a multiple of 32 up to 1,024; each block
         size is its own compiled kernel; bench/gpu_probe.py compares them): the CPU keeps its 1.
-        `lanes` > 1 runs each world on that many threads of one thread block (tsim/lanes.py, a
+        `lanes` > 1 runs each world on that many threads of one thread block (tsim/backend/lanes.py, a
         power of two up to 1,024; GPU and Vulkan only: Taichi's CPU backend has no block barrier),
         1 the backend's own kernel again."""
         if lanes is not None:
-            from tsim.lanes import check_lanes
+            from tsim.backend.lanes import check_lanes
 
             check_lanes(lanes)
             if lanes > 1 and self.backend.on_host:
@@ -606,7 +498,7 @@ class BatchSim:
         `step`, a partial `reset(mask)`, or `BatchEnv`'s measuring and observing kernels): on a
         device a launch copies in
         what was written through the last read and no later write, and a reference kept from
-        before a step does not see that step (`tsim.mirror`). To read only, `read_state`."""
+        before a step does not see that step (`tsim.backend.mirror`). To read only, `read_state`."""
         self.state_version += 1
         return self._state_m.host(write=True)
 
@@ -730,42 +622,6 @@ class BatchSim:
             out[:, :, 0:2] += np.where(own, st[:, :, K.S_POS_LO:K.S_POS_LO + 2], 0.0)
             out[:, :, 2:4] += np.where(own, st[:, :, K.S_VEL_LO:K.S_VEL_LO + 2], 0.0)
         return out
-
-
-def _rows(counts: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """For rows packed body after body (`BodyBatch`), each row's body and its index in that body."""
-    total = int(counts.sum())
-    owner = np.repeat(np.arange(len(counts)), counts)
-    starts = np.cumsum(counts) - counts
-    return owner, np.arange(total) - starts[owner]
-
-
-def _flat_rows(counts: np.ndarray, width: int) -> np.ndarray:
-    """For rows packed body after body, each row's place `world * width + index` in a padded
-    (B, width) layout."""
-    starts = np.cumsum(counts) - counts
-    shift = np.arange(len(counts)) * width - starts
-    return np.arange(int(counts.sum())) + np.repeat(shift, counts)
-
-
-def _scatter_rows(dst: np.ndarray, at: np.ndarray, rows: np.ndarray) -> None:
-    """dst (B, n, k) seen as B * n rows of k items: rows (m, k) into rows `at` (m,), each row as
-    one opaque item (numpy's 1-D scatter; several times faster than a 2-D fancy assignment)."""
-    k = dst.shape[-1] * dst.itemsize
-    item = np.dtype((np.void, k))
-    dst.reshape(-1, dst.shape[-1]).view(item).reshape(-1)[at] = \
-        np.ascontiguousarray(rows, dtype=dst.dtype).view(item).reshape(-1)
-
-
-def _list_by_world(lists: np.ndarray, col: int, keep: np.ndarray, world: np.ndarray, index: np.ndarray,
-                   B: int) -> np.ndarray:
-    """Write each world's kept packed rows' `index` into `lists[world, :, col]` in order; the
-    counts per world."""
-    w, i = world[keep], index[keep]
-    n = np.bincount(w, minlength=B)
-    _, slot = _rows(n)
-    lists[w, slot, col] = i
-    return n
 
 
 def _sweep_pays(pos: np.ndarray, corners: np.ndarray) -> bool:

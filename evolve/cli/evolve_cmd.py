@@ -106,7 +106,7 @@ def run(args: argparse.Namespace) -> int:
     """`sgr evolve`."""
     from evolve.runs.config import load_config
     from evolve.runs.experiment import Experiment, start_backend
-    from tsim import runtime
+    from tsim.backend import runtime
 
     runtime.requested_arch()  # a misspelt SGR_ARCH fails before a run directory exists
     runtime.requested_precision()  # and so does a misspelt SGR_PRECISION

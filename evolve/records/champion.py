@@ -18,8 +18,7 @@ from evolve.records.elites import elite_record
 from evolve.records.rundir import ELITES_FILE, RunDir, check_fitness
 from tasks.env import obs_dim
 from tasks.specs import MAX_SIDE, TASKS
-from tsim import runtime
-from tsim.backend import DEFAULT_PRECISION
+from tsim.backend import DEFAULT_PRECISION, runtime
 from tsim.body import build_body, check_robot
 from tsim.errors import SgrError
 

@@ -27,7 +27,7 @@ from evolve.methods import METHODS
 from evolve.rollout.pool import workers_problem
 from evolve.rollout.robust import Robust
 from tasks.specs import TASKS, body_fit_problem, unknown_task
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.errors import SgrError
 
 

@@ -30,7 +30,7 @@ from evolve.rollout.robust import EpisodeNoise
 from evolve.rollout.worker import read_frame, run_chunk, spec_blob, write_frame
 from tasks.behaviour import FEATURES
 from tasks.env import BatchEnv
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.errors import SgrError
 
 # factory(env, items) -> batched policy for the robots of env; items[i] drives robot i. With

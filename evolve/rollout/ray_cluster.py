@@ -34,7 +34,7 @@ import numpy as np
 
 from evolve.own_modules import ROOT
 from evolve.rollout.pool import BasePool
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.errors import SgrError
 
 INSTALL = 'pip install "sgr[ray]"'

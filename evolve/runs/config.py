@@ -38,7 +38,7 @@ from evolve.records.run_config import (  # the checks a run folder's config.yaml
 )
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.errors import SgrError
 
 __all__ = ["check_config", "check_run_config", "check_run_neat_ini", "config_from_dict", "configs_dir",
@@ -112,7 +112,7 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
             values[key] = str(configs_dir() / "neat" / name)
         if not Path(values[key]).is_file():
             raise SgrError(f"{source}: key {key!r}: file not found: {values[key]}")
-    from tsim.runtime import requested_arch
+    from tsim.backend.runtime import requested_arch
 
     cfg = RunConfig.build(values, problem.config_keys, arch=requested_arch(), precision=precision,
                           robust=robust, selection=selection)

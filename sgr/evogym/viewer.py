@@ -244,6 +244,6 @@ class EvoViewer:
             if not (os.environ.get("DISPLAY") or os.environ.get("WAYLAND_DISPLAY")):
                 raise RuntimeError("render('screen') needs a display (DISPLAY is not set); "
                                    "use render('img') for an image array")
-            from tsim import runtime
+            from tsim.backend import runtime
             self._gui = runtime.ti.GUI("sgr.evogym", res=self.resolution)
         return self._gui

@@ -11,8 +11,8 @@ import numpy as np
 from tasks import kernels as EK
 from tasks import observations as O
 from tasks.spec import Measure, TaskSpec
-from tsim import runtime
-from tsim.backends import ARCHS
+from tsim.backend import runtime
+from tsim.backend.tables import ARCHS
 
 
 def _chain(P: np.ndarray, n: np.ndarray, reverse: bool) -> np.ndarray:

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 import yaml
 
-from tsim import devices
+from tsim.backend import devices
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
@@ -94,7 +94,7 @@ def test_gpu_refuses_a_software_vulkan_device_and_vulkan_names_it(tmp_path):
     assert lines[0].startswith("sgr: error: SGR_ARCH=gpu: the only GPU here is llvmpipe")
     assert "software Vulkan device" in lines[0] and "slower than SGR_ARCH=cpu" in lines[0]
     assert not (tmp_path / "r").exists()
-    code = "import tsim.runtime as r; r.init(); print(r.describe())"
+    code = "import tsim.backend.runtime as r; r.init(); print(r.describe())"
     p = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
                        env={**os.environ, "SGR_ARCH": "vulkan", "SGR_PRECISION": "f32"})
     assert p.returncode == 0, p.stderr

@@ -42,7 +42,7 @@ def test_evolve_records_the_precision_it_ran_in(tmp_path, repo_root):
 
 REPLAY = """
 import json, sys
-from tsim import runtime
+from tsim.backend import runtime
 if sys.argv[2] == "f64-first":
     runtime.init(precision="f64")
 from evolve.records.replay import load_champion, rescore_champion

@@ -109,7 +109,8 @@ def test_default_path_by_batch_size():
 def _subprocess(arch: str, precision: str, tasks: str, steps: int) -> subprocess.CompletedProcess:
     env = {**os.environ, "SGR_ARCH": arch, "SGR_PRECISION": precision, "PYTHONPATH": str(ROOT),
            "LP_NATIVE_VECTOR_WIDTH": "128", "GALLIVM_PERF": "nopt"}
-    code = ("import sys; from tests.tasks.test_env_kernels import run_both; from tsim import runtime; "
+    code = ("import sys; from tests.tasks.test_env_kernels import run_both; "
+            "from tsim.backend import runtime; "
             "[run_both(t, int(sys.argv[2])) for t in sys.argv[1].split(',')]; "
             "print('ok', runtime.precision())")
     return subprocess.run([sys.executable, "-c", code, tasks, str(steps)], cwd=ROOT, env=env,
@@ -132,7 +133,7 @@ def test_kernel_path_equals_numpy_path_in_f32():
 @pytest.mark.subprocess
 def test_kernel_path_equals_numpy_path_on_vulkan():
     """The kernels compile and give numpy's bits on Vulkan (lavapipe here), f64 and f32."""
-    probe = subprocess.run([sys.executable, "-c", "import tsim.runtime as r; r.init()"], cwd=ROOT,
+    probe = subprocess.run([sys.executable, "-c", "import tsim.backend.runtime as r; r.init()"], cwd=ROOT,
                            env={**os.environ, "SGR_ARCH": "vulkan", "PYTHONPATH": str(ROOT)},
                            capture_output=True, text=True, timeout=120)
     if probe.returncode:
@@ -176,7 +177,7 @@ def test_orientation_kernels_give_numpys_bits_bent_turned_and_at_rest():
     cosines round above 1 and are clamped), from float64 and float32 points: the same bits."""
     from tasks import kernels as EK
     from tasks.orientation import orientation
-    from tsim import runtime
+    from tsim.backend import runtime
 
     runtime.init()
     rng = np.random.default_rng(0)

@@ -201,7 +201,7 @@ def test_task_state_is_reset_per_world(folder):
 def test_hull_area_batched():
     """A unit square with an inner and an edge point, a triangle with a point inside and one on an
     edge (padding beyond each mask): areas 1 and 2, by the numpy oracle and by the kernel."""
-    from tsim import runtime
+    from tsim.backend import runtime
 
     sq = np.array([[0, 0], [1, 0], [1, 1], [0, 1], [0.5, 0.5], [0.5, 0], [0, 0]], float)[None]
     mask = np.array([[True] * 6 + [False]])
@@ -217,7 +217,7 @@ def test_hull_area_kernel_gives_the_numpy_bits():
     """`tasks.kernels.hull_areas` against the numpy monotone chain on random point sets of 2 to
     129 points and on lattice points (ties in x and y, collinear runs, repeated points), from
     float64 and float32 points: the same bits."""
-    from tsim import runtime
+    from tsim.backend import runtime
 
     runtime.init()
     rng = np.random.default_rng(0)
@@ -237,7 +237,7 @@ def test_a_worlds_hull_area_has_the_same_bits_alone_and_beside_larger_worlds():
     width (they did: numpy's pairwise sum groups the terms by the padded length; an AreaMaximizer-v0
     robot's reward differed by ~1e-16 alone and beside bigger robots), by the numpy oracle and by
     the kernel. Points on parabolas, so that the lower chain holds every point (2 to 128 terms)."""
-    from tsim import runtime
+    from tsim.backend import runtime
 
     runtime.init()
     rng = np.random.default_rng(5)

@@ -1,4 +1,4 @@
-"""Single precision: one kernel source in f32 or f64, chosen once per process (`tsim.runtime`).
+"""Single precision: one kernel source in f32 or f64, chosen once per process (`tsim.backend.runtime`).
 
 f32 runs in subprocesses (this process runs in f64, evogym's bits). What is checked: an f32
 process steps in float32 from the kernels to the tasks' observations and rewards, follows evogym's
@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.rounding import to_real
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parents[2]
 F32_PROBE = """
 import json, sys
 import numpy as np
-from tsim import runtime
+from tsim.backend import runtime
 from tasks.env import BatchEnv
 out = {"precision": runtime.precision(), "com_err": {}}
 for task in sys.argv[2:]:
@@ -220,7 +220,7 @@ UNITS = """
 import json
 from fractions import Fraction
 import numpy as np
-from tsim import runtime
+from tsim.backend import runtime
 runtime.init()
 ti = runtime.ti
 from tsim.kernels.geometry import intersects, intersects_ends

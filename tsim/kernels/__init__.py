@@ -14,7 +14,7 @@ One physics stage per module, in the order a substep runs them (as brax lays out
 - `step`: the kernels that run the substeps of every world.
 
 The source is one for both real types: arrays and locals take the process's real type (f64 by
-default, f32 on request: `tsim.runtime.init`), fixed before the first kernel compiles.
+default, f32 on request: `tsim.backend.runtime.init`), fixed before the first kernel compiles.
 """
 
 from tsim.kernels.broadphase import (

@@ -14,9 +14,9 @@ the same pairs act, in the same order (the slack and the coordinate limit follow
 `layout.Tolerances`).
 """
 
+from tsim.backend.runtime import ti
 from tsim.kernels import layout as L
 from tsim.kernels.geometry import in_box
-from tsim.runtime import ti
 
 SWEEP_OFF, SWEEP_AUTO, SWEEP_ALWAYS = 0, 1, 2
 SWEEP_MIN = 24

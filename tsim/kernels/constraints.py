@@ -2,10 +2,10 @@
 +-25 %, rigid voxels' sides into +-3 %), projected on the positions."""
 
 from tsim import constants as C
+from tsim.backend.runtime import ti
 from tsim.kernels.integrate import hold_fixed
 from tsim.kernels.layout import N_RIGID, V_PTS, pairs
 from tsim.kernels.springs import add_to_ends
-from tsim.runtime import ti
 
 _HI = 1.0 + C.EDGE_BAND
 _LO = 1.0 - C.EDGE_BAND

@@ -5,6 +5,7 @@ cells its box reaches), whichever way the pairs are found (`broadphase`).
 """
 
 from tsim import constants as C
+from tsim.backend.runtime import PROFILE_SKIP, ti
 from tsim.kernels import layout as L
 from tsim.kernels.broadphase import (
     LIST_ALWAYS,
@@ -24,7 +25,6 @@ from tsim.kernels.broadphase import (
 from tsim.kernels.layout import N_SURF, N_SURF_ROBOT
 from tsim.kernels.narrowphase import Q_LO, load_quad, n_qf, resolve
 from tsim.kernels.scratch import P_COUNT, P_FINITE, P_FITS, P_N_LIST, P_WX, P_WY, pieced
-from tsim.runtime import PROFILE_SKIP, ti
 
 
 @ti.func
@@ -40,7 +40,7 @@ def contacts(b, n_pts, counts: ti.template(), s: ti.template(), ter: ti.template
     s.refbox. `ter`: a `scratch.Terrain`.
 
     `part`: None, all of it (the CPU's kernels); or a `scratch.Part`: the surface voxels i of
-    piece part.piece of part.pieces (SPIR-V, tsim/spirv.py: a driver that bounds a shader's loops
+    piece part.piece of part.pieces (SPIR-V, tsim/backend/spirv.py: a driver that bounds a shader's loops
     may need a substep's contacts in several launches), in the order of one call, with what one
     piece hands the next (its count, the list's length, the boxes' widths) in part's slots; the
     boxes are made and the sweep decided in the first piece, the list closed in the last."""

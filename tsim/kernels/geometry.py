@@ -1,8 +1,8 @@
 """Geometric predicates on 2-vectors: evogym's point-in-voxel, segment and distance tests."""
 
 from tsim import constants as C
+from tsim.backend.runtime import ti
 from tsim.kernels import layout as L
-from tsim.runtime import ti
 
 
 @ti.func

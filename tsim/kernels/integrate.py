@@ -2,11 +2,11 @@
 forces frozen across the stages), and the fixed points held where they were."""
 
 from tsim import constants as C
-from tsim import portable
+from tsim.backend.runtime import ti
+from tsim.kernels import portable
 from tsim.kernels.layout import N_FIXED, pairs
 from tsim.kernels.pairs import renormalize
 from tsim.kernels.springs import spring_forces
-from tsim.runtime import ti
 
 
 @ti.func

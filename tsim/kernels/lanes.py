@@ -1,5 +1,5 @@
 """A substep's second half (integration, fixed points, constraints, snapshot) spread over a world's
-L lanes: the lanes kernel's stages (tsim/lanes.py; GPU and Vulkan only, issue #48 item 1).
+L lanes: the lanes kernel's stages (tsim/backend/lanes.py; GPU and Vulkan only, issue #48 item 1).
 
 `integrate.rk4`, `springs.spring_forces`, `constraints.constraints` and `step.move`, element by
 element, with the elements dealt to lanes: point p and edge e to lane
@@ -21,19 +21,19 @@ The per-element code is the CPU's own (`springs.edge_force`, `integrate.stage_st
 `point_stage`, `stage_end`, `hold_point`, `constraints.edge_correction`, `rigid_voxels`,
 `integrate.snapshot`): the serial kernels call it in loops over a world's elements, this module over a
 lane's. Only the sums that the CPU scatters are gathered here. The CPU's kernels do not call this
-module (Taichi's CPU backend has no block barrier); tests/tsim/test_lanes.py compares the two on
+module (Taichi's CPU backend has no block barrier); tests/tsim/backend/test_lanes.py compares the two on
 every task.
 """
 
+from tsim.backend.runtime import PROFILE_SKIP, ti
 from tsim.kernels.constraints import edge_correction, rigid_voxels
 from tsim.kernels.integrate import hold_point, point_stage, snapshot, stage_end, stage_start
 from tsim.kernels.layout import N_FIXED, pairs
 from tsim.kernels.springs import edge_force
-from tsim.runtime import PROFILE_SKIP, ti
 
 
 def incidence_sizes(pc: int, ec: int) -> dict[str, int]:
-    """A world's incidence lists (capacity pc points, ec edges; `tsim.lanes.incidence_lists`
+    """A world's incidence lists (capacity pc points, ec edges; `tsim.backend.lanes.incidence_lists`
     makes them): point p's edges are inc[ist[p]:imid[p]] (those whose first end it is) then
     inc[imid[p]:ist[p + 1]] (whose second end it is), each ascending."""
     return {"ist": pc + 1, "imid": pc, "inc": 2 * ec}

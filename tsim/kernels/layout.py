@@ -25,8 +25,8 @@ the process's floating-point type (f64 by default, f32 on request; `tsim.backend
 from __future__ import annotations
 
 from tsim import backend
-from tsim.backends import PRECISIONS, Tolerances
-from tsim.runtime import ti
+from tsim.backend.runtime import ti
+from tsim.backend.tables import PRECISIONS, Tolerances
 
 # counts columns
 N_PTS, N_EDGES, N_VOX, N_SURF, N_SURF_ROBOT, N_RIGID, N_ACT, STATUS, N_FIXED = range(9)
@@ -77,7 +77,7 @@ def capacity(k: int) -> tuple[int, int, int]:
     return PC << k, EC << k, SC << k
 
 
-# the kernels' margins per real type: tsim/backend.py's `PRECISIONS` rows own them
+# the kernels' margins per real type: tsim/backend/__init__.py's `PRECISIONS` rows own them
 TOLERANCES: dict[str, Tolerances] = {name: p.tolerances for name, p in PRECISIONS.items()}
 
 

@@ -8,8 +8,9 @@ position's low part, and every difference of two corners the tests use is taken 
 """
 
 from tsim import constants as C
-from tsim import portable
+from tsim.backend.runtime import ti
 from tsim.kernels import layout as L
+from tsim.kernels import portable
 from tsim.kernels.geometry import (
     dist_point_edge,
     intersects,
@@ -17,7 +18,6 @@ from tsim.kernels.geometry import (
     normalized,
     point_in_quad,
 )
-from tsim.runtime import ti
 
 Q_LO = 4  # qf's columns of the low parts (f32)
 N_QF = 4  # qf's columns: n_qf() in the process's real type

@@ -12,7 +12,7 @@ without any of it (`layout.pairs`), so its bits are evogym's as before. Needs IE
 without reassociation, which `runtime.init` asks for (fast_math off).
 """
 
-from tsim.runtime import ti
+from tsim.backend.runtime import ti
 
 
 def given(x: object) -> bool:

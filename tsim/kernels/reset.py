@@ -1,9 +1,9 @@
-"""A partial reset where the state lives on a device (`BatchSim.reset(mask)`, tsim/mirror.py): the
+"""A partial reset where the state lives on a device (`BatchSim.reset(mask)`, tsim/backend/mirror.py): the
 chosen worlds' rows back to their placement at rest in place, instead of bringing the whole state
 to the host, writing it there and sending it back."""
 
+from tsim.backend.runtime import ti
 from tsim.kernels.layout import I32_1, REAL_1, S_LO_OF, S_POS_LO, pairs, state_columns
-from tsim.runtime import ti
 
 
 @ti.kernel

@@ -1,8 +1,8 @@
 """Springs: their forces at an RK4 stage, and the scatter of per-edge vectors to the edges' ends."""
 
 from tsim import constants as C
+from tsim.backend.runtime import ti
 from tsim.kernels.layout import pairs
-from tsim.runtime import ti
 
 
 @ti.func

@@ -7,6 +7,7 @@ pipeline contacts (`contacts`: broad then narrow phase) -> integration (`integra
 points -> constraints (`constraints`) -> the new snapshot.
 """
 
+from tsim.backend.runtime import PROFILE_SKIP, ti
 from tsim.kernels.broadphase import LIST_PER_VOXEL
 from tsim.kernels.constraints import constraints
 from tsim.kernels.contacts import contacts
@@ -42,7 +43,6 @@ from tsim.kernels.layout import (
     state_columns,
 )
 from tsim.kernels.scratch import Scratch, Terrain
-from tsim.runtime import PROFILE_SKIP, ti
 
 
 @ti.func

@@ -20,7 +20,7 @@ import yaml
 
 from evolve.cli import main
 from tasks.env import obs_dim
-from tsim import runtime
+from tsim.backend import runtime
 
 ROOT = Path(__file__).resolve().parents[3]
 NO_CUDA = shutil.which("nvidia-smi") is None

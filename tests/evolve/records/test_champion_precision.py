@@ -13,13 +13,13 @@ import pytest
 import yaml
 
 from evolve.records.replay import load_champion
-from tsim import runtime
+from tsim.backend import runtime
 from tsim.errors import SgrError
 
 REPLAY = """
 import json, os, sys
 before = dict(os.environ)
-from tsim import runtime
+from tsim.backend import runtime
 from evolve.records.replay import judge, load_champion, replay_champion, rescore_champion
 champ = load_champion(sys.argv[1])
 after_load = dict(os.environ) == before

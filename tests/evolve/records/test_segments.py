@@ -8,7 +8,7 @@ import yaml
 
 from evolve.records.segments import SEGMENTS_FILE, backend_summary, segments
 from evolve.runs.experiment import Experiment
-from tsim import runtime
+from tsim.backend import runtime
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 1, "pop_size": 6, "episode_steps": 5,
         "workers": 1, "render_champion": False, "checkpoint_every": 1}

@@ -5,16 +5,16 @@ kept as float pairs, whether results are evogym's bits) and the archs (name -> t
 tried, what is missing when none starts, whether it has 64-bit floats, how a step is launched).
 The names "f64", "f32", "cpu", "gpu", "cuda", "vulkan" and "metal" are written as string literals
 here only: other modules use `PRECISIONS`, `ARCHS`, `DEFAULT_PRECISION`, the `CPU`/`CUDA`/...
-constants or a `tsim.backend.Backend`'s properties (tests/tsim/test_backend_seam.py greps for
-them). A leaf module (no Taichi, nothing of tsim but its constants), so that tsim.runtime, which
-starts Taichi, and tsim.devices can read it; `tsim.backend` re-exports it with the process's
+constants or a `tsim.backend.Backend`'s properties (tests/tsim/backend/test_backend_seam.py greps for
+them). A leaf module (no Taichi, nothing of tsim but its constants), so that tsim.backend.runtime, which
+starts Taichi, and tsim.backend.devices can read it; `tsim.backend` re-exports it with the process's
 `Backend`.
 
 Adding a precision: one `Precision` row in `PRECISIONS` (its numpy and Taichi types and its
-`Tolerances`); the CLI's choices, the run config's check, tsim.runtime and the kernels follow.
+`Tolerances`); the CLI's choices, the run config's check, tsim.backend.runtime and the kernels follow.
 Adding a backend: one `Arch` row in `ARCHS` (the Taichi archs it tries, what is missing without
-it, whether it has f64, and its launch path: a key of tsim/launch.py's `LAUNCHERS`, to which a
-backend that launches its step differently, e.g. the GPU lanes kernel of tsim/lanes.py, adds its
+it, whether it has f64, and its launch path: a key of tsim/backend/launch.py's `LAUNCHERS`, to which a
+backend that launches its step differently, e.g. the GPU lanes kernel of tsim/backend/lanes.py, adds its
 launcher).
 """
 
@@ -72,7 +72,7 @@ class Arch:
     taichi: tuple[str, ...]  # Taichi's archs tried, in order (`getattr(ti, name)`)
     missing: str  # what is missing when Taichi cannot start it (Taichi does not say why)
     f64: bool = True  # has 64-bit floats
-    launch: str = "device"  # how a step is launched: a key of tsim/launch.py's LAUNCHERS
+    launch: str = "device"  # how a step is launched: a key of tsim/backend/launch.py's LAUNCHERS
     host: bool = False  # runs on the host's CPU cores (threads, pinning, cached launches)
 
 

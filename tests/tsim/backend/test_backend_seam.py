@@ -1,11 +1,12 @@
-"""The backend seam: precision and arch names are written in tsim/backends.py only (the tables
+"""The backend seam: precision and arch names are written in tsim/backend/tables.py only (the tables
 that tsim.backend re-exports).
 
 The rule (it can fail): in the library's code (tsim/, tasks/, evolve/, sgr/), a string literal whose
 whole value is a precision's or an arch's name ("f64", "cuda", ...) is a decision taken outside the
-seam (`arch == "cpu"`, `or "f64"`, a copied list of names), and fails this test. Allowed: tsim/backends.py
-itself; docstrings and comments (not string literals that code compares: a docstring is the first
-statement of a module, class or function; comments are not in the syntax tree); longer text that
+seam (`arch == "cpu"`, `or "f64"`, a copied list of names), and fails this test. Allowed:
+tsim/backend/tables.py itself; docstrings and comments (not string literals that code compares: a
+docstring is the first statement of a module, class or function; comments are not in the syntax
+tree); longer text that
 merely mentions a name (help and error lines, "SGR_ARCH=cpu"); and a literal on a line marked
 `# backend-seam: <why>`, for a name that is no arch (e.g. the library "cuda" that ctypes loads).
 """
@@ -20,9 +21,9 @@ import pytest
 
 from tsim import backend
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 PACKAGES = ("tsim", "tasks", "evolve", "sgr")
-SEAM = ROOT / "tsim" / "backends.py"
+SEAM = ROOT / "tsim" / "backend" / "tables.py"
 MARK = "# backend-seam:"
 NAMES = frozenset({"f64", "f32", "cpu", "gpu", "cuda", "vulkan", "metal"})
 
@@ -53,14 +54,15 @@ def named_outside(source: str, path: str = "<text>") -> list[str]:
 
 
 def test_backend_names_are_written_only_in_tsim_backends():
-    """No module of the library but tsim/backends.py writes a precision's or arch's name as a
+    """No module of the library but tsim/backend/tables.py writes a precision's or arch's name as a
     string literal (see this file's docstring for the rule)."""
     hits = []
     for package in PACKAGES:
         for path in sorted((ROOT / package).rglob("*.py")):
             if path != SEAM:
                 hits += named_outside(path.read_text(), str(path.relative_to(ROOT)))
-    assert not hits, "backend names outside tsim/backends.py (ask tsim.backend instead):\n" + "\n".join(hits)
+    assert not hits, ("backend names outside tsim/backend/tables.py (ask tsim.backend instead):\n"
+                      + "\n".join(hits))
 
 
 @pytest.mark.parametrize("code", ['if arch == "cpu":\n    pass\n', 'p = cfg.get("precision") or "f64"\n',
@@ -96,9 +98,9 @@ def test_precision_rows_match_numpy_types():
 
 
 def test_cli_choices_and_runtime_read_the_seam():
-    """The CLI's --precision choices and tsim.runtime's lists are the seam's, not copies."""
+    """The CLI's --precision choices and tsim.backend.runtime's lists are the seam's, not copies."""
     from tasks.cli import PRECISIONS
-    from tsim import runtime
+    from tsim.backend import runtime
 
     assert PRECISIONS == tuple(backend.PRECISIONS)
     assert runtime.PRECISIONS == tuple(backend.PRECISIONS) and runtime.ARCHS == tuple(backend.ARCHS)

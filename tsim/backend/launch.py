@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from tsim import runtime
+from tsim.backend import runtime
 
 
 class CachedLaunch:
@@ -120,10 +120,10 @@ class KernelLaunch:
 
 
 class SplitLaunch:
-    """An env step as the SPIR-V backends' launches (tsim/spirv.py: maybe several per step)."""
+    """An env step as the SPIR-V backends' launches (tsim/backend/spirv.py: maybe several per step)."""
 
     def __init__(self, split, block: int, batch_tier: int):
-        self._split = split  # a `tsim.spirv.Launcher`, kept by the simulator (it learns `chunk`)
+        self._split = split  # a `tsim.backend.spirv.Launcher`, kept by the simulator (it learns `chunk`)
         self._tail = (block, batch_tier)
         self.cached = None  # no cached launch context (`KernelLaunch.cached`)
 
@@ -135,7 +135,7 @@ class SplitLaunch:
 # how a step is launched, by `tsim.backend.Arch.launch`: (serial, block, split launcher, worlds,
 # lanes per world) -> a callable taking `step_kernel`'s arguments less the block size. A backend
 # that launches differently adds its entry here and names it in its `Arch`. "lanes" is the lanes
-# kernel (tsim/lanes.py: a world on `lanes` threads of a block; GPU and Vulkan only), which no
+# kernel (tsim/backend/lanes.py: a world on `lanes` threads of a block; GPU and Vulkan only), which no
 # backend takes by default yet: `BatchSim.choose_kernel(lanes=L)` forces it
 LAUNCHERS = {
     "host": lambda serial, block, split, n, lanes: KernelLaunch(serial, 1, cache=True),
@@ -147,13 +147,13 @@ LAUNCHERS = {
 
 
 def _batch_tier(n_worlds: int) -> int:
-    from tsim import spirv
+    from tsim.backend import spirv
 
     return spirv.batch_tier(n_worlds)
 
 
 def _lanes_launcher(n_worlds: int, lanes: int):
-    from tsim.lanes import LanesLauncher
+    from tsim.backend.lanes import LanesLauncher
 
     return LanesLauncher(n_worlds, lanes)
 

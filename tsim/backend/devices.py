@@ -12,7 +12,7 @@ import platform
 import subprocess
 import sys
 
-from tsim import backends as B
+from tsim.backend import tables as B
 
 # VkPhysicalDeviceType: what a Vulkan driver says its device is
 VK_TYPES = {0: "other", 1: "integrated GPU", 2: "discrete GPU", 3: "virtual GPU", 4: "CPU"}

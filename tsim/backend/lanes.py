@@ -28,7 +28,21 @@ from typing import NamedTuple
 
 import numpy as np
 
-from tsim import backend, spirv
+from tsim import backend
+from tsim.backend import spirv
+from tsim.backend.runtime import PROFILE_SKIP, ti
+from tsim.backend.spirv import (
+    BEGIN,
+    CONTACTS,
+    END,
+    MOVE,
+    ST_COUNT,
+    ST_STATUS,
+    SUBSTEPS,
+    Slice,
+    global_scratch,
+    laps,
+)
 from tsim.kernels.contacts import contacts
 from tsim.kernels.lanes import incidence_sizes, move_lanes, own, sync
 from tsim.kernels.layout import (
@@ -51,8 +65,6 @@ from tsim.kernels.layout import (
 )
 from tsim.kernels.scratch import Part, Scratch, Terrain
 from tsim.kernels.step import load_edges, load_points, store_world, terrain_top
-from tsim.runtime import PROFILE_SKIP, ti
-from tsim.spirv import BEGIN, CONTACTS, END, MOVE, ST_COUNT, ST_STATUS, SUBSTEPS, Slice, global_scratch, laps
 
 MAX_LANES = 1024  # a thread block's most threads (CUDA, and Vulkan's guaranteed minimum is 128)
 

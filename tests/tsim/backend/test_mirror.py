@@ -1,7 +1,7 @@
-"""The state kept on the device between steps (tsim/mirror.py), checked on the CPU: a `DeviceMirror`
+"""The state kept on the device between steps (tsim/backend/mirror.py), checked on the CPU: a `DeviceMirror`
 works over the CPU's Taichi ndarrays as over a GPU's, so forcing it here tests its copying rules
 (that every read sees the last step, every write reaches the next, and nothing else crosses) with
-the CPU's bits as the oracle. Vulkan runs it for real in tests/tsim/test_vulkan.py."""
+the CPU's bits as the oracle. Vulkan runs it for real in tests/tsim/backend/test_vulkan.py."""
 
 import os
 import subprocess
@@ -13,10 +13,10 @@ import pytest
 
 import tsim.sim as sim_mod
 from tasks.env import BatchEnv
-from tsim import mirror as mirror_mod
+from tsim.backend import mirror as mirror_mod
 from tsim.sampling import sample_robot
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 class Counted(mirror_mod.DeviceMirror):
@@ -73,9 +73,9 @@ def test_a_device_state_gives_the_hosts_bits_through_reads_writes_and_resets(tas
 @pytest.mark.subprocess
 def test_a_device_state_gives_the_hosts_bits_in_f32():
     """The same in an f32 process, where a reset also writes the placement's low parts."""
-    code = ("import pytest; from tests.tsim.test_mirror import parity; "
+    code = ("import pytest; from tests.tsim.backend.test_mirror import parity; "
             "[parity(t, pytest.MonkeyPatch()) for t in ('Walker-v0', 'Catcher-v0')]; "
-            "from tsim import runtime; print('ok', runtime.precision())")
+            "from tsim.backend import runtime; print('ok', runtime.precision())")
     r = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=300,
                        env={**os.environ, "SGR_PRECISION": "f32", "PYTHONPATH": str(ROOT)})
     assert r.returncode == 0, r.stderr[-2000:]

@@ -14,7 +14,7 @@ from tasks.specs import task_world
 from tsim.sampling import sample_robots
 from tsim.sim import BatchSim
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def _run(sim: BatchSim, steps: int = 5) -> bytes:

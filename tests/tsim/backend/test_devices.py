@@ -1,7 +1,7 @@
 """Naming the device a backend runs on (issue 45, item 4): the Vulkan device Taichi picks by its
 own rule, and the one line `sgr evolve`, `bench` and `validate` start with."""
 
-from tsim import devices, runtime
+from tsim.backend import devices, runtime
 
 LLVMPIPE = {"name": "llvmpipe (LLVM 15.0.6, 256 bits)", "type": devices.VK_CPU, "api_minor": 3,
             "wide_lines": True}

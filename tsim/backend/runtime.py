@@ -9,9 +9,9 @@ import tempfile
 import threading
 import time
 
-from tsim import backends as B
-from tsim import devices
-from tsim.backends import DEFAULT_ARCH, DEFAULT_PRECISION, GPU, NO_F64, SPIRV_ARCHS, resolved
+from tsim.backend import devices
+from tsim.backend import tables as B
+from tsim.backend.tables import DEFAULT_ARCH, DEFAULT_PRECISION, GPU, NO_F64, SPIRV_ARCHS, resolved
 from tsim.errors import SgrError
 
 # Taichi's version banner and "Starting on arch" line are not printed: a command's stderr holds its
@@ -23,7 +23,7 @@ os.environ.setdefault("ENABLE_TAICHI_HEADER_PRINT", "0")  # no version banner
 with contextlib.redirect_stdout(sys.stderr):
     import taichi as ti
 
-# the archs' and precisions' names: tsim/backend.py's tables own them (and what follows from each)
+# the archs' and precisions' names: tsim/backend/__init__.py's tables own them (and what follows from each)
 ARCHS = tuple(B.ARCHS)
 # profiling only (bench/profile_parts.py): kernel parts left out at compile time, e.g. "pairs,terrain";
 # results are then wrong, so such a process neither reads nor writes Taichi's offline cache
@@ -105,7 +105,7 @@ def requested_arch(arch: str | None = None) -> str:
 
 
 def _taichi_archs(arch: str) -> list:
-    # the Taichi archs tsim/backend.py's row for `arch` tries, in order
+    # the Taichi archs tsim/backend/__init__.py's row for `arch` tries, in order
     return [getattr(ti, name) for name in B.ARCHS[arch].taichi]
 
 
@@ -198,9 +198,9 @@ def resolved_arch() -> str:
 
 def device() -> tuple[str, bool]:
     """(the device's name, whether it is a software device) of the started Taichi
-    (tsim/devices.py): "x64: <CPU model>", the CUDA GPU's name, "<Vulkan device>: <its type>"."""
+    (tsim/backend/devices.py): "x64: <CPU model>", the CUDA GPU's name, "<Vulkan device>: <its type>"."""
     if _DEVICE is None:
-        raise RuntimeError("Taichi has not started: call tsim.runtime.init() first")
+        raise RuntimeError("Taichi has not started: call tsim.backend.runtime.init() first")
     return _DEVICE
 
 
@@ -273,7 +273,7 @@ def backend() -> str:
 def native_tanh() -> bool:
     """Whether the kernels use `ti.tanh` (not on SPIR-V: no f64 `tanh` there, and lavapipe's f32
     one is 0.1 % off at 1e-5 and 19 % at 1e-7, where the ground's friction reads it): read when a
-    kernel is compiled (tsim/portable.py)."""
+    kernel is compiled (tsim/kernels/portable.py)."""
     return backend() not in SPIRV_ARCHS
 
 

@@ -1,4 +1,4 @@
-"""The lanes kernel (tsim/lanes.py, issue #48 item 1): a world's substep spread over L threads of a
+"""The lanes kernel (tsim/backend/lanes.py, issue #48 item 1): a world's substep spread over L threads of a
 block. On Mesa's lavapipe (Vulkan on the CPU) it gives the CPU's f64 results on all 32 tasks, with
 L below and above a world's number of points; on the CPU, where Taichi has no block barrier, it is
 refused in one line and the CPU's kernels are untouched. The incidence lists it gathers springs
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 
 from tasks.specs import task_spec, task_world
-from tests.tsim.test_vulkan import all_tasks, cpu_f64, run, vulkan  # noqa: F401 - vulkan: a fixture
+from tests.tsim.backend.test_vulkan import all_tasks, cpu_f64, run, vulkan  # noqa: F401 - vulkan: a fixture
 from tsim import kernels as K
+from tsim.backend.lanes import check_lanes, incidence_lists
 from tsim.kernels.lanes import incidence_sizes
-from tsim.lanes import check_lanes, incidence_lists
 from tsim.sampling import sample_robot, sample_robots
 from tsim.sim import BatchSim
 
@@ -99,7 +99,7 @@ def test_the_cpu_refuses_the_lanes_kernel_in_one_line_and_keeps_its_own():
         sim.choose_kernel(lanes=32)
     sim.choose_kernel(lanes=1)
     sim.step()
-    assert sim._launch is not None  # the CPU's cached launch (tsim/launch.py's "host" path)
+    assert sim._launch is not None  # the CPU's cached launch (tsim/backend/launch.py's "host" path)
 
 
 LANES = (4, 32)  # below and above a 5x5 robot's ~30 points and ~80 edges
@@ -133,7 +133,7 @@ def lanes_states(tasks: list[str], steps: int, robots: int, lanes: list[int]) ->
     return out
 
 
-LANES_STATES = ("import json, sys; from tests.tsim.test_lanes import lanes_states; "
+LANES_STATES = ("import json, sys; from tests.tsim.backend.test_lanes import lanes_states; "
                 "print(json.dumps(lanes_states(sys.argv[1].split(','), 2, 2, [4, 32])))")
 
 

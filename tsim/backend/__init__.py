@@ -3,9 +3,9 @@
 One value (arch, precision, threads) that the simulator, the tasks' numpy arrays, the rollout
 pools and a run's record read, instead of each asking $SGR_ARCH / $SGR_PRECISION on its own. It
 owns what follows from those choices: numpy's dtype at the kernels' boundary, the kernels'
-tolerances for the real type, and how a step is launched (`Backend.launch_path`, tsim/launch.py:
+tolerances for the real type, and how a step is launched (`Backend.launch_path`, tsim/backend/launch.py:
 the CPU's cached launch, the SPIR-V backends' split launches, a CUDA launch). The precisions and
-archs themselves, their names and facts, are tsim/backends.py's tables, re-exported here: every
+archs themselves, their names and facts, are tsim/backend/tables.py's tables, re-exported here: every
 arch and precision decision asks this module or that one (docs/VALIDATION.md says how to add one).
 """
 
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from tsim.backends import (  # noqa: F401 - re-exported: the seam's tables
+from tsim.backend.tables import (  # noqa: F401 - re-exported: the seam's tables
     ARCHS,
     CPU,
     CUDA,
@@ -36,7 +36,7 @@ from tsim.backends import (  # noqa: F401 - re-exported: the seam's tables
 def real() -> Precision:
     """The process's real type: the one Taichi runs in once started, else the one it would start
     in. What the kernels compile for (read at compile time, under `ti.static`)."""
-    from tsim import runtime
+    from tsim.backend import runtime
 
     return PRECISIONS[runtime.precision()]
 
@@ -84,8 +84,8 @@ class Backend:
     @property
     def launch_path(self) -> str:
         """How a step is launched on the arch the kernels really run on: a key of
-        tsim/launch.py's `LAUNCHERS` ("host", "device" or "spirv")."""
-        from tsim import runtime
+        tsim/backend/launch.py's `LAUNCHERS` ("host", "device" or "spirv")."""
+        from tsim.backend import runtime
 
         if runtime.backend() in SPIRV_ARCHS:  # opengl/gles too, which no `Arch` names
             return "spirv"
@@ -101,27 +101,27 @@ class Backend:
     def runs_on(self) -> str:
         """The arch the kernels really run on: "cpu", "cuda", "vulkan" or "metal" (what "gpu"
         resolved to)."""
-        from tsim import runtime
+        from tsim.backend import runtime
 
         return runtime.resolved_arch()
 
     @property
     def device(self) -> str:
         """The device's name ("x64: <CPU model>", the GPU's name, "<Vulkan device>: <type>")."""
-        from tsim import runtime
+        from tsim.backend import runtime
 
         return runtime.device()[0]
 
     @property
     def software(self) -> bool:
         """Whether the device is a software one (Mesa's lavapipe: a GPU API run on the CPU)."""
-        from tsim import runtime
+        from tsim.backend import runtime
 
         return runtime.device()[1]
 
     def line(self) -> str:
-        """One line naming the backend, the device and the precision (`tsim.runtime.describe`)."""
-        from tsim import runtime
+        """One line naming the backend, the device and the precision (`tsim.backend.runtime.describe`)."""
+        from tsim.backend import runtime
 
         return runtime.describe()
 
@@ -132,10 +132,10 @@ class Backend:
 
 
 def get(arch: str | None = None, precision: str | None = None) -> Backend:
-    """The process's backend, starting Taichi on first use (`tsim.runtime.init`: None means
+    """The process's backend, starting Taichi on first use (`tsim.backend.runtime.init`: None means
     $SGR_ARCH / $SGR_PRECISION, else cpu / f64); ValueError, one line, for one that cannot run
     here or that differs from the one already started."""
-    from tsim import runtime
+    from tsim.backend import runtime
 
     arch = runtime.init(arch, precision)
     return Backend(arch=arch, precision=runtime.precision(), threads=runtime.threads())

@@ -1,4 +1,4 @@
-"""`BatchSim.step` re-launches its kernel from a cached launch context (tsim/launch.py): it must
+"""`BatchSim.step` re-launches its kernel from a cached launch context (tsim/backend/launch.py): it must
 compute exactly what Taichi's own call computes, and notice when its arguments change."""
 
 import numpy as np
@@ -76,8 +76,8 @@ def test_cached_launch_follows_replaced_arrays_and_changed_arguments():
 def test_cached_launch_is_for_its_kernel_only():
     """Two kernels with the same signature and arguments: the context of one must not be reused
     for the other (it would run the first kernel's code)."""
-    from tsim import runtime
-    from tsim.launch import CachedLaunch
+    from tsim.backend import runtime
+    from tsim.backend.launch import CachedLaunch
 
     ti = runtime.ti
     arr = ti.types.ndarray(dtype=ti.f64, ndim=1)

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 LAVAPIPE_ENV = {"LP_NATIVE_VECTOR_WIDTH": "128", "GALLIVM_PERF": "nopt"}
 
 
@@ -29,7 +29,7 @@ def run(code: str, arch: str, **env: str) -> subprocess.CompletedProcess:
 
 @pytest.fixture(scope="module")
 def vulkan():
-    r = run("import tsim.runtime as r; r.init()", "vulkan")
+    r = run("import tsim.backend.runtime as r; r.init()", "vulkan")
     if r.returncode:
         pytest.skip(f"no Vulkan device here ({r.stderr.strip().splitlines()[-1:]}); on Debian, "
                     "apt-get install mesa-vulkan-drivers gives lavapipe")
@@ -53,7 +53,7 @@ def run_states(tasks: list[str], steps: int, robots: int) -> dict[str, list]:
     return out
 
 
-STATES = ("import json, sys; from tests.tsim.test_vulkan import run_states; "
+STATES = ("import json, sys; from tests.tsim.backend.test_vulkan import run_states; "
           "print(json.dumps(run_states(sys.argv[1].split(','), int(sys.argv[2]), int(sys.argv[3]))))")
 
 
@@ -70,7 +70,7 @@ def states(arch: str, tasks: tuple[str, ...], steps: int, robots: int, **env: st
 def cpu_f64(tasks: tuple[str, ...], steps: int, robots: int) -> dict:
     """`run_states` on the CPU in f64: in this process when it runs so (its kernels are then
     mostly compiled by the suite's other tests already), else in a subprocess."""
-    from tsim import runtime
+    from tsim.backend import runtime
     runtime.init()
     if runtime.backend() in ("x64", "arm64") and runtime.precision() == "f64":
         return {k: np.array(v) for k, v in run_states(list(tasks), steps, robots).items()}
@@ -78,8 +78,9 @@ def cpu_f64(tasks: tuple[str, ...], steps: int, robots: int) -> dict:
 
 
 def test_tanh_formula_is_within_3_ulp_of_libm():
-    """tsim.portable.tanh_formula (Vulkan's f64 tanh), run on the CPU backend in this process."""
-    from tsim import portable, runtime
+    """tsim.kernels.portable.tanh_formula (Vulkan's f64 tanh), run on the CPU backend in this process."""
+    from tsim.backend import runtime
+    from tsim.kernels import portable
     runtime.init()
     ti = runtime.ti
 
@@ -101,9 +102,9 @@ def test_tanh_formula_is_within_3_ulp_of_libm():
 
 SENTINEL = """
 import json, numpy as np
-from tsim import runtime
+from tsim.backend import runtime
 runtime.init()
-from tsim.spirv import laps
+from tsim.backend.spirv import laps
 ti = runtime.ti
 
 @ti.kernel
@@ -123,7 +124,7 @@ print(json.dumps(res))
 
 @pytest.mark.vulkan
 def test_the_sentinel_sees_a_drivers_loop_budget_run_out(vulkan, tmp_path):
-    """tsim/spirv.py's sentinel after a long loop in the same shader: 31 laps where the loops ran
+    """tsim/backend/spirv.py's sentinel after a long loop in the same shader: 31 laps where the loops ran
     in full, fewer where the driver cut them. Mesa's lavapipe stops every loop once 65,535 laps
     of them have run in one shader (a GPU's driver runs 70,000 in full)."""
     script = tmp_path / "sentinel.py"  # a file: Taichi reads a kernel's source
@@ -137,7 +138,8 @@ def test_the_sentinel_sees_a_drivers_loop_budget_run_out(vulkan, tmp_path):
 
 TANH_F32 = """
 import json, numpy as np
-from tsim import portable, runtime
+from tsim.backend import runtime
+from tsim.kernels import portable
 runtime.init()
 ti = runtime.ti
 
@@ -160,7 +162,7 @@ def test_f32_tanh_on_vulkan_is_within_3_ulp_near_zero_too(vulkan, tmp_path):
     """The kernels' tanh in f32 on Vulkan (the ground's friction calls it with small products):
     within 3 float32 ulp of the correctly rounded tanh over 1e-9 <= |x| <= 20. SPIR-V's own f32
     `Tanh` on lavapipe was 0.1 % off at 1e-5 and 19 % at 1e-7 (now the formula of
-    tsim/portable.py on every SPIR-V backend)."""
+    tsim/kernels/portable.py on every SPIR-V backend)."""
     script = tmp_path / "tanh32.py"
     script.write_text(TANH_F32)
     r = run(f"import runpy; runpy.run_path({str(script)!r})", "vulkan", SGR_PRECISION="f32")
@@ -174,7 +176,7 @@ def test_f32_tanh_on_vulkan_is_within_3_ulp_near_zero_too(vulkan, tmp_path):
 
 TWO_SUM = """
 import json, numpy as np
-from tsim import runtime
+from tsim.backend import runtime
 runtime.init()
 ti = runtime.ti
 from tsim.kernels.pairs import renormalize
@@ -223,7 +225,7 @@ def test_one_world_without_contacts_matches_the_cpu_within_1e_12(vulkan):
 def test_two_worlds_without_contacts_match_the_cpu_within_1e_12(vulkan):
     """Two different bodies in one batch. The second needs more loop iterations per substep than
     lavapipe runs in one shader over 30 substeps, and the two share SIMD lanes: before the
-    launcher split such steps (tsim/spirv.py), both worlds were ~2 off after one step."""
+    launcher split such steps (tsim/backend/spirv.py), both worlds were ~2 off after one step."""
     a = states("cpu", ("Walker-v0",), 1, 2, SGR_PROFILE_SKIP="contacts")
     b = states("vulkan", ("Walker-v0",), 1, 2, SGR_PROFILE_SKIP="contacts")
     assert np.abs(a["Walker-v0"] - b["Walker-v0"]).max() <= 1e-12
@@ -239,7 +241,7 @@ def test_vulkan_f64_matches_the_cpu_within_1e_9_on_every_task(vulkan):
     """All 32 tasks, two random 5x5 robots each (one batch), 2 steps with contacts: positions and
     velocities within 1e-9 of the CPU's (measured: 5.5e-12; not bits, lavapipe may fuse
     multiply-adds). Before the launcher split steps that run out of lavapipe's loop budget
-    (tsim/spirv.py), worlds with contacts were 0.1-2 off; before it split a substep into
+    (tsim/backend/spirv.py), worlds with contacts were 0.1-2 off; before it split a substep into
     launches, BridgeWalker-v0 (then Traverser-v0, before its contacts took several) stopped with
     the launcher's one-line error, and tier 3 (their capacity) took lavapipe 630 s to compile."""
     tasks = all_tasks()

@@ -1,4 +1,4 @@
-"""tsim.runtime: Taichi's CPU worker threads are pinned one per CPU when they are as many as the
+"""tsim.backend.runtime: Taichi's CPU worker threads are pinned one per CPU when they are as many as the
 CPUs (the one-process case), and left alone otherwise."""
 
 import json
@@ -12,7 +12,7 @@ pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
 PROBE = """
 import json, os
-from tsim import runtime
+from tsim.backend import runtime
 runtime.init()
 me = os.getpid()
 tids = {int(t) for t in os.listdir(f"/proc/{me}/task")}

@@ -10,10 +10,10 @@ followed evogym ~700x less closely than f32 on the CPU (Walker-v0's COM). `tanh`
 Taichi's own `ti.tanh` on the CPU and CUDA, so those results are bit for bit what they were; on a
 SPIR-V backend it takes the formula in both precisions, decided when a kernel is compiled. In f32
 the formula is within 2 ulp of the correctly rounded tanh on the arguments of
-tests/tsim/test_vulkan.py (its `k * _LN2_HI` is then not exact, which matters only near 1).
+tests/tsim/backend/test_vulkan.py (its `k * _LN2_HI` is then not exact, which matters only near 1).
 
 The formula (within 3 units in the last place of the correctly rounded tanh over |x| < 25, 81 %
-of arguments exact; tests/tsim/test_vulkan.py, `test_tanh_formula_is_within_3_ulp_of_libm`):
+of arguments exact; tests/tsim/backend/test_vulkan.py, `test_tanh_formula_is_within_3_ulp_of_libm`):
 tanh(a) = -m / (2 + m) with m = expm1(-2a), a = |x|, and expm1 by the usual reduction
 y = k ln 2 + r, |r| <= ln 2 / 2, a degree-14 Taylor polynomial for expm1(r) and 2^k built by exact
 repeated squaring (no 64-bit integers or ldexp needed).
@@ -21,8 +21,8 @@ repeated squaring (no 64-bit integers or ldexp needed).
 
 import math
 
-from tsim import runtime
-from tsim.runtime import ti
+from tsim.backend import runtime
+from tsim.backend.runtime import ti
 
 _LN2_HI = 6.93147180369123816490e-01  # ln 2 with its low 32 bits zero: k * _LN2_HI is exact
 _LN2_LO = 1.90821492927058770002e-10  # ln 2 - _LN2_HI

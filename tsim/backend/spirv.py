@@ -26,12 +26,12 @@ sentinel loop that such a driver cuts short once the budget is spent, and flags 
 launcher then starts the env step again from its state (which only the last launch writes) in
 launches of half as many substeps, down to one substep, then one half of a substep (its contacts,
 in pieces if need be; the rest) per launch (a GPU's driver has no such bound: one launch of all
-substeps per step). Every split gives the bits of one launch (tests/tsim/test_spirv.py, run on
+substeps per step). Every split gives the bits of one launch (tests/tsim/backend/test_spirv.py, run on
 the CPU backend).
 
 Why two more differences from the CPU's code, both SPIR-V only and decided at compile time: f32's
 two-sum reads a 1.0 from the global scratch (`Scratch.one`; lavapipe's compiler otherwise turns
-(a + b) - a into b, `pairs.renormalize`), and `tanh` is tsim/portable.py's formula in f32 too
+(a + b) - a into b, `pairs.renormalize`), and `tanh` is tsim/kernels/portable.py's formula in f32 too
 (SPIR-V's f32 `Tanh` on lavapipe is 19 % off at 1e-7).
 """
 
@@ -40,6 +40,7 @@ from typing import NamedTuple
 import numpy as np
 
 from tsim import backend
+from tsim.backend.runtime import PROFILE_SKIP, ti
 from tsim.errors import SgrError
 from tsim.kernels.broadphase import LIST_PER_VOXEL
 from tsim.kernels.contacts import contacts
@@ -64,7 +65,6 @@ from tsim.kernels.layout import (
 )
 from tsim.kernels.scratch import N_PART_F, N_PART_I, Part, Scratch, Terrain
 from tsim.kernels.step import load_edges, load_points, move, store_world, terrain_top
-from tsim.runtime import PROFILE_SKIP, ti
 
 # what one launch of `phase_kernel` runs
 BEGIN, SUBSTEPS, CONTACTS, MOVE, END = range(5)
@@ -147,7 +147,7 @@ def laps(m):
     """The sentinel: a loop of m laps, returning how many ran: fewer than m once a driver's loop
     budget is spent. m must be known only at run time: a loop of constant length is unrolled by
     the shader compiler and then runs in full (measured on lavapipe: 31 of 31 laps after the
-    budget ran out; tests/tsim/test_vulkan.py)."""
+    budget ran out; tests/tsim/backend/test_vulkan.py)."""
     ran = 0
     for _ in range(m):
         ran += 1
@@ -257,7 +257,7 @@ class Launcher:
     def step(self, args: tuple) -> None:
         """One env step: args are `kernels.step.step_kernel`'s arguments, then the batch tier
         (args[N_SUB_ARG] substeps; counts, a numpy array, and state, a numpy array or a device's
-        Taichi ndarray (`tsim.mirror`), are written in place)."""
+        Taichi ndarray (`tsim.backend.mirror`), are written in place)."""
         n_sub = args[N_SUB_ARG]
         gf, gi = self._scratch_for(args)
         chunk = n_sub if self.chunk is None else min(self.chunk, n_sub)

@@ -1,4 +1,4 @@
-"""The SPIR-V backends' launch (tsim/spirv.py: the scratch in global arrays, an env step in
+"""The SPIR-V backends' launch (tsim/backend/spirv.py: the scratch in global arrays, an env step in
 several launches where the driver bounds a shader's loop iterations, as lavapipe does) gives the
 numbers of one launch of all substeps. Run here on the CPU backend, where both are plain Taichi
 kernels: bit for bit, with sweeps and pair lists kept between launches, a substep's contacts in
@@ -15,11 +15,11 @@ import pytest
 from tasks.specs import task_spec, task_world
 from tests.tsim.conftest import drive
 from tsim import kernels as K
-from tsim import spirv
+from tsim.backend import spirv
+from tsim.backend.spirv import batch_tier
 from tsim.errors import SgrError
 from tsim.sampling import sample_robot
 from tsim.sim import BatchSim
-from tsim.spirv import batch_tier
 
 
 def _run(task: str, bodies, steps: int, chunk: int | None, blow_up: int | None = None,
@@ -105,7 +105,7 @@ def test_in_f32_a_world_that_stops_mid_step_is_left_where_one_launch_leaves_it_l
     process is f64)."""
     env = {k: v for k, v in os.environ.items() if k not in ("SGR_ARCH", "SGR_PRECISION")}
     out = subprocess.run([sys.executable, "-c", F32_STOP], env={**env, "SGR_PRECISION": "f32"},
-                         cwd=Path(__file__).resolve().parents[2], capture_output=True, text=True,
+                         cwd=Path(__file__).resolve().parents[3], capture_output=True, text=True,
                          timeout=300)
     assert out.returncode == 0, out.stderr[-2000:]
     dtype, columns, unstable, same_state, same_counts = out.stdout.split()[-5:]

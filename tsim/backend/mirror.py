@@ -3,13 +3,13 @@
 On a GPU (or Vulkan) a numpy array passed to a Taichi kernel crosses the bus at every launch: in
 before the kernel, out after it. For the state, (B, P, columns) reals (2.3 KB a world at 5x5 in
 f64, 150 MB at B = 65,536), that is every env step's largest cost outside the physics, and an
-env step is 1 launch on CUDA and 3 or more on Vulkan (`tsim.spirv`). A `DeviceMirror` keeps the
+env step is 1 launch on CUDA and 3 or more on Vulkan (`tsim.backend.spirv`). A `DeviceMirror` keeps the
 array in a Taichi ndarray between steps and a numpy copy on the host, and copies one to the other
 only when the other side reads it after this side was written: a run whose host reads nothing
 but the kernels' outputs never moves the state at all.
 
 On the CPU the kernels take the numpy array itself (`HostArray`): nothing is copied, and a cached
-launch (`tsim.launch`) keeps its address.
+launch (`tsim.backend.launch`) keeps its address.
 
 The rule for callers: ask for the host array with `host(write=True)` if you may write it (the
 next launch then copies it in), with `host()` to read only. A reference kept across a launch (any
@@ -25,7 +25,7 @@ import os
 
 import numpy as np
 
-from tsim.runtime import ti
+from tsim.backend.runtime import ti
 
 
 class HostArray:
