@@ -5,7 +5,7 @@
 evogym32 records its reruns at +-1e-9 and +-1e-6 only. Our f64 reproduces evogym's runs to ~1e-14,
 so it stands in for evogym here. Per task of tests/data/evogym32 and per d: the median over the 24
 robots of the larger of the +d and -d reruns' largest COM deviation over the episode from
-evogym's recorded run (as `tasks.validate.chaos_check`'s floor), all reruns of a task in one batch.
+evogym's recorded run (as `parity.harness.chaos_check`'s floor), all reruns of a task in one batch.
 """
 
 from __future__ import annotations

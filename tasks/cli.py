@@ -1,4 +1,4 @@
-"""The `sgr` commands that need only tasks and the simulator (demo, validate, bench), and the
+"""The `sgr` commands that need only tasks and the simulator (demo, bench), and the
 argument helpers every command shares; `register_task_commands` adds them to the dispatcher in
 evolve/cli/ (the sgr dispatcher)."""
 
@@ -138,31 +138,6 @@ def _demo(args: argparse.Namespace) -> int:
     return 0
 
 
-def _validate(args: argparse.Namespace) -> int:
-    from tasks.validate import validate
-    from tsim import backend
-    from tsim.backend import runtime
-
-    runtime.use_precision(args.precision)
-    here = backend.get()  # one that cannot start fails here, in one line
-    if not args.json:
-        print(here.line(), flush=True)
-    report = validate(args.dir)
-    if args.json:
-        print(json.dumps({**report, "backend": here.record()}))
-        return 0
-    for c in report["cases"]:
-        print(f"{c['file']:<48} {c['task']:<22} com_err_final {c['com_err_final']:.2e} "
-              f"com_err_max50 {c['com_err_max50']:.2e} obs_err_step0 {c['obs_err_step0']:.1e} "
-              f"return_err {c['return_err']:.2e}")
-    for task, t in report["tasks"].items():
-        print(task, " ".join(f"{k}={v:.4g}" if isinstance(v, float) else f"{k}={v}"
-                             for k, v in t.items()))
-    return 0
-
-
-
-
 def _bench(args: argparse.Namespace) -> int:
     from tasks.bench import bench
     from tsim import backend
@@ -195,7 +170,7 @@ def _bench(args: argparse.Namespace) -> int:
 
 
 def register_task_commands(sub) -> None:
-    """Add demo, validate and bench to an argparse subparsers object."""
+    """Add demo and bench to an argparse subparsers object."""
     d = sub.add_parser("demo", help="simulate random robots with open-loop gaits (short main job)")
     d.add_argument("--task", default="Walker-v0",
                    help="the task (default Walker-v0; sgr's 32: docs/TASKS.md)")
@@ -208,12 +183,6 @@ def register_task_commands(sub) -> None:
     d.add_argument("--out", default="runs/demo", help="folder for the demo's GIF and results.json "
                                                        "(default runs/demo)")
     d.set_defaults(fn=_demo)
-    v = sub.add_parser("validate", help="compare with evogym reference traces or returns")
-    v.add_argument("dir", help="a folder of evogym reference data (index.json and its .npz files), "
-                               "e.g. tests/data/traces or tests/data/evogym32")
-    v.add_argument("--json", action="store_true", help="print the comparison as JSON")
-    v.add_argument("--precision", choices=PRECISIONS, help=PRECISION_HELP)
-    v.set_defaults(fn=_validate)
     b = sub.add_parser("bench", help="robot-steps per second on random bodies")
     b.add_argument("--task", default="Walker-v0", help="the task (default Walker-v0)")
     b.add_argument("--robots", type=positive(int, MAX_ROBOTS), default=128,

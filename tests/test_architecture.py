@@ -1,13 +1,13 @@
 """The layers: no import cycle among the project's modules (module-level or inside functions), and
-each layer imports only the layers above it (tsim <- tasks <- evolve <- sgr: sgr, the face users
-import, sits on top and nothing imports it)."""
+each layer imports only the layers above it (tsim <- tasks <- parity <- evolve <- sgr: parity is
+the evogym comparison harness; sgr, the face users import, sits on top and nothing imports it)."""
 
 import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tsim", "tasks", "evolve", "sgr")
-LAYER = {"tsim": 0, "tasks": 1, "evolve": 2, "sgr": 3}
+PACKAGES = ("tsim", "tasks", "parity", "evolve", "sgr")
+LAYER = {"tsim": 0, "tasks": 1, "parity": 2, "evolve": 3, "sgr": 4}
 
 
 def modules() -> dict[str, Path]:

@@ -397,7 +397,8 @@ def test_every_repository_path_the_code_names_exists():
     """No stale pointer in the code: every path of the repository that a docstring, comment or
     string of a .py or .sh file of its folders names is a file or folder here (or in NOT_OURS,
     with why)."""
-    folders = ("tsim", "tasks", "evolve", "sgr", "bench", "tools", "studies", "tests", "references", "device")
+    folders = ("tsim", "tasks", "parity", "evolve", "sgr", "bench", "tools", "studies", "tests", "references",
+               "device")
     sources = [f for d in folders for pattern in ("*.py", "*.sh") for f in (ROOT / d).rglob(pattern)
                if "__pycache__" not in f.parts]
     assert len(sources) > 300

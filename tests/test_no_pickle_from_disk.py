@@ -12,7 +12,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tsim", "tasks", "evolve")
+PACKAGES = ("tsim", "tasks", "parity", "evolve")
 # a run folder keeps a script's task as a reference (task.json), never as a pickle: tasks/registry.py
 # unpickles nothing (tests/evolve/runs/test_folder_trust.py)
 MAY_UNPICKLE = {"evolve/rollout/pool.py", "evolve/rollout/worker.py", "evolve/records/legacy.py"}

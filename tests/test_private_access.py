@@ -13,7 +13,7 @@ from functools import cache
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("tsim", "tasks", "evolve", "sgr", "tests")
+PACKAGES = ("tsim", "tasks", "parity", "evolve", "sgr", "tests")
 
 
 def _private(name: str) -> bool:

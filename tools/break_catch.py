@@ -34,8 +34,8 @@ FILES = [  # the fast test files run on every break
     "tests/tsim/test_physics.py",
     "tests/tasks/test_env_rules.py",
     "tests/tasks/test_evogym_states.py",
-    "tests/tasks/test_validation_traces.py",
-    "tests/tasks/test_validation_returns.py",
+    "tests/parity/test_traces.py",
+    "tests/parity/test_returns.py",
     "tests/tasks/test_evogym32.py",
 ]
 E32, STATES, PHYSICS = FILES[5], FILES[2], FILES[0]

@@ -1,8 +1,9 @@
 """`sgr` command line: the dispatcher. Each of evolve's commands is a module of this package with
 `register(subparsers)` (its options) and `run(args)`: evolve (evolve_cmd), sweep, report,
 select-champion, explain, render, plot, migrate (alias: convert-checkpoints) and decode; the task and
-simulator commands (demo, validate, bench) come from tasks/cli.py. Options shared by commands are
-built once in common.py. The dispatcher lives in evolve, the only layer that may import all three."""
+simulator commands (demo, bench) come from tasks/cli.py, and validate from parity/cli.py.
+Options shared by commands are built once in common.py. The dispatcher lives in evolve, the only
+layer that may import them all."""
 
 from __future__ import annotations
 
@@ -22,6 +23,7 @@ from evolve.cli.common import (
     parse_body,
     workers_arg,
 )
+from parity import cli as parity_cli
 from tasks.cli import register_task_commands
 from tsim.errors import SgrError, printable
 
@@ -50,6 +52,7 @@ def build_parser() -> argparse.ArgumentParser:
     for parser in (rp, r, sc, dc):  # the commands that read one run's task.json
         add_import_file(parser)
     register_task_commands(sub)
+    parity_cli.register(sub)
     for parser in sub.choices.values():  # `sgr evolve ... --debug` as well as `sgr --debug evolve ...`
         parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS,
                             help="show the traceback of every error")

@@ -17,7 +17,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 # the `sgr` console script: like it, nothing of the working folder on sys.path (-P), sgr on PYTHONPATH
 SGR = [sys.executable, "-P", "-c", "import sys; from evolve.cli import main; sys.exit(main())"]
-SHADOWS = ("tasks", "evolve", "tsim")
+SHADOWS = ("tasks", "evolve", "tsim", "parity")
 
 
 @pytest.fixture(scope="module")

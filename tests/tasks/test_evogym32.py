@@ -21,12 +21,12 @@ import numpy as np
 import pytest
 from gymnasium.utils.env_checker import check_env
 
+from parity.harness import evogym32_returns, evogym32_traces, state_steps
 from tasks.env import BatchEnv
 from tasks.specs import TASKS
 from tasks.suite.bidirectional_walker import draw_goals
 from tasks.suite.catcher import placement
 from tasks.suite.shape import hull_area, hull_area_numpy
-from tasks.validate import evogym32_returns, evogym32_traces, state_steps
 
 NEW_TASKS = [
     "Jumper-v0", "Flipper-v0", "Balancer-v0", "Balancer-v1", "UpStepper-v0", "DownStepper-v0",

@@ -22,7 +22,7 @@ import pytest
 from tsim import backend
 
 ROOT = Path(__file__).resolve().parents[3]
-PACKAGES = ("tsim", "tasks", "evolve", "sgr")
+PACKAGES = ("tsim", "tasks", "parity", "evolve", "sgr")
 SEAM = ROOT / "tsim" / "backend" / "tables.py"
 MARK = "# backend-seam:"
 NAMES = frozenset({"f64", "f32", "cpu", "gpu", "cuda", "vulkan", "metal"})

@@ -6,7 +6,7 @@ ObstacleTraverser, Climber and Thrower)."""
 
 import pytest
 
-from tasks.validate import validate_returns
+from parity.harness import validate_returns
 
 pytestmark = pytest.mark.slow
 

@@ -11,7 +11,7 @@ tight regression bound: every case's max COM error over the first 50 steps <= 1e
 import numpy as np
 import pytest
 
-from tasks.validate import validate_traces
+from parity.harness import validate_traces
 
 pytestmark = pytest.mark.slow
 

@@ -1,7 +1,7 @@
 """f32 against evogym's recorded data (tests/data/evogym32) and evogym's own chaos floor, on 10 of
 the 32 tasks (all 32 take ~1-2 minutes on 2 shared cores; their figures are in docs/VALIDATION.md,
 "Single precision"): the median over the 24 robots of the largest COM error over the episode
-within evogym's spread under +-1e-6 action changes (`tasks.validate.chaos_check`, which `sgr
+within evogym's spread under +-1e-6 action changes (`parity.harness.chaos_check`, which `sgr
 validate` reports in f32; the issue's criterion is 2x, every task now lies within 0.5x). The
 subset: Walker-v0; 4 that failed by 56x to 1,714x before f32 kept positions as pairs
 (tsim/kernels/pairs.py): Hurdler-v0 and HeightMaximizer-v0 (floors of 3e-7 to 6e-7), Pusher-v1
@@ -28,7 +28,7 @@ PASSING = ["Walker-v0", "Hurdler-v0", "HeightMaximizer-v0", "Pusher-v1", "Bridge
 
 PROBE = """
 import json, sys
-from tasks.validate import validate_evogym32
+from parity.harness import validate_evogym32
 print(json.dumps(validate_evogym32(sys.argv[1], sys.argv[2:])))
 """
 
