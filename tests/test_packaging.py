@@ -15,7 +15,8 @@ ROOT = Path(__file__).resolve().parents[1]
 def test_every_package_is_listed_for_the_distribution():
     listed = set(tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"])
     found = {".".join(p.parent.relative_to(ROOT).parts)
-             for top in ("tsim", "tasks", "parity", "evolve", "sgr") for p in (ROOT / top).rglob("__init__.py")}
+             for top in ("tsim", "tasks", "parity", "evolve", "sgr")
+             for p in (ROOT / top).rglob("__init__.py")}
     assert found | {"evolve.configs"} == listed
 
 
