@@ -4,8 +4,9 @@
 everything method-specific: how a genome decodes (`decode`), how a generation of decoded robots
 is evaluated (`evaluate`), what the champion file holds (`champion`), which neat-python settings
 the method fixes (`neat_overrides`), its config keys, and any state of its own that a checkpoint
-must keep (`state`/`restore`). A method is one file with one `Problem` subclass, plus one line in
-evolve/methods/__init__.py's registry.
+must keep (`state`/`restore`), what it can do (`starts_from_runs`, `keeps_archive`,
+`decode_refusal`) and the config sgr ships for it (`packaged`). A method is one file with one
+`Problem` subclass and one registration (evolve/methods/__init__.py).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from typing import Any, ClassVar, Protocol
 import numpy as np
 
 from evolve.config import RunConfig
+from evolve.methods.packaged import PackagedConfig
 from evolve.nn.genome_record import genome_json
 from evolve.rollout.pool import PolicyFactory, RolloutPool
 from evolve.rollout.robust import Robust
@@ -56,6 +58,9 @@ class Problem:
     # what the method can do, declared here so that no other module names it
     starts_from_runs: ClassVar[bool] = False  # `start_from`/`--from`: its genomes continue a run of it
     keeps_archive: ClassVar[bool] = False  # its search keeps an archive (elites.json, archive.png)
+    # the config sgr ships for it per task, configs/<name>/<task>.yaml (tools/gen_configs.py writes
+    # them); None: none (a method of the user's gives `default_config` instead)
+    packaged: ClassVar[PackagedConfig | None] = None
 
     @classmethod
     def decode_refusal(cls, cfg: RunConfig, shape: tuple[int, int]) -> str | None:

@@ -20,6 +20,7 @@ import numpy as np
 
 from evolve.methods import formats
 from evolve.methods.base import Problem
+from evolve.methods.packaged import ROBUST_ACCUMULATED, PackagedConfig
 from evolve.methods.sgr.decoder import is_valid_robot
 from evolve.methods.sgr.substrates import N_TYPES, cell_coordinates
 from evolve.nn.batch import GraphPolicy, NetworkBatch
@@ -68,12 +69,34 @@ def _derived(record: dict) -> GraphController:
 formats.register(FORMAT, graph_of_record)
 formats.register(DERIVED_FORMAT, _derived)
 
+# configs/direct/<task>.yaml (tools/gen_configs.py writes one per task; tests check the files)
+DIRECT_CONFIG = PackagedConfig(
+    template="""\
+# Direct-encoding NEAT baseline on $task$about
+method: direct
+task: $task
+generations: 250
+pop_size: 128
+seed: 0
+robot_shape: [5, 5]
+$episode
+neat_config: ../neat/direct.ini
+body_distance_weight: 0.0    # plain NEAT speciation, as in the paper's baseline
+checkpoint_every: 5
+render_champion: true
+""" + ROBUST_ACCUMULATED,
+    about=(' (one network: body coordinates + observation -> materials + actions).',
+           ' (not in the SGR paper; one network: body coordinates + observation -> materials\n'
+           "# + actions) with the paper's settings and evogym's episode length."),
+    paper_episode="episode_steps: null          # the paper's episode length")
+
 
 class DirectProblem(Problem):
     """The paper's direct-encoding baseline: one NEAT network is both body generator and
     controller (layouts in the module docstring)."""
 
     name = "direct"
+    packaged = DIRECT_CONFIG
     config_keys = {"body_distance_weight": (float, 0.0), "layout": (str, "per_output")}
     config_docs = {
         "body_distance_weight": "How much two genomes' bodies count in their speciation distance (0: "

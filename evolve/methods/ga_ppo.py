@@ -30,6 +30,7 @@ import numpy as np
 
 from evolve.methods import formats
 from evolve.methods.base import Problem
+from evolve.methods.packaged import PackagedConfig
 from evolve.nn.mlp import FORMAT as MLP_FORMAT
 from evolve.nn.mlp import MlpController, mlp_policy
 from evolve.rollout.ppo import PpoSettings, require_torch, train_bodies
@@ -95,11 +96,59 @@ class Robot:
         """The mean of its scores (None: not scored yet)."""
         return self.total / len(self.tags) if self.tags else None
 
+# configs/ga-ppo/<task>.yaml (tools/gen_configs.py writes one per task; tests check the files)
+GA_PPO_CONFIG = PackagedConfig(
+    template="""\
+# evogym's GA co-design on $task$about
+# All of a generation's new bodies train together in one batched simulation, each with its own
+# policy (docs/RL.md "Co-design with PPO").
+method: ga-ppo
+task: $task
+generations: 20
+pop_size: 16                 # bodies per generation; the best survive untrained, mutants fill the rest
+seed: 0
+robot_shape: [5, 5]
+$episode
+checkpoint_every: 1          # a generation trains for long: a checkpoint after each
+render_champion: true
+ga:
+  mutation_rate: 0.1         # evogym's: each voxel redrawn with this probability
+  survival: 0.6              # the first survivors' fraction, falling linearly to 0 (at least 2)
+  max_evaluations: null      # null: it falls over the generations; N: over N bodies (evogym's run_ga.py)
+ppo:                         # evogym's PPO arguments (examples/ppo/args.py), per body
+  timesteps: 1000000         # 16 new bodies: ~2.7 h on a 2-vCPU VM (docs/BENCHMARKS.md, "GA + PPO")
+  n_envs: 1
+  n_steps: 128
+  batch_size: 4
+  n_epochs: 4
+  learning_rate: 0.00025
+  gamma: 0.99
+  gae_lambda: 0.95
+  clip_range: 0.1
+  ent_coef: 0.01
+  vf_coef: 0.5
+  max_grad_norm: 0.5
+  hidden: [64, 64]           # SB3's MlpPolicy: policy and value networks of two 64-unit tanh layers
+# Honest by default (docs/EVOLVE.md "Robust evaluation"): a body's fitness is its trained policy's
+# deterministic episode under uniform(±1e-3) actuator noise, a survivor's the mean of its scores so far
+# (8 at most: settle); the champion chosen at the end among the final population (final_selection).
+robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
+reevaluate: true, accumulate: true, settle: 8}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
+confirm: auto, holdout: auto}
+""",
+    about=(": bodies by a genetic algorithm, each body's controller trained by PPO\n"
+           "# (evogym's examples/ga with its PPO arguments; evogym's episode length).",
+           ": bodies by a genetic algorithm, each body's controller trained by PPO\n"
+           "# (evogym's examples/ga with its PPO arguments; evogym's episode length)."),
+    paper_episode=None)
+
 
 class GaPpoProblem(Problem):
     """evogym's GA over bodies, each body's controller trained by PPO (module docstring)."""
 
     name = "ga-ppo"
+    packaged = GA_PPO_CONFIG
     uses_neat = False
     config_keys = {"ppo": (dict, {}), "ga": (dict, {})}
     config_docs = {

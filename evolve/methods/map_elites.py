@@ -18,6 +18,7 @@ import numpy as np
 
 from evolve.config import MAX_POP
 from evolve.methods.descriptors import DESCRIPTORS, measure, needs_behaviour
+from evolve.methods.packaged import PackagedConfig
 from evolve.methods.qd_floors import FLOORS
 from evolve.methods.sgr import SgrProblem
 from evolve.rollout.pool import RolloutPool
@@ -138,12 +139,57 @@ class QdSettings:
         mean over its scored episodes), which behaviour descriptors read."""
         return measure(self.descriptors, body, features)
 
+# configs/map-elites/<task>.yaml (tools/gen_configs.py writes one per task; tests check the files)
+MAP_ELITES_CONFIG = PackagedConfig(
+    template="""\
+# MAP-Elites with SGR genomes on $task$about
+method: map-elites
+task: $task
+# The budget of SGR's 100 generations of configs/sgr/<task>.yaml: those runs simulated 8,109 to 9,107
+# episodes (mean 8,648; results/robust-fast/runs/sgr-*/generations.csv, column episodes). Here a
+# generation simulates its 64 valid children and re-scores at most 24 elites: at most 88 episodes, at
+# most 8,800 in 100 generations (fewer while the archive is small).
+generations: 100
+pop_size: 128                # sizes the final selection alone, as SGR's 128 genomes do
+seed: 0
+robot_shape: [5, 5]
+$episode
+neat_config: ../neat/sgr.ini  # NEAT's crossover and mutation; no speciation
+cppn_outputs: 1
+weight_threshold: 0.2
+max_weight: 1.0
+checkpoint_every: 5
+render_champion: true
+qd:
+  descriptors: [actuator, rigid]  # the body's voxel shares; or behaviour: [gait_frequency, contact]
+  resolution: [10, 10]            # cells per descriptor
+  batch: 64                       # valid children per generation
+  initial: 64                     # valid random genomes of the first generation
+  rescore: 24                     # elites re-scored per generation at most (fewest scores first)
+  selection: curiosity            # parents: elites whose children entered the archive drawn more often
+  exploit: 0.5                    # half the children: parents the fittest of 4 elites drawn
+  score_offset: auto              # the QD score counts fitness above the task's floor (qd_floors.py)
+# Honest by default (docs/EVOLVE.md "Robust evaluation"): every action carries uniform(±1e-3)
+# actuator noise; one episode per child, an elite's fitness the mean of its scores so far (re-scored
+# until it has 8: settle); the champion chosen at the end among the archive's best elites
+# (final_selection; auto: sized to at most a fifth of pop_size x generations episodes).
+robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
+reevaluate: true, accumulate: true, settle: 8}
+final_selection: {candidates: auto, episodes: auto, statistic: mean, tolerance: 0.05, rank: pooled, \
+confirm: auto, holdout: auto}
+""",
+    about=(': an archive of the best robot per kind of body (docs/EVOLVE.md).',
+           ' (not in the SGR paper): an archive of the best robot per kind of body\n'
+           "# (docs/EVOLVE.md); evogym's episode length."),
+    paper_episode="episode_steps: null          # the paper's episode length")
+
 
 class MapElitesProblem(SgrProblem):
     """SGR genomes (one CPPN: body and controller, evolve/methods/sgr/problem.py) searched by MAP-Elites
     (`MapElitesSearch`) instead of NEAT's speciated population."""
 
     name = "map-elites"
+    packaged = MAP_ELITES_CONFIG
     config_keys = {**{k: v for k, v in SgrProblem.config_keys.items() if k != "body_distance_weight"},
                    "qd": (dict, {})}
     config_docs = {**{k: v for k, v in SgrProblem.config_docs.items() if k != "body_distance_weight"},

@@ -24,6 +24,7 @@ import numpy as np
 
 from evolve.methods import formats
 from evolve.methods.base import Problem, positive
+from evolve.methods.packaged import PackagedConfig
 from evolve.methods.sgr.decoder import is_valid_robot
 from evolve.methods.sgr.substrates import N_TYPES, cell_coordinates, controller_side
 from evolve.nn.batch import GraphPolicy, NetworkBatch
@@ -77,12 +78,45 @@ def _tag(body_key: bytes, generation: int, genome_key: int) -> str:
     population's generation and its genome key."""
     return f"{hashlib.blake2b(body_key, digest_size=8).hexdigest()}/{generation}/{genome_key}"
 
+# configs/nested/<task>.yaml (tools/gen_configs.py writes one per task; tests check the files)
+NESTED_CONFIG = PackagedConfig(
+    template="""\
+# Nested-loop NEAT baseline on $task$about
+method: nested
+task: $task
+generations: 250
+pop_size: 12                 # outer population (bodies), as in the paper
+inner_pop_size: 12           # controllers per body, as in the paper
+inner_generations: 2         # inner generations per outer generation (paper silent; our choice)
+inner_keep_generations: 20   # forget a body's inner population after 20 outer generations without it
+                             # (the champion's is kept; a body back later starts afresh; null = never
+                             # forget: memory and checkpoints grow with every body seen; docs/EVOLVE.md)
+seed: 0
+robot_shape: [5, 5]
+$episode
+neat_config: ../neat/nested-body.ini
+controller_neat_config: ../neat/nested-controller.ini
+checkpoint_every: 5
+render_champion: true
+# Honest by default (docs/EVOLVE.md "Robust evaluation"): every action carries uniform(±1e-3)
+# actuator noise, one fresh episode per controller and evaluation (averaging and final selection are
+# not for nested NEAT: a body's fitness is the best its inner search has found). For the paper's
+# nominal evaluation set it to null, as configs/sweeps/paper.yaml does.
+robust: {episodes: 1, action_noise: uniform, action_scale: 0.001, offset: 0.0, statistic: mean, \
+reevaluate: true}
+""",
+    about=(': outer NEAT over body networks, inner NEAT over controllers per body.',
+           ' (not in the SGR paper): outer NEAT over body networks, inner NEAT over\n'
+           "# controllers per body; the paper's settings and evogym's episode length."),
+    paper_episode="episode_steps: null          # the paper's episode length")
+
 
 class NestedProblem(Problem):
     """The paper's nested-loop baseline: NEAT over body networks outside, a NEAT population of
     controllers per distinct body inside (module docstring)."""
 
     name = "nested"
+    packaged = NESTED_CONFIG
     config_keys = {"inner_pop_size": (int, 12), "inner_generations": (int, 2),
                    "inner_keep_generations": ((int, type(None)), 20), "controller_neat_config": (str, None)}
     config_docs = {

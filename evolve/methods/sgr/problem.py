@@ -8,6 +8,7 @@ import numpy as np
 
 from evolve.methods import formats
 from evolve.methods.base import Problem
+from evolve.methods.packaged import ROBUST_ACCUMULATED, PackagedConfig
 from evolve.methods.sgr import record as sgr_record
 from evolve.methods.sgr.decoder import DecoderSettings, Phenotype, decode
 from evolve.methods.sgr.decoders import DEFAULT as DEFAULT_DECODER
@@ -28,12 +29,38 @@ formats.register(DENSE_FORMAT, _dense)
 formats.register(None, _dense)  # an older sgr's, untagged
 formats.register(sgr_record.FORMAT, sgr_record.rebuild)  # as its genome's decoding, checked
 
+# configs/sgr/<task>.yaml (tools/gen_configs.py writes one per task; tests check the files)
+SGR_CONFIG = PackagedConfig(
+    template="""\
+# SGR (single genome, HyperNEAT-decoded body + controller) on $task$about
+method: sgr
+task: $task
+generations: 250
+pop_size: 128
+seed: 0
+robot_shape: [5, 5]
+$episode
+neat_config: ../neat/sgr.ini
+cppn_outputs: 1              # 1 as in the paper; 2 = separate body / controller outputs
+weight_threshold: 0.2
+max_weight: 1.0
+body_distance_weight: 0.1    # v of the paper's eq. 1 (our choice, see docs/EVOLVE.md)
+body_decoder: substrate      # the paper's; or cppn, fourier, growth (docs/EVOLVE.md "Body decoders")
+checkpoint_every: 5
+render_champion: true
+""" + ROBUST_ACCUMULATED,
+    about=(" with the paper's settings.",
+           " (not in the SGR paper) with the paper's settings\n"
+           "# and evogym's episode length."),
+    paper_episode="episode_steps: null          # null = the paper's episode length for the task")
+
 
 class SgrProblem(Problem):
     """One CPPN genome, queried HyperNEAT-style over a 3-D substrate: a body network (z > 0) and
     a controller network (z < 0); fitness is the episode return (docs/EVOLVE.md)."""
 
     name = "sgr"
+    packaged = SGR_CONFIG
     config_keys = {"cppn_outputs": (int, 1), "weight_threshold": (float, 0.2), "max_weight": (float, 1.0),
                    "body_distance_weight": (float, 0.1), "body_decoder": (str, DEFAULT_DECODER),
                    "body_decoder_settings": (dict, {})}

@@ -33,6 +33,25 @@ def test_the_committed_configs_are_what_the_generator_writes(gen):
     assert not stale, f"run python tools/gen_configs.py: {stale}"
 
 
+def test_a_method_of_sgrs_with_a_template_gets_its_configs_without_a_generator_edit(gen, monkeypatch):
+    """The generator names no method: it writes one config per task for every method of sgr's
+    whose class declares `packaged` (here a sixth, registered beside the five)."""
+    from evolve import methods
+    from evolve.methods.packaged import PackagedConfig
+
+    class Sixth(methods.Problem):
+        name = "sixth"
+        packaged = PackagedConfig("# sixth on $task$about\nmethod: sixth\ntask: $task\n$episode\n",
+                                  about=(" (a paper task)", ""))
+
+    monkeypatch.setitem(methods.METHODS, "sixth", Sixth)
+    monkeypatch.setattr(gen, "BUILTIN_METHODS", methods.BUILTIN | {"sixth"})
+    made = gen.generated()
+    assert len(made) == 6 * len(BUILTIN)
+    assert made[Path("sixth/Walker-v0.yaml")] == "# sixth on Walker-v0 (a paper task)\nmethod: sixth\n" \
+        "task: Walker-v0\nepisode_steps: 500                # evogym's max_episode_steps for Walker-v0\n"
+
+
 def test_the_generators_check_finds_a_hand_edited_config(gen, tmp_path, capsys):
     out = tmp_path / "configs"
     assert gen.main(["--out", str(out)]) == 0  # writes all 160
