@@ -4,7 +4,7 @@ against SGR, at SGR's episode budget and twice it.
 Arms, per task (Walker-v0, Climber-v2, UpStepper-v0) and seed (0-2), each the packaged map-elites
 config (configs/map-elites/<task>.yaml: honest evaluation, 64 children a generation, up to 24
 elites re-scored) with parents by curiosity and half the children from tournaments
-(`qd.selection: curiosity`, `qd.exploit: 0.5`, docs/EVOLVE.md "MAP-Elites"):
+(`qd.selection: curiosity`, `qd.exploit: 0.5`, docs/QD.md):
 
 - ``body``: the archive over the body's actuator x rigid shares (10 x 10), as issue 49's;
 - ``behaviour``: the archive over what the robot does, its gait frequency (0-10 Hz) x its share of

@@ -1,8 +1,10 @@
 """Write the reference pages from the code, so they cannot drift from it: docs/reference/cli.md
 (every `sgr` command and its options, from `evolve.cli.build_parser()`) and docs/reference/config.md
 (every run-config key with its type and default, from `evolve.config.COMMON`, and each method's own
-keys from `evolve.methods.METHODS`). `--check` writes nothing and exits 1 when a committed page
-differs from what this writes (tests/test_reference_docs.py runs it)."""
+keys from `evolve.methods.METHODS`), and the API reference, docs/reference/api/ (a page per public
+package listing its `__all__`, rendered from the docstrings by mkdocstrings). `--check` writes
+nothing and exits 1 when a committed page differs from what this writes
+(tests/test_reference_docs.py runs it)."""
 
 from __future__ import annotations
 
@@ -117,7 +119,35 @@ def config_page() -> str:
     return "".join(out)
 
 
-PAGES = {"cli.md": cli_page, "config.md": config_page}
+# the API reference: a page per public package, its names those of its `__all__` (sgr's are the three
+# packages' own, re-exported: its page links to them)
+API = ("tsim", "tasks", "evolve", "sgr.evogym")
+
+
+def _public(package: str) -> list[str]:
+    import importlib
+
+    return list(importlib.import_module(package).__all__)
+
+
+def api_page(package: str) -> str:
+    """docs/reference/api/<package>.md: mkdocstrings renders its docstring and every public name."""
+    names = "\n".join(f"        - {n}" for n in _public(package))
+    return (f"{HEADER}# `{package}`\n\n::: {package}\n    options:\n      show_root_heading: false\n"
+            f"      show_submodules: false\n      members:\n{names}\n")
+
+
+def sgr_page() -> str:
+    """docs/reference/api/sgr.md: the face users import, and where each of its names is documented."""
+    import sgr
+
+    rows = "\n".join(f"| `sgr.{n}` | [`{sgr._WHERE[n]}.{n}`][{sgr._WHERE[n]}.{n}] |" for n in sgr.__all__)
+    return (f"{HEADER}# `sgr`\n\n::: sgr\n    options:\n      show_root_heading: false\n"
+            f"      members: false\n\n| name | documented as |\n|---|---|\n{rows}\n")
+
+
+PAGES = {"cli.md": cli_page, "config.md": config_page, "api/sgr.md": sgr_page,
+         **{f"api/{pkg}.md": (lambda pkg=pkg: api_page(pkg)) for pkg in API}}
 
 
 def stale(reference: Path = REFERENCE) -> list[str]:
@@ -136,8 +166,8 @@ def main(argv: list[str] | None = None) -> int:
             print("stale (run python tools/gen_reference.py): " + ", ".join(names), file=sys.stderr)
             return 1
         return 0
-    REFERENCE.mkdir(parents=True, exist_ok=True)
     for name, render in PAGES.items():
+        (REFERENCE / name).parent.mkdir(parents=True, exist_ok=True)
         (REFERENCE / name).write_text(render())
     return 0
 

@@ -1,4 +1,4 @@
-"""The map-elites method: quality diversity with SGR genomes (docs/EVOLVE.md "MAP-Elites").
+"""The map-elites method: quality diversity with SGR genomes (docs/QD.md).
 
 Instead of one population converging on one champion, an archive keeps the best robot found in
 each cell of a grid over descriptors of the body or of what it does (evolve/methods/descriptors.py:
@@ -194,7 +194,7 @@ class MapElitesProblem(SgrProblem):
                    "qd": (dict, {})}
     config_docs = {**{k: v for k, v in SgrProblem.config_docs.items() if k != "body_distance_weight"},
                    "qd": "The archive: its descriptors and cells, the batch of children, parent choice "
-                         "and score_offset (docs/EVOLVE.md \"MAP-Elites\")."}
+                         "and score_offset (docs/QD.md)."}
     absent_before = {}
     starts_from_runs = False  # (its search is an archive, not a NEAT population)
     keeps_archive = True
