@@ -120,7 +120,7 @@ PY
 # f64 is judged statistically: Taichi 1.7's CUDA JIT (taichi/runtime/cuda/jit_cuda.cpp) keeps
 # FPOpFusion::Strict with fast_math off but marks every function "unsafe-fp-math"="true", which
 # lets LLVM's NVPTX backend fuse multiply-adds (fma.rn.f64), so bits need not match the CPU's
-# (docs/VALIDATION.md, "CUDA f64"): the check fails on a task's median |return difference| above
+# (docs/history/VALIDATION.md, "CUDA f64"): the check fails on a task's median |return difference| above
 # F64_TOL and says whether the bits matched. f32 is compared with the CPU in f32 (F32_TOL).
 for prec in ${PRECISIONS:-f64 f32}; do
   if [ "$prec" = f32 ] && ! grep -rqs "SGR_PRECISION" tsim/; then

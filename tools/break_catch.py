@@ -69,7 +69,7 @@ BREAKS = [
           "FRICTION_DYN = 0.2  #", "FRICTION_DYN = 0.22  #", (STATES, TRACES)),
     # the order forces add up at a point: the springs' second ends before their first ends (a
     # contact-order change, a pair's two directions or a voxel's terrain partners visited in the
-    # other order, changes no recorded number: docs/VALIDATION.md, "Catch rate")
+    # other order, changes no recorded number: docs/history/VALIDATION.md, "Catch rate")
     Break("force_order", "spring forces added to their second ends before their first ends "
           "(not evogym's order)", "tsim/kernels/springs.py", "    for half in ti.static(range(2)):",
           "    for half in ti.static((1, 0)):", (E32,)),

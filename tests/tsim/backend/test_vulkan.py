@@ -4,7 +4,7 @@ errors of archs that cannot run here.
 Taichi starts one arch per process, so every Vulkan (and failing-arch) run is a subprocess. The
 Vulkan set skips, saying why, where no Vulkan device exists (`.ci/run` installs Debian's
 mesa-vulkan-drivers). LP_NATIVE_VECTOR_WIDTH=128 and GALLIVM_PERF=nopt make lavapipe compile the
-step kernel in ~10 s of CPU instead of ~50 s (docs/VALIDATION.md, "Vulkan")."""
+step kernel in ~10 s of CPU instead of ~50 s (docs/history/VALIDATION.md, "Vulkan")."""
 
 import functools
 import json
@@ -259,7 +259,7 @@ F32_POS, F32_VEL = 1e-8, 5e-6
 def test_vulkan_f32_matches_the_cpus_f32_within_its_rounding_on_every_task(vulkan):
     """All 32 tasks as above, in f32 on Vulkan against f32 on the CPU: positions within 1e-8 and
     velocities within 5e-6 (measured on lavapipe: 1.4e-9 and 5.4e-7; f32 on the CPU is validated
-    against evogym's chaos floor, docs/VALIDATION.md "Single precision"). Not bits: lavapipe may
+    against evogym's chaos floor, docs/history/VALIDATION.md "Single precision"). Not bits: lavapipe may
     fuse multiply-adds, and Vulkan's f32 division and square root need not round correctly; over
     long episodes the difference grows like any perturbation, to evogym's chaos floor. Before
     the f32 two-sum hid its sum from lavapipe's compiler (tsim/kernels/pairs.py) the pairs' low
