@@ -22,8 +22,15 @@ Runs are ordinary run folders under ``--out``, run or resumed as in every study
 runs/qd/records, beside the runs).
 
     python studies/qd_study.py                 # 18 map-elites runs and 3 SGR runs: ~8 h on 2 cores
-    python studies/qd_study.py --table         # docs: the table from the records
-    sgr report runs/qd/records --replays 20    # then the report (archives, QD curves)
+    python studies/qd_study.py --commit        # the finished records, compact, into results/qd/runs
+    python studies/qd_study.py --table         # docs: the table from the committed records
+    sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
+
+What results/qd/runs keeps of a record (the tree has a budget, tests/test_tree_size.py): its config,
+neat.ini, champion.json and champion-best-ever.json as written, generations.csv with its figures to
+6 significant digits and its timings to milliseconds, and for a run at twice the budget its archive,
+elites.json.gz (the 1x record's archive is the same run's at generation 100; archive.png is drawn
+again by `sgr report`).
 """
 
 from __future__ import annotations
@@ -51,6 +58,51 @@ BUDGET, TWICE = 100, 200
 SGR_RUNS = ROOT / "results" / "robust-fast" / "runs"
 UNIFORM_RUNS = ROOT / "results" / "map-elites" / "runs"  # issue 49's: the same archive, parents uniform
 ARCHIVE_RECORDS = RECORDS + ("elites.json", "archive.png")
+COMMITTED = ROOT / "results" / "qd" / "runs"
+
+
+def _rounded_csv(text: str) -> str:
+    """generations.csv with each figure to 6 significant digits and each timing (`*_s`) to 1 ms."""
+    import csv
+    import io
+
+    rows = list(csv.reader(io.StringIO(text)))
+    head, out = rows[0], io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(head)
+    for row in rows[1:]:
+        cells = []
+        for name, cell in zip(head, row, strict=True):
+            try:
+                x = float(cell)
+            except ValueError:
+                cells.append(cell)
+                continue
+            cells.append(cell if x.is_integer() and "." not in cell and "e" not in cell
+                         else f"{x:.3f}" if name.endswith("_s") else f"{x:.6g}")
+        w.writerow(cells)
+    return out.getvalue()
+
+
+def commit(records: Path, dest: Path = COMMITTED) -> list[str]:
+    """Copy the finished records in `records` compactly into `dest` (see the module docstring);
+    the names of the records copied."""
+    import gzip
+
+    done = []
+    for rec in sorted(d for d in records.iterdir() if (d / "champion.json").is_file()):
+        out = dest / rec.name
+        out.mkdir(parents=True, exist_ok=True)
+        for name in RECORDS:
+            if name == "generations.csv":
+                (out / name).write_text(_rounded_csv((rec / name).read_text()))
+            elif (rec / name).is_file():
+                shutil.copy2(rec / name, out / name)
+        if (rec / "elites.json").is_file() and not rec.name.endswith(f"-g{BUDGET}"):
+            archive = gzip.compress((rec / "elites.json").read_bytes(), 9, mtime=0)
+            (out / "elites.json.gz").write_bytes(archive)
+        done.append(rec.name)
+    return done
 
 
 def config(arm: str, task: str, folder: Path) -> Path:
@@ -191,10 +243,15 @@ def main() -> None:
     # chosen then, within the tree's budget)
     ap.add_argument("--records", type=Path, default=ROOT / "runs" / "qd" / "records")
     ap.add_argument("--workers", type=int, default=1)
-    ap.add_argument("--table", action="store_true", help="only print the study's table from RECORDS")
+    ap.add_argument("--table", action="store_true", help="only print the study's table (committed records)")
+    ap.add_argument("--commit", action="store_true",
+                    help="only copy the finished records into results/qd/runs")
     a = ap.parse_args()
     if a.table:
-        print(table(a.records, a.seeds, a.tasks))
+        print(table(COMMITTED, a.seeds, a.tasks))
+        return
+    if a.commit:
+        print("committed:", " ".join(commit(a.records)) or "none")
         return
     for seed in a.seeds:
         for task in a.tasks:
