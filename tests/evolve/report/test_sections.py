@@ -37,3 +37,13 @@ def test_without_it_the_report_has_neither(sgr_run, tmp_path):
     assert "s_per_episode" not in (out.parent / "summary.csv").read_text()
     assert "## Speed" not in out.read_text()
     assert list(sections.SECTIONS) == ["quality diversity", "behaviour", "archives"]
+
+
+def test_the_guides_example_is_the_one_tested_here():
+    """docs/EXTENDING.md shows this module docstring's example, the one the tests above run."""
+    from pathlib import Path
+
+    code = sections.__doc__.split("A section of your own:", 1)[1].strip("\n")
+    example = "\n".join(line[4:] for line in code.splitlines())
+    guide = (Path(__file__).resolve().parents[3] / "docs" / "EXTENDING.md").read_text()
+    assert f"# speed.py: sgr report runs/ --import speed.py\n{example}\n```" in guide
