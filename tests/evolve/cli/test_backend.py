@@ -17,7 +17,7 @@ from tsim.backend import devices
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[3]
 
 
 def sgr(*args, cwd, **env) -> subprocess.CompletedProcess:
