@@ -57,6 +57,18 @@ def register(sub) -> argparse.ArgumentParser:
     return e
 
 
+DEFAULTS_PREFIX = "sgr-config-"  # the temporary folder of a method's default_config
+
+
+def _made_config(config: Path) -> Path | None:
+    """The temporary folder `evolve_config` made for a method's defaults, when `config` is in one."""
+    import tempfile
+
+    folder = config.parent
+    made = folder.name.startswith(DEFAULTS_PREFIX) and folder.parent == Path(tempfile.gettempdir())
+    return folder if made else None
+
+
 def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None) -> Path:
     """The config a new run starts from: --config (a file, or a packaged config's name), the
     packaged config of --method on --task (at `shape`: its <task>-RxC config when one ships, else
@@ -94,7 +106,8 @@ def evolve_config(args: argparse.Namespace, shape: tuple[int, int] | None = None
 
         import yaml
 
-        path = Path(tempfile.mkdtemp(prefix="sgr-config-")) / f"{args.task}.yaml"
+        # (a folder of its own, which `run` removes once the run has copied it: _made_config)
+        path = Path(tempfile.mkdtemp(prefix=DEFAULTS_PREFIX)) / f"{args.task}.yaml"
         path.write_text(yaml.safe_dump({**own, "method": method, "task": args.task}, sort_keys=False))
         return path
     shipped = sorted(f.stem for f in (configs_dir() / method).glob("*.yaml"))
@@ -159,7 +172,13 @@ def run(args: argparse.Namespace) -> int:
         stamp = time.strftime("%Y%m%d-%H%M%S")
         out = args.out or str(Path("runs") / f"{name}-seed{cfg.seed}-{stamp}")
         output_path(out, folder=True)
-        exp = Experiment.create(config, out, overrides, quiet=args.quiet, named_in=named_in)
+        try:
+            exp = Experiment.create(config, out, overrides, quiet=args.quiet, named_in=named_in)
+        finally:  # the run keeps its own copy (config.yaml)
+            if (made := _made_config(config)) is not None:
+                import shutil
+
+                shutil.rmtree(made, ignore_errors=True)
         print(f"run directory: {out}")
     return run_experiment(exp)
 

@@ -78,18 +78,24 @@ def test_register_refuses_what_is_not_a_method_and_sgr_s_own_names():
     assert "sgr" in BUILTIN and METHODS["sgr"] is not Sgr
 
 
-def test_sgr_evolve_method_task_import_runs_the_method_s_defaults(gain_files, capsys):
+def test_sgr_evolve_method_task_import_runs_the_method_s_defaults(gain_files, capsys, monkeypatch, tmp_path):
     """`sgr evolve --method gain --task Walker-v0 --import gain.py`: the module named on the command
     line registers the method, its `default_config` is the run's, and config.yaml names the module in
-    its imports: (what a resume imports, when trusted)."""
+    its imports: (what a resume imports, when trusted); the defaults' temporary file is removed."""
+    import tempfile
+
     import yaml
 
+    temp = tmp_path / "temp"
+    temp.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(temp))
     run = gain_files / "cli"
     assert main(["evolve", "--method", "gain", "--task", "Walker-v0", "--import", str(gain_files / "gain.py"),
                  "--out", str(run), "--quiet"]) == 0
     raw = yaml.safe_load((run / "config.yaml").read_text())
     assert raw["method"] == "gain" and raw["generations"] == 3 and raw["pop_size"] == 8
     assert raw["imports"] == [str((gain_files / "gain.py").resolve())]
+    assert list(temp.iterdir()) == []  # (the defaults were written there, then removed)
     METHODS.pop("gain")
     capsys.readouterr()
     assert main(["evolve", "--method", "gain", "--task", "Walker-v0", "--out", str(gain_files / "x")]) == 2
