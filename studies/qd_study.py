@@ -132,10 +132,6 @@ def sgr_run(records: Path, task: str, seed: int) -> Path:
 def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: int, twice: bool) -> None:
     """One arm's run: to SGR's budget (kept as ``<run>-g100`` for map-elites), or with `twice`
     extended to twice it (map-elites only; SGR's runs stop at its budget)."""
-    import subprocess
-
-    from studies.study_runs import SGR
-
     run = out / f"{arm}-{task}-s{seed}"
     if arm == "sgr":
         if twice or (SGR_RUNS / f"sgr-{task}-s{seed}").is_dir():
@@ -155,11 +151,7 @@ def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: i
         return
     if not snapshot.is_dir():
         return  # (its first part is not done)
-    if not (finished(run) and _generations(run) == TWICE):
-        cmd = SGR + ["evolve", "--quiet", "--workers", str(workers), "--resume", str(run),
-                     "--generations", str(TWICE)]
-        print("+", " ".join(cmd[2:]), flush=True)
-        subprocess.run(cmd, check=True, cwd=ROOT)
+    evolve(run, [], workers, generations=TWICE)
     if finished(run):
         keep(run, records, ARCHIVE_RECORDS)
 

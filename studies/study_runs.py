@@ -12,6 +12,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import yaml
+
 ROOT = Path(__file__).resolve().parents[1]
 # a run's records: what a results folder keeps of it (its checkpoints and pictures stay behind)
 RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
@@ -28,12 +30,18 @@ def finished(run: Path) -> bool:
     return rd.last_checkpoint_generation() == int(rd.config()["generations"])
 
 
-def evolve(run: Path, args: list[str], workers: int) -> None:
-    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished."""
-    if finished(run):
+def evolve(run: Path, args: list[str], workers: int, generations: int | None = None) -> None:
+    """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished.
+
+    With `generations`, a run that exists is extended to that many (`--resume RUN --generations N`)
+    unless it has them already."""
+    if finished(run) and (generations is None or int(yaml.safe_load(
+            (run / "config.yaml").read_text())["generations"]) == generations):
         return
     cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
     cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
+    if generations is not None and (run / "config.yaml").is_file():
+        cmd += ["--generations", str(generations)]
     print("+", " ".join(cmd[2:]), flush=True)
     subprocess.run(cmd, check=True, cwd=ROOT)
 
