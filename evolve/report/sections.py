@@ -3,8 +3,9 @@
 `sgr report` (evolve/report/report.py, the frame) writes the results table, the groups, the tests
 between methods, each champion under noise, the champion bodies and the backends. A section adds
 its own part: values on each run's row (and columns of summary.csv), and a part of report.md and
-report.html, with any pictures it draws. The built-in ones: "quality diversity" and "behaviour"
-(evolve/report/qd.py) and "archives" (evolve/report/archive.py). A section of your own:
+report.html, with any pictures it draws. The built-in ones: "champion bodies" and "backends"
+(evolve/report/champions.py), "quality diversity" and "behaviour" (evolve/report/qd.py) and
+"archives" (evolve/report/archive.py). A section of your own:
 
     from evolve.report.sections import Section, SectionPart, register_section
 
@@ -47,7 +48,7 @@ class Section:
             -> values for the run's row; {} for a run it has nothing to say about.
         part: (the rows, the run folders, the report's folder, the settings pooled) -> its part of
             report.md and report.html; it may draw pictures into the report's folder.
-        order: where it appears among the sections (lower first; sgr's own: 10 to 30).
+        order: where it appears among the sections (lower first; sgr's own: 1 to 30).
     """
 
     name: str
@@ -62,8 +63,8 @@ SECTIONS: dict[str, Section] = {}
 
 def register_section(section: Section) -> Section:
     """Add `section` to every report from now on: sections appear by their `order`, then in the
-    order they were registered (sgr's own: quality diversity 10, behaviour 20, archives 30; evolve/
-    report/report.py imports their modules, which registers them)."""
+    order they were registered (sgr's own: champion bodies 1, backends 2, quality diversity 10,
+    behaviour 20, archives 30; evolve/report/report.py imports their modules, which registers them)."""
     SECTIONS.pop(section.name, None)
     SECTIONS[section.name] = section
     ranked = sorted(enumerate(SECTIONS.values()), key=lambda kv: (kv[1].order, kv[0]))

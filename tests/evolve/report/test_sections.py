@@ -36,7 +36,8 @@ def test_without_it_the_report_has_neither(sgr_run, tmp_path):
     out = write_report([sgr_run], tmp_path / "without" / "report.md", robustness=False, gallery=False)
     assert "s_per_episode" not in (out.parent / "summary.csv").read_text()
     assert "## Speed" not in out.read_text()
-    assert list(sections.SECTIONS) == ["quality diversity", "behaviour", "archives"]
+    assert list(sections.SECTIONS) == ["champion bodies", "backends", "quality diversity", "behaviour",
+                                       "archives"]
 
 
 def test_the_guides_example_is_the_one_tested_here():
