@@ -1,9 +1,11 @@
-"""Genomes and search on top of tasks: SGR and the paper's baselines behind one contract
-(`evolve.methods`), NEAT plumbing (`evolve.search`), networks (`evolve.nn`), batched rollouts
-(`evolve.rollout`), the run's lifecycle (`evolve.runs`), what a run leaves on disk (`evolve.records`),
-sweeps (`evolve.sweeps`), reports (`evolve.report`), and the `sgr` command line.
+"""Genomes and search on top of tasks: evolve the bodies and controllers of robots, and run experiments.
 
-    from evolve import Experiment
+SGR and the paper's baselines behind one contract (`evolve.methods`), NEAT plumbing (`evolve.search`),
+networks (`evolve.nn`), batched rollouts (`evolve.rollout`), the run's lifecycle (`evolve.runs`), what a
+run leaves on disk (`evolve.records`), sweeps (`evolve.sweeps`), reports (`evolve.report`), and the
+`sgr` command line.
+
+    from evolve import Experiment, load_champion
     exp = Experiment.from_config({"method": "sgr", "task": "Walker-v0", "generations": 5,
                                   "pop_size": 16, "episode_steps": 100}, out="runs/notebook")
     exp.run_all(); exp.finish()

@@ -1,5 +1,7 @@
-"""evogym's tasks on top of tsim: one spec per task (`tasks.spec`, `tasks/suite/`), a batched,
-task-agnostic env (`BatchEnv`) and gymnasium adapters. Importing registers the `sgr/<task>` ids.
+"""evogym's tasks on top of tsim: one spec per task, a batched env and gymnasium adapters.
+
+The specs are `TaskSpec`s (`tasks.spec`, `tasks/suite/`); `BatchEnv` is the batched, task-agnostic
+env. Importing the package registers the `sgr/<task>` ids.
 
     from tasks import BatchEnv, TASKS
     env = BatchEnv("Walker-v0", [body_a, body_b])

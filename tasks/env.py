@@ -35,9 +35,31 @@ def obs_dim(task: str, n_points: int) -> int:
 
 
 class BatchEnv:
-    """Batched evogym task. `episode_steps` defaults to the SGR paper's length for the task;
-    pass "evogym" for evogym's registered limit. Everything task-specific comes from the task's
-    spec (`tasks/spec.py`)."""
+    """One evogym task for many robots (bodies may differ), stepped together.
+
+    Everything task-specific comes from the task's spec (`tasks/spec.py`). The layout of
+    observations, actions and rewards is in `tasks.env`'s module docstring.
+
+    Args:
+        task: The task's id, such as "Walker-v0".
+        bodies: One body per robot: `Body`s, body matrices or one (B, H, W) array (as `BatchSim`).
+        episode_steps: The episode length: None for the SGR paper's length for the task, "evogym"
+            for evogym's registered limit, or a positive int.
+        arch: The process's backend, as `BatchSim`'s.
+        precision: The simulator's real type, as `BatchSim`'s.
+        passive_ok: Admit bodies without actuators, as `BatchSim`.
+        seeds: Seeds of the worlds' random streams, as `seed` takes them.
+        robot_shift: (B,) starts each robot that much right of its task's placement
+            (`BatchSim.shift_robots`; a perturbed start for robustness tests).
+        fused: Compute the COMs and observation rows by Taichi kernels (`tasks.kernels`, True) or
+            by numpy (False, the kernels' test oracle); the same bits either way. None takes the
+            kernels from `FUSED_MIN` robots on, where their launches cost less than numpy's
+            temporaries.
+
+    Raises:
+        ValueError: When `episode_steps` is not a positive int, "evogym" or None, or a body is
+            bad.
+    """
 
     def __repr__(self) -> str:
         return (f"BatchEnv({self.task!r}, {self.n_worlds} robot{'s' if self.n_worlds != 1 else ''}, "
@@ -48,11 +70,7 @@ class BatchEnv:
                  precision: str | None = None, passive_ok: bool = False,
                  seeds: Sequence[int] | int | None = None, robot_shift: Sequence[float] | None = None,
                  fused: bool | None = None):
-        """`robot_shift` (B,) starts each robot that much right of its task's placement
-        (`BatchSim.shift_robots`; a perturbed start for robustness tests). `fused`: the COMs and
-        observation rows by Taichi kernels (`tasks.kernels`, True) or by numpy (False, the
-        kernels' test oracle); the same bits either way. None: the kernels from `FUSED_MIN`
-        robots on, where their launches cost less than numpy's temporaries."""
+        """Build the worlds and start their first episodes (the arguments: see the class)."""
         self.spec = task_spec(task)
         self.task = task
         episode_steps = self.spec.episode_length(episode_steps)
@@ -379,9 +397,18 @@ class BatchEnv:
 
     # ------------------------------------------------------------------ task state
     def seed(self, seeds: Sequence[int] | int | None = None) -> None:
-        """Restart the worlds' random streams (`random.Random`), from which a task with per-episode
-        randomness (`TaskSpec.state`) draws at every reset of a world: world w's stream is seeded
-        with `seeds[w]` (an int: seeds + w; None: w)."""
+        """Restart the worlds' random streams, from which a task with per-episode randomness draws.
+
+        Such a task (`TaskSpec.state`) draws from world w's stream (a `random.Random`) at every
+        reset of world w.
+
+        Args:
+            seeds: One seed per world, world w's stream seeded with `seeds[w]`; an int s seeds it
+                with s + w, and None with w.
+
+        Raises:
+            ValueError: When a sequence of seeds does not hold one per world.
+        """
         if seeds is None or np.ndim(seeds) == 0:  # None, an int, a numpy integer or a 0-d array
             base = 0 if seeds is None else int(seeds)
             self._seeds = (base, None)
@@ -450,9 +477,24 @@ class BatchEnv:
         return int(self.elapsed.max())
 
     def step(self, actions) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, dict]:
-        """One env step of every world: (obs (B, max_obs_dim), reward, terminated, truncated (B,),
-        info with `unstable` and `t`). An unstable world gets -3 and terminates; a terminated one
-        earns 0 from then on. RuntimeError once any world reached `episode_steps`, until `reset`."""
+        """Advance every world by one env step.
+
+        An unstable world gets -3 and terminates; a terminated one earns 0 from then on.
+
+        Args:
+            actions (ArrayLike): (B, max_actuators), robot b using its first `n_actuators[b]`
+                entries, or a list of per-robot arrays (`BatchSim.set_actions`).
+
+        Returns:
+            obs: (B, max_obs_dim) observations.
+            reward: (B,) rewards.
+            terminated: (B,) bools.
+            truncated: (B,) bools.
+            info: `unstable` (B,) bools, and `t`, each world's steps since its reset.
+
+        Raises:
+            RuntimeError: Once any world reached `episode_steps`, until `reset`.
+        """
         if (self.elapsed >= self.episode_steps).any():
             raise RuntimeError("episode is over (truncated); call reset()")
         self._set_actions(actions)

@@ -68,17 +68,33 @@ class SgrEnv(gym.Env):
         self.action_space = _action_space(int(self._env.n_actuators[0]))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """The physics is deterministic; a task with per-episode randomness (Catcher-v0's placement,
+        """Start a new episode; return its first observation and an empty info dict.
+
+        The physics is deterministic; a task with per-episode randomness (Catcher-v0's placement,
         BidirectionalWalker-v0's goals) draws from the env's stream at every reset, restarted from
-        `seed` when one is given (evogym's draw after `random.seed(seed); env.reset()`)."""
+        `seed` when one is given (evogym's draw after `random.seed(seed); env.reset()`).
+
+        Args:
+            seed: Restart the task's random stream from this seed.
+            options: Unused (gymnasium's API).
+        """
         super().reset(seed=seed)
         if seed is not None:  # per-episode task randomness (BidirectionalWalker's goals)
             self._env.seed([seed])
         return self._env.reset()[0, :self.observation_space.shape[0]].copy(), {}
 
     def step(self, action):
-        """`action` of shape (n_actuators,), else ValueError; values are clipped to [0.6, 1.6].
-        Truncates only with `episode_steps`, otherwise gymnasium's TimeLimit does."""
+        """Advance the robot by one env step: gymnasium's (obs, reward, terminated, truncated, info).
+
+        Truncates only with `episode_steps`, otherwise gymnasium's TimeLimit does. `info` holds
+        `unstable`.
+
+        Args:
+            action (ArrayLike): (n_actuators,) actuator targets, clipped to [0.6, 1.6].
+
+        Raises:
+            ValueError: When `action` is not of shape (n_actuators,).
+        """
         a = np.asarray(action, dtype=np.float64)
         if a.shape != self.action_space.shape:
             raise ValueError(f"wrong action shape: expected {self.action_space.shape}, got {a.shape}")
@@ -87,8 +103,13 @@ class SgrEnv(gym.Env):
                 bool(trunc[0]), {"unstable": bool(info["unstable"][0])})
 
     def render(self) -> np.ndarray | None:
-        """None without a render mode, else an (H, W, 3) uint8 image of the robot and the world's
-        objects now (tsim's renderer, the camera following the robot)."""
+        """An image of the robot and the world's objects now, or None without a render mode.
+
+        Drawn by tsim's renderer, the camera following the robot.
+
+        Returns:
+            An (H, W, 3) uint8 image, or None when the env has no render mode.
+        """
         if self.render_mode is None:
             return None
         sim = self._env.sim
@@ -107,8 +128,10 @@ class SgrEnv(gym.Env):
 
     @property
     def batch_env(self) -> BatchEnv:
-        """The underlying one-world `BatchEnv` (its `sim`, `spec`), for what gymnasium's API does
-        not expose."""
+        """The underlying one-world `BatchEnv`, for what gymnasium's API does not expose.
+
+        Its `sim` and `spec`, for instance.
+        """
         return self._env
 
 
@@ -150,16 +173,25 @@ class SgrVectorEnv(VectorEnv):
         self.action_space = gym.vector.utils.batch_space(self.single_action_space, self.num_envs)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
-        """Reset every robot; with `seed`, robot i's task stream restarts from seed + i (see
-        `SgrEnv.reset`)."""
+        """Reset every robot; return the observations and an empty info dict.
+
+        Args:
+            seed: Restart robot i's task stream from seed + i (see `SgrEnv.reset`).
+            options: Unused (gymnasium's API).
+        """
         super().reset(seed=seed)
         if seed is not None:  # world i's task stream from seed + i
             self._env.seed(seed)
         return self._env.reset(), {}
 
     def step(self, actions):
-        """`actions` (num_envs, max_actuators), padded as in the class docstring; robots whose
-        episode ended are reset within this call (same-step autoreset)."""
+        """Advance every robot by one env step; robots whose episode ended are reset in this call.
+
+        This is gymnasium's same-step autoreset; the class tells where the final observations are.
+
+        Args:
+            actions (ArrayLike): (num_envs, max_actuators), padded as the class tells.
+        """
         obs, reward, term, trunc, info = self._env.step(np.asarray(actions, dtype=np.float64))
         done = term | trunc
         out = {"unstable": info["unstable"], "_unstable": np.ones(self.num_envs, dtype=bool)}
@@ -175,8 +207,10 @@ class SgrVectorEnv(VectorEnv):
 
     @property
     def batch_env(self) -> BatchEnv:
-        """The underlying `BatchEnv` of all robots (its `sim`, `spec`), for what gymnasium's API
-        does not expose."""
+        """The underlying `BatchEnv` of all robots, for what gymnasium's API does not expose.
+
+        Its `sim` and `spec`, for instance.
+        """
         return self._env
 
 

@@ -47,11 +47,22 @@ def _eigen_sum(a: np.ndarray, n: np.ndarray) -> np.ndarray:
 
 
 def orientation(pos: np.ndarray, pos0: np.ndarray, mask: np.ndarray) -> np.ndarray:
-    """evogym's orientation (`object_orientation_at_time`): mass-weighted mean unsigned angle of
-    the centred points against time 0, with its clamps, pi = 3.1415926 and the sign taken from the
-    summed cross products. Sums in Eigen's order (`_eigen_com`, `_eigen_sum`), so that the points
-    of an undeformed body whose dot products round above 1 (clamped to arccos(0.99999)) are the
-    same as evogym's: the result then equals evogym's to rounding, at reset too."""
+    """evogym's orientation of each robot (`object_orientation_at_time`).
+
+    It is the mass-weighted mean unsigned angle of the centred points against time 0, with evogym's
+    clamps, pi = 3.1415926 and the sign taken from the summed cross products. It sums in Eigen's
+    order (`_eigen_com`, `_eigen_sum`), so that the points of an undeformed body whose dot products
+    round above 1 (clamped to arccos(0.99999)) are the same as evogym's: the result then equals
+    evogym's to rounding, at reset too.
+
+    Args:
+        pos: (B, N, 2) the robots' point positions, zero-padded.
+        pos0: (B, N, 2) their positions at time 0.
+        mask: (B, N) which points are real.
+
+    Returns:
+        (B,) angles in radians.
+    """
     n = mask.sum(axis=1)
     m = mask[:, :, None]
     new = (pos - _eigen_com(pos * m, n)[:, None, :]) * m

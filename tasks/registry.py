@@ -47,11 +47,25 @@ MAX_SCRIPT_BYTES = 16 << 20  # a task script larger than this is no script (read
 
 
 def register(spec: TaskSpec, *, replace: bool = False) -> TaskSpec:
-    """Make `spec` a task: `BatchEnv(spec.name, ...)`, `gymnasium.make("sgr/" + spec.name, body=m)`
-    (TimeLimit at `paper_steps`), configs and sweeps (`task: <name>`) and rollout workers. A name
-    that is registered already is an error unless `replace`; sgr's own tasks cannot be replaced.
-    The file of the code that called it is remembered: a run of the task refers to it
-    (`task_reference`). Returns the spec."""
+    """Make `spec` a task, known wherever sgr's own tasks are.
+
+    That is `BatchEnv(spec.name, ...)`, `gymnasium.make("sgr/" + spec.name, body=m)` (TimeLimit at
+    `paper_steps`), configs and sweeps (`task: <name>`) and rollout workers. The file of the code
+    that called it is remembered: a run of the task refers to it (`task_reference`).
+
+    Args:
+        spec: The task.
+        replace: Replace a task of the same name registered already (sgr's own tasks cannot be
+            replaced).
+
+    Returns:
+        The spec.
+
+    Raises:
+        TypeError: When `spec` is not a `TaskSpec`.
+        SgrError: When the name is one of sgr's own tasks, or is registered already and `replace`
+            is False.
+    """
     if not isinstance(spec, TaskSpec):
         raise TypeError(f"register takes a tasks.TaskSpec, got {type(spec).__name__}")
     if spec.name in BUILTIN:

@@ -23,10 +23,24 @@ from tsim.world import World, world_from_dict
 
 @dataclass(frozen=True)
 class Measure:
-    """What rewards and terminations see of the state at one instant: the robot's COM (B, 2), the
-    COMs of the objects the spec tracks, by name, and (computed only when read) the robot's points
-    and orientation. `state` is the task's per-world state (`TaskSpec.state`), the same dict in the
-    measures before and after a step: a reward may update it in place."""
+    """What rewards and terminations see of the state at one instant.
+
+    The robot's points and orientation are computed only when read. `state` is the same dict in the
+    measures before and after a step: a reward may update it in place.
+
+    Attributes:
+        com: (B, 2) the robots' centres of mass.
+        objects: The COMs of the objects the spec tracks (`TaskSpec.tracked`), by name.
+        points: (B, N, 2) the robots' point positions, zero-padded.
+        mask: (B, N) which of `points` are real.
+        pos0: (B, N, 2) the robots' points at reset (the reference of `orientation`).
+        state: The task's per-world state (`TaskSpec.state`).
+        orientation_of: How `orientation` is computed from (points, pos0, mask):
+            `tasks.orientation.orientation`, or the env's kernels that give its bits.
+        kernels: Whether the env's kernel path made this measure: a reward may then compute with
+            `tasks.kernels` (the same bits), and with numpy where the numpy path (the kernels'
+            oracle) made it.
+    """
 
     com: np.ndarray
     objects: dict[str, np.ndarray]
@@ -49,9 +63,18 @@ class Measure:
         return self.orientation_of(self.points, self.pos0, self.mask)
 
     def derived(self, name: str, compute: Callable[[Measure], np.ndarray]) -> np.ndarray:
-        """`compute(self)`, once per measure: the env passes a step's `after` as the next step's
-        `before`, so a reward that reads a costly quantity of both (a hull's area) computes it
-        once per state. Treat the result as read-only: the next step reads it again."""
+        """A quantity derived from this measure, `compute(self)`, computed once per measure.
+
+        The env passes a step's `after` as the next step's `before`, so a reward that reads a
+        costly quantity of both (a hull's area) computes it once per state.
+
+        Args:
+            name: The quantity's name, under which the measure keeps it.
+            compute: Computes the quantity from a measure.
+
+        Returns:
+            The quantity. Treat it as read-only: the next step reads it again.
+        """
         hit = self._derived.get(name)
         if hit is None:
             hit = self._derived[name] = compute(self)
@@ -91,8 +114,38 @@ class AddedObject:
 
 @dataclass(frozen=True)
 class TaskSpec:
-    """Every fact of one evogym task (see the module docstring); one frozen instance per task,
-    registered in `tasks.specs.TASKS`."""
+    """Every fact of one evogym task; one frozen instance per task.
+
+    Each is registered in `tasks.specs.TASKS` (`tasks.register` adds yours). How `BatchEnv` uses
+    them is in `tasks.spec`'s module docstring.
+
+    Attributes:
+        name: The task's id, such as "Walker-v0".
+        world: A world file in tasks/worlds/ (or any path), or a `World` (`tsim.world_from_matrix`);
+            a dict in the world file's layout is made a `World`.
+        origin: The grid cell of the bottom-left of the robot's body matrix.
+        paper_steps: The episode length used by the SGR paper (sgr's default).
+        evogym_steps: evogym's registered max_episode_steps.
+        observation: The observation's blocks, in order; exactly one of width -1 (the robot's
+            points).
+        reward: (before, after) measures -> (B,) reward of one step.
+        tracked: The objects whose COM the reward needs (`Measure.objects`).
+        goal: (voxel x the robot's COM must pass, bonus[, "left"]); ends the episode. Passing
+            means going right of x, or left of it with "left".
+        termination: Further task ends (after the goal): (before, after) -> ((B,) reward added,
+            (B,) bool episode over), e.g. -3 and over when upside down.
+        state: Draws one world's task state, anew at each reset of that world, from that world's
+            random stream.
+        objects: The objects added in code, in the order evogym adds them.
+        placement: The cells of the per_world objects from a world's task state.
+        reads_points: Whether reward or termination read the robot's points (`Measure.points`,
+            `.orientation`): False spares `BatchEnv` copying them twice a step (a measure's
+            points are then None).
+
+    Raises:
+        ValueError: When `goal` is malformed, or a per_world object has no `placement` (or a
+            `placement` no per_world object to place).
+    """
     name: str
     world: str | World  # a world file in tasks/worlds/ (or any path), or a World (tsim.world_from_matrix)
     origin: tuple[int, int]  # grid cell of the bottom-left of the robot's body matrix
@@ -113,8 +166,12 @@ class TaskSpec:
     reads_points: bool = True
 
     def episode_length(self, steps: int | str | None) -> int:
-        """The episode length that `steps` stands for: None is the paper's, "evogym" evogym's, an
-        int itself (the one place these are resolved)."""
+        """The episode length that `steps` stands for (the one place these are resolved).
+
+        Args:
+            steps: None for the paper's length, "evogym" for evogym's, or an int, which stands for
+                itself.
+        """
         return self.paper_steps if steps is None else self.evogym_steps if steps == "evogym" else steps
 
     def __post_init__(self) -> None:
@@ -135,10 +192,18 @@ class TaskSpec:
             raise ValueError(f"task {self.name}: placement given but no object is per_world")
 
     def check_placement(self, cells: dict[str, tuple[int, int]]) -> None:
-        """ValueError (one line, naming the task and the object) unless `cells`, what `placement`
-        returned, places exactly the per_world objects: a name outside them would move a shared
-        object or none at all, and a per_world object left out would silently keep the last
-        episode's cell."""
+        """Check that `cells`, what `placement` returned, places exactly the per_world objects.
+
+        A name outside them would move a shared object or none at all, and a per_world object left
+        out would silently keep the last episode's cell.
+
+        Args:
+            cells: The grid cell of each object, by name.
+
+        Raises:
+            ValueError: One line naming the task and the object, unless `cells` names exactly
+                the per_world objects.
+        """
         per_world = [o.name for o in self.objects if o.per_world]
         for name in cells:
             if name not in per_world:

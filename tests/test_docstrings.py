@@ -77,3 +77,59 @@ if True:
 '''
     found = [name for _, name in _undocumented(ast.parse(src).body, "")]
     assert found == ["pub", "Pub", "Pub.meth", "Pub.prop", "guarded"]
+
+
+# The public API (what the docs site's API pages render: each package's `__all__`, the public methods
+# and properties of its classes, and the package's own docstring) reads as pyribs' does: a first line
+# that says what, alone, then the details (Args/Returns/Raises where they help).
+API_PACKAGES = ("tsim", "tasks", "evolve", "sgr.evogym")
+
+
+def api_docstrings() -> dict[str, str]:
+    """Every public API object's name -> its docstring (those with one)."""
+    import importlib
+    import inspect
+
+    out = {}
+    for pkg in API_PACKAGES:
+        module = importlib.import_module(pkg)
+        out[pkg] = inspect.getdoc(module) or ""
+        for name in module.__all__:
+            obj = getattr(module, name)
+            if not (inspect.isclass(obj) or inspect.isfunction(obj)):
+                continue
+            out[f"{pkg}.{name}"] = obj.__doc__ and inspect.cleandoc(obj.__doc__) or ""
+            if inspect.isclass(obj) and obj.__module__.split(".")[0] == pkg.split(".")[0]:
+                for key, value in vars(obj).items():
+                    if key.startswith("_") or not (inspect.isfunction(value) or isinstance(
+                            value, property | classmethod | staticmethod)):
+                        continue
+                    fn = value.fget if isinstance(value, property) else getattr(value, "__func__", value)
+                    if fn is not None and fn.__doc__:
+                        out[f"{pkg}.{name}.{key}"] = inspect.cleandoc(fn.__doc__)
+    return out
+
+
+def summary_problem(doc: str) -> str | None:
+    """Why `doc` does not open with a one-line summary, None when it does."""
+    lines = doc.splitlines()
+    if not lines or not lines[0].strip():
+        return "no first line"
+    if len(lines) > 1 and lines[1].strip():
+        return "the first line runs on into a second (a summary is one line, then a blank line)"
+    if not lines[0].rstrip().endswith((".", ":", "?", "!")):
+        return "the first line is not a sentence"
+    return None
+
+
+def test_the_public_api_docstrings_open_with_a_one_line_summary():
+    docs = api_docstrings()
+    assert {"tsim.BatchSim", "tasks.BatchEnv", "evolve.Experiment", "sgr.evogym.EvoSim"} <= set(docs)
+    bad = sorted(f"{name}: {why}" for name, doc in docs.items() if (why := summary_problem(doc)))
+    assert not bad, f"{len(bad)} docstrings:\n" + "\n".join(bad)
+
+
+def test_the_summary_rule_finds_an_essay():
+    assert summary_problem("Run the batch.\n\nArgs:\n    n: steps.") is None
+    assert summary_problem("Run the batch for n steps, which\nmay take long.") is not None
+    assert summary_problem("") is not None

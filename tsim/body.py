@@ -135,8 +135,16 @@ def _connected_bool(filled: np.ndarray) -> np.ndarray:
 
 
 def has_actuator(matrix: np.ndarray) -> bool:
-    """True when any cell is an actuator (3 = H_ACT, 4 = V_ACT): a robot without one cannot be
-    driven, so `check_robot` rejects it."""
+    """Whether any cell of a body matrix is an actuator (3 = H_ACT, 4 = V_ACT).
+
+    A robot without one cannot be driven, so `check_robot` rejects it.
+
+    Args:
+        matrix: A body matrix of material codes.
+
+    Returns:
+        True when some cell is 3 or 4.
+    """
     m = np.asarray(matrix)
     return bool(np.any((m == C.H_ACT) | (m == C.V_ACT)))
 
@@ -212,8 +220,10 @@ class Body:
 
     @property
     def voxel_is_surface(self) -> np.ndarray:
-        """(n_voxels,) bool: voxels with at least one unconnected side, the only ones collision
-        checks visit."""
+        """(n_voxels,) bool: the voxels with at least one unconnected side.
+
+        They are the only ones collision checks visit.
+        """
         return self.voxel_open.any(axis=1)
 
     @property

@@ -5,8 +5,11 @@ and keeps its traceback."""
 
 
 class SgrError(ValueError):
-    """Bad input, described in one line that names the key, flag or file and the problem. A
-    ValueError, so code that catches ValueError (and evogym-style callers) still does."""
+    """Bad input, the user's to fix, described in one line.
+
+    The message names the key, flag or file and the problem. A ValueError, so code that catches
+    ValueError (and evogym-style callers) still does.
+    """
 
 
 _CONTROL = {c: f"\\x{c:02x}" for c in [*range(0x20), *range(0x7f, 0xa0)]}  # C0, DEL and C1

@@ -210,10 +210,27 @@ class Camera:
 
 
 class Renderer:
-    """Draws one robot `body` in `world` (static terrain plus free objects such as Thrower's package):
-    a `World`, a world file, or a task id such as "Walker-v0" (its world, once `import tasks` ran).
+    """Draws one robot in a world, with the world's static terrain and free objects.
 
-    Scale is fixed: `view_voxels` voxels across the image width (evogym shows 40 x 20 voxels).
+    Free objects are such as Thrower's package. The scale is fixed: `view_voxels` voxels across
+    the image width (evogym shows 40 x 20 voxels). The camera follows the robot.
+
+    Args:
+        world: A `World`, a world file, or a task id such as "Walker-v0" (its world, once
+            `import tasks` ran).
+        body: The robot: a `Body` or a body matrix.
+        width: The image's width in pixels.
+        height: The image's height in pixels.
+        view_voxels: How many voxels the image's width spans.
+        grid: Draw the grid of cells.
+        follow: The fraction of the way to its target that the camera moves at each frame
+            (exponential smoothing).
+        track_objects: Let the camera follow the loose free objects too (those without fixed
+            voxels), the nearest ones first, as long as they fit the view with the robot.
+
+    Raises:
+        ValueError: When the image size is not whole numbers of pixels >= 1, or `view_voxels` is
+            not a positive number.
     """
 
     def __init__(self, world: World | str | Path, body: Body | object, width: int = 640, height: int = 320, *,
@@ -303,8 +320,19 @@ class Renderer:
 
     def frame(self, robot_points: np.ndarray, object_points: dict[str, np.ndarray] | None = None
               ) -> np.ndarray:
-        """RGB image (height, width, 3) uint8 of the robot at `robot_points` (2, n) and free objects
-        at `object_points[name]` (2, m); objects not given are drawn at their initial position."""
+        """An RGB image of the robot and the free objects at the points given.
+
+        Args:
+            robot_points: (2, n) the robot's point positions, world units.
+            object_points: (2, m) the points of free objects, by name; objects not given are drawn
+                at their initial position.
+
+        Returns:
+            A (height, width, 3) uint8 image.
+
+        Raises:
+            ValueError: When a body's points are not of shape (2, its point count).
+        """
         return to_rgb(self.frame_indexed(robot_points, object_points))
 
     def frame_indexed(self, robot_points: np.ndarray, object_points: dict[str, np.ndarray] | None = None
@@ -458,11 +486,21 @@ def caption(frame: np.ndarray, text: str) -> np.ndarray:
 def write_gif(frames: Sequence[np.ndarray], path: str | Path, fps: float = 30.0) -> Path:
     """Write frames as a looping GIF; returns the path.
 
-    Written whole or not at all (tsim/files.py). Frames are RGB (H, W, 3) uint8 or `PALETTE` index
-    images (H, W). Frames whose colours all lie in
-    `PALETTE` (every frame `Renderer` makes) are written losslessly with that palette through Pillow
-    directly, which skips imageio's per-frame colour quantization (about 10x faster); other RGB frames
-    go through imageio's GIF writer.
+    Written whole or not at all (tsim/files.py). Frames whose colours all lie in `PALETTE` (every
+    frame `Renderer` makes) are written losslessly with that palette through Pillow directly, which
+    skips imageio's per-frame colour quantization; other RGB frames go through imageio's GIF writer.
+
+    Args:
+        frames: RGB (H, W, 3) uint8 images or `PALETTE` index images (H, W), all of one size.
+        path: The GIF file to write; its folder is made if needed.
+        fps: Frames per second.
+
+    Returns:
+        `path`, as a `Path`.
+
+    Raises:
+        ValueError: When there are no frames, frames are not images of one size, or `fps` is not
+            a positive number.
     """
     frames = _frames(frames, fps)
     path = Path(path)

@@ -54,8 +54,25 @@ def _shape(shape: object) -> tuple[int, int]:
 
 def sample_robot(shape: tuple[int, int], rng: np.random.Generator,
                  pd: tuple[float, ...] = DEFAULT_PD, max_tries: int = 100_000) -> np.ndarray:
-    """Draw cells independently from `pd`, redrawing the whole matrix until it is connected and
-    has an actuator (evogym's rejection sampling)."""
+    """Draw a random robot body as evogym does (rejection sampling).
+
+    Each cell is drawn independently from `pd`; the whole matrix is drawn again until it is
+    connected and has an actuator.
+
+    Args:
+        shape: (rows, columns) of the body matrix.
+        rng: The generator to draw from.
+        pd: The weights of the materials 0 to 4 (empty, rigid, soft, H_ACT, V_ACT), normalised here;
+            evogym's by default.
+        max_tries: How many matrices to draw before giving up.
+
+    Returns:
+        An (H, W) int64 body matrix.
+
+    Raises:
+        ValueError: When `shape` or `pd` is bad.
+        RuntimeError: When no valid robot was found in `max_tries` draws.
+    """
     p, shape = _normalised(pd), _shape(shape)
     for _ in range(max_tries):
         m = rng.choice(5, size=shape, p=p)
@@ -66,12 +83,27 @@ def sample_robot(shape: tuple[int, int], rng: np.random.Generator,
 
 def sample_robots(n: int, shape: tuple[int, int], rng: np.random.Generator,
                   pd: tuple[float, ...] = DEFAULT_PD, max_tries: int = 100_000) -> np.ndarray:
-    """(n, H, W) int64: exactly the bodies of n calls `sample_robot(shape, rng, pd, max_tries)` in a
-    row, and `rng` left where those calls leave it (where they raise, too).
+    """Draw n random robot bodies: exactly those of n calls of `sample_robot` in a row.
 
+    `rng` is left where those calls leave it (where they raise, too).
     `Generator.choice(5, size, p)` is `cdf.searchsorted(rng.random(size), 'right')`; so whole
     chunks of draws are made at once, tested together (`is_connected_batch`), and the generator is
-    then rewound and advanced by exactly the draws the n bodies took."""
+    then rewound and advanced by exactly the draws the n bodies took.
+
+    Args:
+        n: How many bodies.
+        shape: As `sample_robot`'s.
+        rng: As `sample_robot`'s.
+        pd: As `sample_robot`'s.
+        max_tries: As `sample_robot`'s, for each body.
+
+    Returns:
+        An (n, H, W) int64 array, the bodies of `sample_robot(shape, rng, pd, max_tries)`.
+
+    Raises:
+        ValueError: When `n`, `shape` or `pd` is bad.
+        RuntimeError: As `sample_robot`, when one of the calls would.
+    """
     n = _count("n", n)
     p = _normalised(pd)
     # numpy's own choice(): p as given to it (normalised above), then its cdf

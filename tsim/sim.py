@@ -110,12 +110,24 @@ def _checked(arr: np.ndarray, passive_ok: bool) -> np.ndarray | None:
 
 
 class BatchSim:
-    """B worlds of `world`, robot b built from `bodies[b]` and placed with its matrix's bottom-left
-    cell at grid cell `origin` (bodies: `Body`s or matrices, or one (B, H, W) array; matrices are
-    checked and built all at once, `tsim.bodybatch`). `passive_ok` admits bodies without actuators
-    (evogym loads those as plain objects; the reference traces contain a few). `arch` and
-    `precision` choose the process's backend (`tsim.backend.get`: None means $SGR_ARCH /
-    $SGR_PRECISION, else cpu / f64)."""
+    """B worlds of one `World`, one robot each (bodies may differ), stepped together.
+
+    Robot b is built from `bodies[b]` and placed with its matrix's bottom-left cell at grid cell
+    `origin`. Body matrices are checked and built all at once (`tsim.bodybatch`).
+
+    Args:
+        world: The world that every member of the batch simulates.
+        bodies: One body per world: `Body`s or body matrices, or one (B, H, W) array.
+        origin: The grid cell (x, y) of the bottom-left cell of each robot's body matrix.
+        arch: The process's backend (`tsim.backend.get`); None means $SGR_ARCH, else cpu.
+        precision: The process's real type (`tsim.backend.get`); None means $SGR_PRECISION,
+            else f64.
+        passive_ok: Admit bodies without actuators (evogym loads those as plain objects; the
+            reference traces contain a few).
+
+    Raises:
+        ValueError: When `bodies` is empty or a body is bad.
+    """
 
     def __init__(self, world: World, bodies: Sequence[Body | object], origin: tuple[int, int],
                  *, arch: str | None = None, precision: str | None = None, passive_ok: bool = False):
@@ -270,9 +282,20 @@ class BatchSim:
         return len(self.bodies)
 
     def reset_mask(self, mask: object) -> np.ndarray:
-        """`mask` as (B,) bools, or ValueError. Integers are refused, not cast: numpy reads an int
-        array as indices, so [1, 0] would mean world 1 and world 0 to one reader and world 0 to
-        another."""
+        """Check a reset mask: one bool per world.
+
+        Integers are refused, not cast: numpy reads an int array as indices, so [1, 0] would mean
+        world 1 and world 0 to one reader and world 0 to another.
+
+        Args:
+            mask: The worlds to reset, one bool per world.
+
+        Returns:
+            `mask` as a (B,) bool array.
+
+        Raises:
+            ValueError: When `mask` is not of shape (B,) or not bools.
+        """
         sel = np.asarray(mask)
         if sel.shape != (self.n_worlds,):
             raise ValueError(f"reset mask must have shape ({self.n_worlds},), got {sel.shape}")
@@ -283,8 +306,11 @@ class BatchSim:
         return sel
 
     def reset(self, mask: np.ndarray | None = None) -> None:
-        """Back to the initial placement at rest (evogym `reset`), running again; `mask` (B,) bool
-        resets only those worlds."""
+        """Put worlds back to their initial placement at rest, running again (evogym's `reset`).
+
+        Args:
+            mask: (B,) bools: reset only the worlds where it is True. None resets every world.
+        """
         # every world: plain slices, several times faster than a full mask
         sel = slice(None) if mask is None else self.reset_mask(mask)
         if mask is None:
@@ -314,11 +340,16 @@ class BatchSim:
         reset_worlds(self._state_m.device(), *self.kernel_initial_positions(), worlds, self._state_m.shape[1])
 
     def kernel_initial_positions(self) -> tuple:
-        """`initial_positions` flat, and in f32 the placement's low parts (`_round_world`; else a
-        one-element stand-in), as kernels take them: on a device copied there once per placement
-        (it changes only by `place_object`, `shift_robots` or a write through
-        `initial_positions`), so a partial reset or an object's orientation does not send
-        (B, P, 2) arrays across the bus each time."""
+        """`initial_positions` as kernels take them: flat, with f32's low parts.
+
+        On a device they are copied there once per placement (it changes only by `place_object`,
+        `shift_robots` or a write through `initial_positions`), so a partial reset or an object's
+        orientation does not send (B, P, 2) arrays across the bus each time.
+
+        Returns:
+            The flat `initial_positions`, then in f32 the placement's low parts (`_round_world`),
+            else a one-element stand-in for each.
+        """
         cached = self._pos0_kernel
         if cached is None or cached[0] != self._pos0_version:
             f32 = self._pos0_lo is not None
@@ -329,9 +360,19 @@ class BatchSim:
         return cached[1]
 
     def place_object(self, w: int, name: str, cell: tuple[int, int]) -> None:
-        """Start free object `name` of world w with its bounding box's bottom-left at grid cell
-        `cell` from the next `reset` of that world on (objects placed anew each episode, e.g.
-        Catcher-v0's package and pegs; fixed points stay fixed wherever they are put)."""
+        """Start a free object of world w at a grid cell from the next `reset` of that world on.
+
+        For objects placed anew each episode, e.g. Catcher-v0's package and pegs. Fixed points stay
+        fixed wherever they are put.
+
+        Args:
+            w: The world.
+            name: The free object's name.
+            cell: The grid cell (x, y) of the bottom-left of the object's bounding box.
+
+        Raises:
+            KeyError: When the world has no free object of that name.
+        """
         k, obj = self._free_object(name)
         self._pos0_version += 1
         off = self._obj_offsets[k][w]
@@ -340,9 +381,17 @@ class BatchSim:
             self._round_placement([w])
 
     def shift_robots(self, dx: np.ndarray) -> None:
-        """Start each world's robot `dx[w]` further right (left when negative; evogym's length
-        units, a voxel is 0.1) from the next `reset` of that world on: a perturbed start for
-        robustness tests. Objects and terrain stay where they are."""
+        """Start each world's robot further right from the next `reset` of that world on.
+
+        A perturbed start for robustness tests. Objects and terrain stay where they are.
+
+        Args:
+            dx: (B,) shifts, world w's robot by `dx[w]`: evogym's length units (a voxel is 0.1),
+                to the left when negative.
+
+        Raises:
+            ValueError: When `dx` is not B finite numbers.
+        """
         dx = np.asarray(dx, dtype=np.float64)
         if dx.shape != (self.n_worlds,) or not np.all(np.isfinite(dx)):
             raise ValueError(f"shift_robots needs {self.n_worlds} finite shifts, got shape {dx.shape}")
@@ -443,17 +492,28 @@ class BatchSim:
     def choose_kernel(self, *, serial: bool | None = None, extra_capacity_tiers: int = 0,
                       spirv_launch: bool | None = None, substeps_per_launch: int | None = None,
                       gpu_block: int | None = None, lanes: int | None = None) -> None:
-        """Force a kernel variant instead of the one chosen for this batch (tests and benchmarks
-        compare them; every variant gives the same bits): `serial` runs on the calling thread
-        (True, CPU only) or the thread pool (False); `extra_capacity_tiers` compiles for local
-        arrays that many tiers bigger than needed; `spirv_launch` takes (True) or leaves (False)
-        the SPIR-V backends' launch (tsim/backend/spirv.py) on any backend, and `substeps_per_launch`
-        splits its env steps into launches of that many substeps. `gpu_block` sets the worlds per
-        thread block on a GPU (default `GPU_BLOCK`, 64; a multiple of 32 up to 1,024; each block
-        size is its own compiled kernel; bench/gpu_probe.py compares them): the CPU keeps its 1.
-        `lanes` > 1 runs each world on that many threads of one thread block (tsim/backend/lanes.py, a
-        power of two up to 1,024; GPU and Vulkan only: Taichi's CPU backend has no block barrier),
-        1 the backend's own kernel again."""
+        """Force a kernel variant instead of the one chosen for this batch.
+
+        Tests and benchmarks compare the variants; every variant gives the same bits. An argument
+        left None keeps its current choice.
+
+        Args:
+            serial: Run on the calling thread (True, CPU only) or on the thread pool (False).
+            extra_capacity_tiers: Compile for local arrays that many tiers bigger than needed.
+            spirv_launch: Take (True) or leave (False) the SPIR-V backends' launch
+                (tsim/backend/spirv.py), on any backend.
+            substeps_per_launch: Split the SPIR-V launch's env steps into launches of that many
+                substeps.
+            gpu_block: The worlds per thread block on a GPU (default `GPU_BLOCK`, 64): a multiple
+                of 32 up to 1,024, each block size its own compiled kernel (bench/gpu_probe.py
+                compares them). The CPU keeps its 1.
+            lanes: More than 1 runs each world on that many threads of one thread block
+                (tsim/backend/lanes.py): a power of two up to 1,024, on a GPU or Vulkan only
+                (Taichi's CPU backend has no block barrier). 1 runs the backend's own kernel again.
+
+        Raises:
+            ValueError: When `gpu_block` or `lanes` is out of range, or `lanes` > 1 on the CPU.
+        """
         if lanes is not None:
             from tsim.backend.lanes import check_lanes
 
@@ -476,29 +536,41 @@ class BatchSim:
         self._launcher = self._make_launcher()
 
     def ignore_robot_self_collisions(self) -> None:
-        """No instability rule for these worlds: evogym's rule counts only robots' self-collisions,
-        and a world led by an object that is no robot (sgr.evogym's EvoSim without robots) has
-        none. Kept across resets."""
+        """Turn evogym's instability rule off for these worlds, across resets.
+
+        evogym's rule counts only robots' self-collisions, and a world led by an object that is no
+        robot (sgr.evogym's EvoSim without robots) has none.
+        """
         self._counts0[:, K.N_SURF_ROBOT] = 0
         self.counts[:, K.N_SURF_ROBOT] = 0
 
     def set_world_status(self, w: int, status: int) -> None:
-        """Set world w's status code (RUNNING, UNSTABLE, ...): RUNNING lets a frozen world advance
-        again after its state was restored (evogym's revert); UNSTABLE freezes it."""
+        """Set world w's status code (RUNNING, UNSTABLE, ...).
+
+        RUNNING lets a frozen world advance again after its state was restored (evogym's revert);
+        UNSTABLE freezes it.
+
+        Args:
+            w: The world.
+            status: The new code, one of `tsim.sim`'s RUNNING, UNSTABLE, NONFINITE and INACTIVE.
+        """
         self.counts[w, K.STATUS] = status
 
     # ------------------------------------------------------------------ read-out
     @property
     def state(self) -> np.ndarray:
-        """(B, P, columns) every world's points in the real type: position 0:2, velocity 2:4, last
-        position 4:6, true velocity 6:8 (and f32's low parts, `tsim.kernels.layout`), written in
-        place by `step` and `reset`. Each read moves `state_version` on, as the reader may write
-        it: `BatchEnv` then measures the state anew rather than reuse its last measurement. So
-        write through `state` each time, not through a reference kept across any launch (a
-        `step`, a partial `reset(mask)`, or `BatchEnv`'s measuring and observing kernels): on a
-        device a launch copies in
-        what was written through the last read and no later write, and a reference kept from
-        before a step does not see that step (`tsim.backend.mirror`). To read only, `read_state`."""
+        """(B, P, columns) every world's points in the real type, to read and write.
+
+        The columns are position 0:2, velocity 2:4, last position 4:6, true velocity 6:8 (and f32's
+        low parts, `tsim.kernels.layout`), written in place by `step` and `reset`.
+
+        Each read moves `state_version` on, as the reader may write it: `BatchEnv` then measures
+        the state anew rather than reuse its last measurement. So write through `state` each time,
+        not through a reference kept across any launch (a `step`, a partial `reset(mask)`, or
+        `BatchEnv`'s measuring and observing kernels): on a device a launch copies in what was
+        written through the last read and no later write, and a reference kept from before a step
+        does not see that step (`tsim.backend.mirror`). To read only, use `read_state`.
+        """
         self.state_version += 1
         return self._state_m.host(write=True)
 
@@ -517,21 +589,28 @@ class BatchSim:
         return self._state_m.shape
 
     def read_state(self) -> np.ndarray:
-        """`state` for reading only (read-only view): on a device the next step need not copy it
-        in again, and `state_version` stays (the state is as the last measurement saw it)."""
+        """`state` for reading only, as a read-only view.
+
+        On a device the next step need not copy it in again, and `state_version` stays (the state
+        is as the last measurement saw it).
+        """
         view = self._state_m.host().view()
         view.flags.writeable = False
         return view
 
     def kernel_state(self):
-        """The flat state as kernels take it, for kernels that only read it (`tasks.kernels`):
-        the device's own array on a device, which then need not come to the host."""
+        """The flat state as kernels take it, for kernels that only read it (`tasks.kernels`).
+
+        On a device it is the device's own array, which then need not come to the host.
+        """
         return self._state_m.device(write=False)
 
     @property
     def status(self) -> np.ndarray:
-        """(B,) copy of each world's status code (RUNNING, UNSTABLE, NONFINITE, INACTIVE, in this
-        module); only RUNNING worlds advance."""
+        """(B,) copy of each world's status code; only RUNNING worlds advance.
+
+        The codes are `tsim.sim`'s RUNNING, UNSTABLE, NONFINITE and INACTIVE.
+        """
         return self.counts[:, K.STATUS].copy()
 
     def world_status(self, w: int) -> int:
@@ -540,21 +619,31 @@ class BatchSim:
 
     @property
     def n_points(self) -> np.ndarray:
-        """(B,) simulated points of each world: its robot's, then its free objects' (`state`'s
-        rows, in that order; padding after them)."""
+        """(B,) the number of simulated points of each world.
+
+        They are its robot's, then its free objects' (`state`'s rows, in that order; padding after
+        them).
+        """
         return self.counts[:, K.N_PTS].copy()
 
     def object_offsets(self, k: int) -> np.ndarray:
-        """(B,) the row in `state` where free object k (`free_objects[k]`) starts in each world;
-        its points follow in its body's order."""
+        """(B,) the row in `state` where free object k starts in each world.
+
+        Its points follow in its body's order.
+
+        Args:
+            k: The object's index in `free_objects`.
+        """
         return np.array(self._obj_offsets[k])
 
     @property
     def initial_positions(self) -> np.ndarray:
-        """(B, P, 2) every point's position at reset, as `state`'s rows (the reference of an
-        object's orientation). Writing it moves where the next reset starts, as `place_object`
-        and `shift_robots` do (in f32 until one of them, which round evogym's float64 placement
-        anew, `tsim.rounding`)."""
+        """(B, P, 2) every point's position at reset, as `state`'s rows.
+
+        It is the reference of an object's orientation. Writing it moves where the next reset
+        starts, as `place_object` and `shift_robots` do (in f32 until one of them, which round
+        evogym's float64 placement anew, `tsim.rounding`).
+        """
         self._pos0_version += 1  # the caller may write it (`kernel_initial_positions`)
         return self._pos0
 
@@ -569,13 +658,26 @@ class BatchSim:
         return self.read_state()[w, :self.n_robot_points[w], 0:2].T.copy()
 
     def robot_vel(self, w: int) -> np.ndarray:
-        """(2, n) robot point velocities of world w, evogym point order, world units per unit of
-        simulated time (dt = 1e-4 per substep)."""
+        """(2, n) robot point velocities of world w, in evogym's point order.
+
+        In world units per unit of simulated time (dt = 1e-4 per substep).
+
+        Args:
+            w: The world.
+        """
         return self.read_state()[w, :self.n_robot_points[w], 2:4].T.copy()
 
     def object_pos(self, w: int, name: str) -> np.ndarray:
-        """(2, n) point positions of free object `name` in world w, world units; KeyError when the
-        world has no free object of that name (fixed objects are terrain, not simulated)."""
+        """(2, n) point positions of free object `name` in world w, in world units.
+
+        Args:
+            w: The world.
+            name: The free object's name.
+
+        Raises:
+            KeyError: When the world has no free object of that name (fixed objects are terrain,
+                not simulated).
+        """
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 0:2].T.copy()
@@ -585,8 +687,15 @@ class BatchSim:
         return {o.name: self.object_pos(w, o.name) for o in self.free_objects}
 
     def object_vel(self, w: int, name: str) -> np.ndarray:
-        """(2, n) point velocities of free object `name` in world w, units as `robot_vel`; KeyError
-        as `object_pos`."""
+        """(2, n) point velocities of free object `name` in world w, in `robot_vel`'s units.
+
+        Args:
+            w: The world.
+            name: The free object's name.
+
+        Raises:
+            KeyError: When the world has no free object of that name, as `object_pos`.
+        """
         k, obj = self._free_object(name)
         off = self._obj_offsets[k][w]
         return self.read_state()[w, off:off + obj.body.n_points, 2:4].T.copy()
@@ -598,10 +707,12 @@ class BatchSim:
         raise KeyError(f"no free object {name!r} in world {self.world.name}")
 
     def robot_com(self) -> np.ndarray:
-        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass). In f32 the
-        mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in float64, then in
-        float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7 (Jumper-v0's COM was
-        8e-7 off evogym that way, 2e-7 from the pairs; evogym's chaos floor there is 3e-7)."""
+        """(B, 2) unweighted mean of each robot's points (evogym's centre of mass).
+
+        In f32 it is the mean of the positions' pairs hi + lo (`tsim.kernels.pairs`), summed in
+        float64, then rounded to float32: a float32 sum of ~30 coordinates near 1 rounds at ~1e-7,
+        which can put the COM further from evogym's than evogym's own chaos floor (Jumper-v0).
+        """
         mask = np.arange(self._state_m.shape[1])[None, :] < self.n_robot_points[:, None]
         if self.dtype == np.float64:
             s = (self.read_state()[:, :, 0:2] * mask[:, :, None]).sum(axis=1)
@@ -610,11 +721,13 @@ class BatchSim:
         return (s / self.n_robot_points[:, None]).astype(self.dtype)
 
     def states64(self) -> np.ndarray:
-        """(B, P, 4) every point's position (0:2) and velocity (2:4) in float64: in f64 the state's
-        own columns; in f32 each as its pair hi + lo (`tsim.kernels.pairs`), which holds it to
-        ~1e-15, where float32 alone rounds at ~1e-8. A low part counts only while its position is
-        the one it was written for (a position changed from Python, e.g. by `place_object`, has
-        none until the next step). For comparing f32 with f64 or evogym."""
+        """(B, P, 4) every point's position (0:2) and velocity (2:4) in float64.
+
+        For comparing f32 with f64 or evogym. In f64 these are the state's own columns; in f32 each
+        is its pair hi + lo (`tsim.kernels.pairs`), which holds it to ~1e-15, where float32 alone
+        rounds at ~1e-8. A low part counts only while its position is the one it was written for
+        (a position changed from Python, e.g. by `place_object`, has none until the next step).
+        """
         st = self.read_state()
         out = st[:, :, 0:4].astype(np.float64)
         if st.shape[2] > K.NS:

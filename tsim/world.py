@@ -78,8 +78,15 @@ class Terrain:
 
 @dataclass(frozen=True, eq=False)
 class World:
-    """A loaded evogym world file: grid size in cells, its objects in evogym's load order (sorted by
-    name) and the static terrain built from the fixed ones."""
+    """A loaded evogym world file: its grid, its objects and its static terrain.
+
+    Attributes:
+        name: The world's name (a world file's stem).
+        grid_w: The grid's width in cells.
+        grid_h: The grid's height in cells.
+        objects: Every object, in evogym's load order (after the robot): sorted by name.
+        terrain: The static terrain, built from the fixed objects.
+    """
     name: str
     grid_w: int
     grid_h: int
@@ -93,13 +100,27 @@ class World:
 
     @property
     def fixed_objects(self) -> tuple[WorldObject, ...]:
-        """Objects that are static terrain (all voxels FIXED, same place in every world), in load
-        order."""
+        """Objects that are static terrain, in load order.
+
+        Their voxels are all FIXED, and they are in the same place in every world.
+        """
         return tuple(o for o in self.objects if o.is_terrain)
 
     def with_objects(self, extra: tuple[WorldObject, ...]) -> World:
-        """This world plus objects added in code (evogym's `EvoWorld.add_object`), all in load
-        order again (sorted by name as strings); the grid grows to hold them, as evogym's does."""
+        """This world plus objects added in code (evogym's `EvoWorld.add_object`).
+
+        All objects are in load order again (sorted by name as strings); the grid grows to hold
+        them, as evogym's does.
+
+        Args:
+            extra: The objects to add.
+
+        Returns:
+            A new world; this one is left as it is.
+
+        Raises:
+            ValueError: When two objects have the same name.
+        """
         names = [o.name for o in self.objects] + [o.name for o in extra]
         if len(set(names)) != len(names):
             raise ValueError(f"world {self.name}: duplicate object names in {names}")
@@ -210,10 +231,20 @@ def world_from_dict(data: dict, name: str = "custom") -> World:
 
 
 def world_from_matrix(matrix: object, name: str = "custom") -> World:
-    """A world drawn as a material matrix (row 0 = top, as body matrices; 5 = fixed terrain, other
-    materials make simulated objects): every filled cell is glued to its filled 4-neighbours, and
-    each connected group of cells is one object, named terrain, terrain_1, ... in reading order.
-    The grid is the matrix's size: leave empty rows above the terrain for the robot."""
+    """A world drawn as a material matrix.
+
+    Row 0 is the top, as in body matrices; 5 is fixed terrain, and other materials make simulated
+    objects. Every filled cell is glued to its filled 4-neighbours, and each connected group of
+    cells is one object, named terrain, terrain_1, ... in reading order. The grid is the matrix's
+    size: leave empty rows above the terrain for the robot.
+
+    Args:
+        matrix: A non-empty 2-D array of ints, material codes 0 to 5.
+        name: The world's name.
+
+    Raises:
+        ValueError: When `matrix` is not such an array, or has no material > 0.
+    """
     m = np.asarray(matrix)
     if m.ndim != 2 or m.size == 0 or not np.issubdtype(m.dtype, np.integer):
         raise ValueError(f"world {name!r}: a terrain matrix must be a non-empty 2-D array of ints")

@@ -39,8 +39,15 @@ class Phenotype(Protocol):
 
 
 class Problem:
-    """Base class of a method (see the module docstring): subclass it, set `name`, and add it to
-    evolve.methods.METHODS."""
+    """Base class of a method: it turns genomes into robots and robots into fitness.
+
+    Subclass it, set `name`, and add it to evolve.methods.METHODS. `NeatSearch` runs NEAT over the
+    method's genomes and asks the problem for everything method-specific: how a genome decodes
+    (`decode`), how a generation of decoded robots is evaluated (`evaluate`), what the champion
+    file holds (`champion`), which neat-python settings the method fixes (`neat_overrides`), its
+    config keys, and any state of its own that a checkpoint must keep (`state`/`restore`). The
+    module docstring of evolve/methods/base.py says more.
+    """
     name: ClassVar[str]  # the config's `method`
     config_keys: ClassVar[Schema] = {}  # the method's keys beyond the common ones (evolve/runs/config.py)
     config_docs: ClassVar[dict[str, str]] = {}  # what each of `config_keys` does, in a sentence
@@ -64,8 +71,10 @@ class Problem:
 
     @classmethod
     def decode_refusal(cls, cfg: RunConfig, shape: tuple[int, int]) -> str | None:
-        """Why a run's champion genome cannot be decoded at `shape` (`sgr decode`), None when it
-        can: a method without NEAT genomes cannot; the others can at any size unless they say."""
+        """Why a run's champion genome cannot be decoded at `shape` (`sgr decode`), None when it can.
+
+        A method without NEAT genomes cannot; the others can at any size unless they say.
+        """
         if not cls.uses_neat:
             return (f"a {cls.name} run's champion is a body and a controller trained for it, no genome to "
                     "decode at another size (decode sgr runs)")
@@ -81,8 +90,11 @@ class Problem:
         self.pool = pool or RolloutPool(1)
 
     def body_distance_weight(self) -> float:
-        """The body's weight in speciation's genome distance (the `body_distance_weight` key of sgr
-        and direct; a method without it: plain NEAT speciation)."""
+        """The body's weight in speciation's genome distance.
+
+        It is the `body_distance_weight` key of sgr and direct; a method without it gets 0 (plain
+        NEAT speciation).
+        """
         return self.cfg.body_distance_weight if "body_distance_weight" in self.config_keys else 0.0
 
     @classmethod
@@ -96,31 +108,55 @@ class Problem:
 
     @classmethod
     def default_config(cls, task: str) -> dict | None:
-        """The config `sgr evolve --method NAME --task TASK` runs where sgr ships no
-        configs/NAME/TASK.yaml (a method of the user's), beyond `method` and `task`; None: none."""
+        """The config `sgr evolve --method NAME --task TASK` runs where sgr ships none for the task.
+
+        That is where there is no configs/NAME/TASK.yaml (a method of the user's). The config's keys
+        beyond `method` and `task`; None: none.
+        """
         return None
 
     def decode(self, genome) -> Phenotype:
-        """One genome -> its phenotype, without simulating; must be deterministic and side-effect
-        free: the search caches it by genome key and decodes again after a resume."""
+        """One genome -> its phenotype, without simulating.
+
+        It must be deterministic and free of side effects: the search caches it by genome key and
+        decodes again after a resume.
+        """
         raise NotImplementedError
 
     def evaluate(self, phenotypes: Sequence[Phenotype],
                  tags: Sequence[str] | None = None) -> tuple[np.ndarray, int]:
-        """Fitness of each (valid) phenotype and the number of episodes simulated. `tags` name each
-        phenotype's evaluation uniquely within the run (the search passes "<generation>/<genome
-        key>"); robust evaluation draws its noise from them (`rollout`)."""
+        """Fitness of each (valid) phenotype and the number of episodes simulated.
+
+        Args:
+            phenotypes: The phenotypes to score, as `decode` returned them (valid ones).
+            tags: Name each phenotype's evaluation uniquely within the run (the search passes
+                "<generation>/<genome key>"); robust evaluation draws its noise from them (`rollout`).
+
+        Returns:
+            The fitnesses, one per phenotype, and the number of episodes simulated.
+        """
         raise NotImplementedError
 
     def rollout(self, bodies: Sequence[np.ndarray], items: Sequence, factory: PolicyFactory,
                 tags: Sequence[str] | None) -> tuple[np.ndarray, int]:
-        """Fitness of each robot (`RolloutPool.run`'s bodies, items and factory) and the episodes
-        simulated: its episode return, or with the config's `robust` key the statistic over K
-        perturbed episodes, the K episodes of every robot in one batch; episode k of the robot
-        tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`).
+        """Fitness of each robot and the number of episodes simulated.
+
+        A robot's fitness is its episode return, or with the config's `robust` key the statistic
+        over K perturbed episodes, the K episodes of every robot in one batch; episode k of the
+        robot tagged t is perturbed by `episode_keys(seed, [t], k)` alone (`Robust.noise`).
 
         With `record_behaviour` set, `behaviour` is then each robot's behaviour features
-        (tasks/behaviour.py), the mean over its K episodes."""
+        (tasks/behaviour.py), the mean over its K episodes.
+
+        Args:
+            bodies: The robots' bodies, as `RolloutPool.run` takes them.
+            items: What `factory` makes each robot's policy of, as `RolloutPool.run` takes them.
+            factory: Makes the policies, as `RolloutPool.run` takes it.
+            tags: Name each robot's evaluation (as `evaluate`'s); None: their indices.
+
+        Returns:
+            The fitnesses, one per robot, and the number of episodes simulated.
+        """
         cfg = self.cfg
         robust = cfg.robust  # parsed once, with the config
         record = self.record_behaviour
@@ -145,9 +181,13 @@ class Problem:
 
     @contextmanager
     def scored_with(self, robust: Robust | dict | None) -> Iterator[None]:
-        """Inside, `evaluate` scores as `robust` says (a mapping is the config key; None: one exact
-        episode) instead of as the run's config does (a run's final selection scores its
-        candidates this way)."""
+        """Inside, `evaluate` scores as `robust` says instead of as the run's config does.
+
+        A run's final selection scores its candidates this way.
+
+        Args:
+            robust: The scoring: a mapping is the config key; None: one exact episode.
+        """
         cfg = self.cfg
         if not isinstance(robust, Robust | None):
             robust = Robust.from_config(robust)
@@ -162,32 +202,50 @@ class Problem:
         raise NotImplementedError
 
     def champion_of(self, genome, phenotype: Phenotype) -> dict:
-        """`champion`'s keys for `genome`, decoded to `phenotype`: a method whose controller is a
-        function of the genome may record it as that (SGR: evolve/methods/sgr/record.py), since the
-        champion file holds the genome too."""
+        """`champion`'s keys for `genome`, decoded to `phenotype`.
+
+        A method whose controller is a function of the genome may record it as that (SGR:
+        evolve/methods/sgr/record.py), since the champion file holds the genome too.
+        """
         return self.champion(phenotype)
 
     def genome_record(self, genome) -> dict:
-        """What champion.json holds as `genome`: a NEAT genome's record (`genome_json`); a method
-        whose search has no NEAT genome records what it has (at least `key`)."""
+        """What champion.json holds as `genome`: a NEAT genome's record (`genome_json`).
+
+        A method whose search has no NEAT genome records what it has (at least `key`).
+        """
         return genome_json(genome)
 
     @classmethod
     def compact_controller(cls, record: dict, controller, raw: dict | None) -> dict | None:
-        """An older champion `record`'s `controller` (as read) in the method's shortest exact
-        format, or None to keep it as it is; `raw`: its run's config.yaml, when there is one. What
-        `sgr migrate` writes, once it reads back as the same controller bit for bit."""
+        """An older champion `record`'s controller in the method's shortest exact format, or None.
+
+        What `sgr migrate` writes, once it reads back as the same controller bit for bit; None keeps
+        the record's as it is.
+
+        Args:
+            record: The older champion record.
+            controller (Any): Its `controller`, as read.
+            raw: Its run's config.yaml, when there is one.
+        """
         return None
 
     def state(self) -> dict:
-        """The method's own run state for checkpoints (beyond the NEAT population), as JSON data:
-        numbers, strings, lists and dicts only (checkpoints are JSON, never pickles)."""
+        """The method's own run state for checkpoints (beyond the NEAT population), as JSON data.
+
+        Numbers, strings, lists and dicts only: checkpoints are JSON, never pickles.
+        """
         return {}
 
     @classmethod
     def decode_state(cls, data, cfg: RunConfig) -> dict:
-        """`state`'s data read back from a checkpoint, checked (ValueError naming the bad field)
-        and made into what `restore` takes; must build nothing from names in the data."""
+        """`state`'s data read back from a checkpoint, checked and made into what `restore` takes.
+
+        It must build nothing from names in the data.
+
+        Raises:
+            ValueError: A field is bad; the message names it.
+        """
         if data != {}:
             raise ValueError(f"problem: {cls.name} keeps no state of its own, got {str(data)[:60]}")
         return {}
@@ -196,9 +254,11 @@ class Problem:
         """Take back what `decode_state` returned, in a fresh process."""
 
     def make_search(self, neat_config, seed: int, state: dict | None = None) -> Any | None:
-        """The method's own search, or None for NEAT's (`NeatSearch`, built by the run). One of its
-        own has NeatSearch's face: `generation`, `step()` -> the generation's row, `best`,
-        `population`, `decode` and `state()` (evolve/search/archive.py)."""
+        """The method's own search, or None for NEAT's (`NeatSearch`, built by the run).
+
+        One of its own has NeatSearch's face: `generation`, `step()` -> the generation's row,
+        `best`, `population`, `decode` and `state()` (evolve/search/archive.py).
+        """
         return None
 
     @classmethod

@@ -307,8 +307,19 @@ def _replay_noise(replays: int, eps: float, kind: str, offset: float, seed: int)
 
 @dataclass(frozen=True)
 class Champion:
-    """A run's champion, ready to use: its task, body, controller and the episode length and
-    fitness of its evaluation. `policy(obs) -> action` whatever the controller's format."""
+    """A run's champion, ready to use: its task, body and controller, episode length and fitness.
+
+    `policy(obs) -> action` whatever the controller's format. `load_champion` reads one from a run.
+
+    Attributes:
+        task: Its task's id ("Walker-v0").
+        body: Its body, the matrix of voxel materials.
+        controller: Its controller, dense or graph.
+        episode_steps: The episode length of its evaluation.
+        fitness: The fitness of its evaluation.
+        record: champion.json as read.
+        cell: A map-elites run's elite: its cell of the archive; None for a run's champion.
+    """
 
     task: str
     body: np.ndarray
@@ -320,12 +331,14 @@ class Champion:
 
     @property
     def nominal(self) -> float | None:
-        """The return of its exact, noise-free episode as evolution computed it (what `rollout()`
-        gives again): its fitness for a run scored by that episode, the recorded nominal return
-        for a champion chosen by final selection (whose fitness is its score under noise); for a
-        champion scored under noise alone, its headline's exact episode, or a map-elites elite's
-        recorded `nominal` (`record_elite_nominals`); None for a record without them (`verdict()`
-        replays it)."""
+        """The return of its exact, noise-free episode as evolution computed it (`rollout()` again).
+
+        For a run scored by that episode, its fitness. For a champion chosen by final selection
+        (whose fitness is its score under noise), the recorded nominal return. For a champion
+        scored under noise alone, its headline's exact episode, or a map-elites elite's recorded
+        `nominal` (`record_elite_nominals`). None for a record without them (`verdict()` replays
+        it).
+        """
         if (self.record.get("evaluation") or {}).get("robust") is None:
             return self.fitness
         selection = self.record.get("selection")
@@ -338,9 +351,12 @@ class Champion:
 
     @property
     def headline(self) -> verdict_rule.Verdict | None:
-        """Its one figure as its run recorded it (champion.json's `headline`: the mean return of
-        held-out episodes under the run's noise, their sd, and the verdict; evolve/records/verdict.py);
-        None for a record written before headlines (`headline(run_dir)` simulates it)."""
+        """Its one figure as its run recorded it: champion.json's `headline`.
+
+        The headline is the mean return of held-out episodes under the run's noise, their sd, and
+        the verdict (evolve/records/verdict.py). None for a record written before headlines
+        (`headline(run_dir)` simulates it).
+        """
         return verdict_rule.from_headline(self.record.get("headline"))
 
     def __repr__(self) -> str:
@@ -368,8 +384,11 @@ class Champion:
         return precision_of(self.record)
 
     def env(self, **kwargs):
-        """`gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>,
-        precision=<its precision>)`; `kwargs` go to gymnasium.make."""
+        """A gymnasium env of its task and body, with its episode length and its precision.
+
+        That is `gymnasium.make("sgr/<task>", body=..., max_episode_steps=<its episode length>,
+        precision=<its precision>)`; `kwargs` go to gymnasium.make.
+        """
         import gymnasium as gym
 
         import tasks  # noqa: F401  (registers the sgr/<task> ids)
@@ -378,10 +397,18 @@ class Champion:
                         **{"max_episode_steps": self.episode_steps, "precision": self.precision, **kwargs})
 
     def rollout(self, env=None) -> float:
-        """The return of its episode in gymnasium (`env()`, or `env` given): reset with seed 0,
-        as evolution's episode was, so it equals `nominal` exactly (and `fitness`, for a run scored
-        by one exact episode). (A run with robust evaluation scored a statistic over perturbed
-        episodes: `rescore_champion(run_dir)` reproduces that.)"""
+        """The return of its episode in gymnasium, reset with seed 0 as evolution's episode was.
+
+        So it equals `nominal` exactly (and `fitness`, for a run scored by one exact episode). A run
+        with robust evaluation scored a statistic over perturbed episodes: `rescore_champion(run_dir)`
+        reproduces that.
+
+        Args:
+            env (gymnasium.Env | None): The env to run it in; None: `env()`.
+
+        Returns:
+            The episode's return.
+        """
         env = self.env() if env is None else env
         obs, _ = env.reset(seed=0)
         total, done = 0.0, False
@@ -393,9 +420,15 @@ class Champion:
 
     def verdict(self, replays: int = verdict_rule.REPLAYS,
                 eps: float = verdict_rule.EPS) -> verdict_rule.Verdict:
-        """Whether it holds (evolve/records/verdict.py): its episode replayed `replays` times with
-        uniform(+-eps) on every action, against its noise-free return. `verdict().line()` says it
-        in words; `verdict().holds` is the rule's answer."""
+        """Whether it holds: its episode replayed under action noise, against its noise-free return.
+
+        The rule is evolve/records/verdict.py's. `verdict().line()` says it in words;
+        `verdict().holds` is the rule's answer.
+
+        Args:
+            replays: How many times its episode is replayed.
+            eps: The noise on every action: uniform(+-eps).
+        """
         returns = _replay(self.record, self.body, self.controller,
                           _replay_noise(replays, eps, "uniform", 0.0, 0))
         return verdict_rule.from_returns(returns, eps)
@@ -411,9 +444,19 @@ class Champion:
 
 
 def load_champion(run_dir: str | Path, cell=None) -> Champion:
-    """The champion of a run directory (its champion.json), checked to run: ValueError naming the
-    file and the key otherwise. `cell` ((i, j) or "i,j"): a map-elites run's elite of that cell of
-    its archive (elites.json) instead."""
+    """The champion of a run directory (its champion.json), checked to run.
+
+    Args:
+        run_dir: The run's folder.
+        cell (tuple[int, int] | str | None): A map-elites run's cell of its archive, (i, j) or
+            "i,j": that cell's elite (elites.json) instead.
+
+    Returns:
+        The champion, ready to use.
+
+    Raises:
+        ValueError: It does not run; the message names the file and the key.
+    """
     record, body, ctrl = read_champion(run_dir, cell)
     if cell is not None:
         cell = parse_cell(cell) if isinstance(cell, str) else tuple(int(i) for i in np.asarray(cell).ravel())

@@ -208,8 +208,12 @@ class PickledCheckpoints(SgrError):
 
 
 class RunDir:
-    """One run's directory (layout in the module docstring); only the process holding `lock` may
-    write it."""
+    """One run's directory: its config, generations.csv, champion.json and checkpoints.
+
+    Only the process holding `lock` may write it. It holds config.yaml, neat.ini (the INI actually
+    used), generations.csv, champion.json, segments.json and checkpoints/gen-XXXXX.json.gz; the
+    module docstring of evolve/records/rundir.py says what each is and how it is written.
+    """
     def __init__(self, path: str | Path):
         self.path = Path(path)
         self.ckpt_dir = self.path / "checkpoints"
@@ -219,8 +223,15 @@ class RunDir:
 
     # ------------------------------------------------------------------ one process at a time
     def lock(self) -> None:
-        """Hold the run for this process (until it exits or `unlock`): two processes advancing one
-        run (a sweep resumed while a run of it still goes on, say) would interleave its files."""
+        """Hold the run for this process, until it exits or calls `unlock`.
+
+        Two processes advancing one run (a sweep resumed while a run of it still goes on, say) would
+        interleave its files.
+
+        Raises:
+            ValueError: Another process holds the run (the message gives its pid), the path is not
+                a folder, or the run's files hold a symbolic link (`refuse_links`).
+        """
         try:
             self.path.mkdir(parents=True, exist_ok=True)
         except (FileExistsError, NotADirectoryError):
@@ -243,10 +254,15 @@ class RunDir:
         self._lock_fd = fd
 
     def refuse_links(self) -> None:
-        """SgrError naming the first symbolic link among the run's files and in checkpoints/ (the
-        run folder itself may be one: the user named it). A run writes only into its own folder,
+        """Refuse a run whose files or checkpoints/ hold a symbolic link.
+
+        The run folder itself may be one: the user named it. A run writes only into its own folder,
         and a planted link (a .lock or generations.csv linked to a file elsewhere, checkpoints/
-        linked to another folder) would make it write there instead."""
+        linked to another folder) would make it write there instead.
+
+        Raises:
+            SgrError: Naming the first symbolic link found.
+        """
         for folder in (self.path, self.ckpt_dir):
             if folder is not self.path and not folder.is_dir():
                 continue
@@ -265,8 +281,11 @@ class RunDir:
 
     @contextmanager
     def locked_unless_it_fails(self) -> Iterator[RunDir]:
-        """`lock`, and `unlock` again if the block raises: a run that cannot be started, resumed or
-        opened lets go of its directory; otherwise the lock stays held (until `unlock`)."""
+        """`lock`, and `unlock` again if the block raises.
+
+        A run that cannot be started, resumed or opened lets go of its directory; otherwise the lock
+        stays held (until `unlock`).
+        """
         self.lock()
         try:
             yield self
@@ -276,8 +295,16 @@ class RunDir:
 
     # ------------------------------------------------------------------ creation
     def create(self, cfg: RunConfig, neat_ini: str | None, extra_files: dict[str, str] | None = None) -> None:
-        """Write a new run's config.yaml, neat.ini (unless None: a method without NEAT), any
-        `extra_files` and an empty generations.csv; ValueError when the directory already holds a run."""
+        """Write a new run's config.yaml, neat.ini, any extra files and an empty generations.csv.
+
+        Args:
+            cfg: The run's config.
+            neat_ini: neat.ini's text; None: no neat.ini (a method without NEAT).
+            extra_files: More files to write, name -> text.
+
+        Raises:
+            ValueError: The directory already holds a run.
+        """
         if (self.path / "generations.csv").exists():
             raise SgrError(f"run directory {self.path} already holds a run; use --resume {self.path} "
                            "or another --out")
@@ -302,10 +329,13 @@ class RunDir:
         return raw
 
     def neat_ini(self) -> Path:
-        """The path of the run's neat.ini, for neat-python to read (it opens the file itself);
-        SgrError naming it unless it is a regular file (neat-python calls a FIFO "no such config
-        file"), not a link (one outside the run would be read as the run's own), of at most
-        CONFIG_CAP bytes."""
+        """The path of the run's neat.ini, for neat-python to read (it opens the file itself).
+
+        Raises:
+            SgrError: Naming it, unless it is a regular file (neat-python calls a FIFO "no such
+                config file"), not a link (one outside the run would be read as the run's own), of
+                at most CONFIG_CAP bytes.
+        """
         f = self.path / "neat.ini"
         if not os.path.lexists(f):  # neat-python says so, as ever
             return f
@@ -315,21 +345,35 @@ class RunDir:
         return f
 
     def save_task(self, reference: dict) -> None:
-        """Keep the reference to a task registered in a script (no `imports:` names it): its name,
-        source file and that file's sha256, as JSON (tasks/registry.py, `task_reference`), so
-        that the run renders, reports and resumes in another process that registers it."""
+        """Keep the reference to a task registered in a script (no `imports:` names it).
+
+        So the run renders, reports and resumes in another process that registers it.
+
+        Args:
+            reference: The task's name, source file and that file's sha256, as JSON data
+                (`task_reference`, tasks/registry.py).
+        """
         from tasks.registry import TASK_FILE
 
         atomic_write(self.path / TASK_FILE, (json.dumps(reference, indent=1) + "\n").encode(),
                      inside=self.path)
 
     def load_task(self, raw: dict, method: bool = False) -> None:
-        """Register the run's own task in this process, unless it is sgr's or registered already:
-        import the modules its config names (`imports:`), else the file its task reference names
-        (a script's); either only after --trust-imports (tasks/registry.py). Reading the folder
-        runs nothing: SgrError in one line, saying how to allow it, when the task may not be
-        loaded or is still unknown. `method`: the run's method is not registered here, so the
-        modules its config names are imported (under the same rule) whatever its task."""
+        """Register the run's own task in this process, unless it is sgr's or registered already.
+
+        It imports the modules its config names (`imports:`), else the file its task reference
+        names (a script's); either only after --trust-imports (tasks/registry.py). Reading the
+        folder runs nothing.
+
+        Args:
+            raw: The run's config.yaml, as read.
+            method: The run's method is not registered here, so the modules its config names are
+                imported (under the same rule) whatever its task.
+
+        Raises:
+            SgrError: In one line, saying how to allow it, when the task may not be loaded or is
+                still unknown.
+        """
         from tasks.registry import OLD_TASK_FILE, TASK_FILE, import_tasks, load_task_reference
         from tasks.specs import TASKS, unknown_task
 
@@ -364,16 +408,22 @@ class RunDir:
 
     # ------------------------------------------------------------------ generations.csv
     def rows(self) -> list[dict]:
-        """generations.csv as dicts of strings, whole lines only (a last line cut short is skipped);
-        [] without the file."""
+        """generations.csv as dicts of strings, [] without the file.
+
+        Whole lines only: a last line cut short is skipped.
+        """
         f = self.path / "generations.csv"
         if not os.path.lexists(f):  # (a FIFO or a link is there: refused by the reader, in one line)
             return []
         return generation_rows(f)[0]
 
     def check_rows(self) -> list[dict]:
-        """`rows`, read once; SgrError naming the file and the line unless generations.csv holds
-        one row per generation, in order (what a resume keeps and appends to)."""
+        """`rows`, read once and checked: what a resume keeps and appends to.
+
+        Raises:
+            SgrError: Naming the file and the line, unless generations.csv holds one row per
+                generation, in order.
+        """
         f = self.path / "generations.csv"
         if not os.path.lexists(f):  # (a FIFO or a link is there: refused by the reader, in one line)
             return []
@@ -400,8 +450,13 @@ class RunDir:
         return self._header == ",".join(columns)
 
     def append_row(self, row: dict) -> None:
-        """Append one generation's row (keys COLUMNS, floats written with repr so they read back
-        exactly), fsynced; a last line cut short is dropped by rewriting the file."""
+        """Append one generation's row to generations.csv, flushed to disk (fsync).
+
+        A last line cut short is dropped by rewriting the file.
+
+        Args:
+            row: The row, keys COLUMNS; floats are written with repr, so they read back exactly.
+        """
         row = {k: (repr(float(v)) if isinstance(v, float) else v) for k, v in row.items()}
         path = self.path / "generations.csv"
         columns = _columns([row])
@@ -424,8 +479,10 @@ class RunDir:
             raise
 
     def truncate_rows(self, generation: int) -> None:
-        """Keep the rows of the first `generation` generations (the others are recomputed after a
-        resume). Rows count generations from 1; a run written when they counted from 0 is renumbered."""
+        """Keep the rows of the first `generation` generations; the others are recomputed after a resume.
+
+        Rows count generations from 1; a run written when they counted from 0 is renumbered.
+        """
         rows = self.check_rows()
         if rows and rows[0]["generation"] == "0":  # counted from 0 before: renumber, once
             rows = [{**r, "generation": str(int(r["generation"]) + 1)} for r in rows]
@@ -433,9 +490,11 @@ class RunDir:
 
     # ------------------------------------------------------------------ end files
     def begin_end_files(self) -> None:
-        """Mark that the end files (fitness.png, champion.gif) are being written: until
-        `end_files_written`, a finished run is not done, and `sgr evolve --resume` writes them again
-        (a full disk or a kill while writing them)."""
+        """Mark that the end files (fitness.png, champion.gif) are being written.
+
+        Until `end_files_written`, a finished run is not done, and `sgr evolve --resume` writes them
+        again (after a full disk or a kill while writing them).
+        """
         atomic_write(self.path / ENDING, b"", inside=self.path)
 
     def end_files_written(self) -> None:
@@ -456,8 +515,12 @@ class RunDir:
         atomic_write(self.path / ELITES_FILE, record_json(elites).encode(), inside=self.path)
 
     def champion(self) -> dict:
-        """champion.json as a dict; SgrError naming the file when there is none yet, or it is not a
-        JSON object (a damaged file: ours are written whole)."""
+        """champion.json as a dict.
+
+        Raises:
+            SgrError: Naming the file, when there is none yet or it is not a JSON object (a damaged
+                file: ours are written whole).
+        """
         f = self.path / "champion.json"
         if f.exists() and not f.is_file():  # a FIFO or a device would be read forever
             raise SgrError(f"{f}: not a regular file")
@@ -474,12 +537,20 @@ class RunDir:
         return champ
 
     def save_checkpoint(self, generation: int, data: dict) -> Path:
-        """Write `data` (JSON-able: numbers, strings, lists, dicts) atomically as
-        checkpoints/gen-<generation>.json.gz and delete the older checkpoints but the newest
-        KEEP_CHECKPOINTS up to this one; returns its path. Retention goes by the generation just
-        written, not by the names in the folder: a file named after a later generation (planted, or
-        left by a damaged run) is never deleted and never makes a real checkpoint go, nor is any
-        file that is not a regular one (a FIFO, a link)."""
+        """Write `data` atomically as checkpoints/gen-<generation>.json.gz and delete older ones.
+
+        The newest KEEP_CHECKPOINTS checkpoints up to this one are kept. Retention goes by the
+        generation just written, not by the names in the folder: a file named after a later
+        generation (planted, or left by a damaged run) is never deleted and never makes a real
+        checkpoint go, nor is any file that is not a regular one (a FIFO, a link).
+
+        Args:
+            generation: Generations done: the checkpoint's number.
+            data: JSON-able data: numbers, strings, lists, dicts.
+
+        Returns:
+            The checkpoint's path.
+        """
         make_folder(self.ckpt_dir, self.path)
         path = self.ckpt_dir / f"gen-{generation:05d}.json.gz"
         atomic_write(path, checkpoint_bytes({"generation": generation, **data}), inside=self.path)
@@ -496,9 +567,14 @@ class RunDir:
         return [f for _, f in sorted(found, reverse=True)]
 
     def last_checkpoint_generation(self, done: int | None = None) -> int | None:
-        """Generations done at the newest checkpoint file (a regular file, of a generation the run
-        has done: `done`, else `generations_done`, read from its files), None without one. A run
-        under way passes `done` (its search's generation), so the loop reads no file back."""
+        """Generations done at the newest checkpoint file, None without one.
+
+        Only a regular file, of a generation the run has done, counts.
+
+        Args:
+            done: The generations the run has done; None: `generations_done`, read from its files.
+                A run under way passes its search's generation, so the loop reads no file back.
+        """
         done = self.generations_done() if done is None else done
         for f in self.checkpoints():
             g = checkpoint_generation(f)
@@ -507,9 +583,11 @@ class RunDir:
         return None
 
     def generations_done(self) -> int | None:
-        """How many generations the run's own records say it has done, the most a checkpoint of
-        it can be after: generations.csv's last whole row (an older sgr's rows count from 0), else,
-        without rows, config.yaml's `generations`; None when neither can be read."""
+        """How many generations the run's own records say it has done: the most a checkpoint can be after.
+
+        That is generations.csv's last whole row (an older sgr's rows count from 0), else, without
+        rows, config.yaml's `generations`; None when neither can be read.
+        """
         f = self.path / "generations.csv"
         try:
             rows, lines = generation_rows(f) if f.exists() or f.is_symlink() else ([], [])
@@ -525,8 +603,10 @@ class RunDir:
         return g if isinstance(g, int) and not isinstance(g, bool) else None
 
     def has_checkpoint(self) -> bool:
-        """Whether the run has any checkpoint to resume from, an older sgr's pickled ones included
-        (they are refused on resume, with the way to convert them, but the run is not lost)."""
+        """Whether the run has any checkpoint to resume from, an older sgr's pickled ones included.
+
+        Pickled ones are refused on resume, with the way to convert them, but the run is not lost.
+        """
         return bool(self.checkpoints() or self.pickled_checkpoints())
 
     def pickled_checkpoints(self) -> list[Path]:
@@ -534,11 +614,21 @@ class RunDir:
         return sorted(self.ckpt_dir.glob("gen-*.pkl")) if self.ckpt_dir.is_dir() else []
 
     def latest_checkpoint(self, decode: Callable[[dict], dict] | None = None) -> dict | None:
-        """The newest checkpoint that loads and that `decode` (which checks it and builds objects)
-        accepts, as `decode` returns it (the JSON data without one). Damaged checkpoints and every
-        other file in checkpoints/ (pickles above all) are skipped, named in one warning line. None
-        when there is none at all; ValueError naming the files when none loads;
-        PickledCheckpoints when there are only an older sgr's pickles."""
+        """The newest checkpoint that loads and that `decode` accepts, None when there is none at all.
+
+        Damaged checkpoints and every other file in checkpoints/ (pickles above all) are skipped,
+        named in one warning line.
+
+        Args:
+            decode: Checks a checkpoint's data and builds objects; None: the JSON data as it is.
+
+        Returns:
+            The checkpoint, as `decode` returns it; None without any checkpoint.
+
+        Raises:
+            PickledCheckpoints: There are only an older sgr's pickles.
+            ValueError: No checkpoint loads; the message names the files.
+        """
         ours = self.checkpoints()
         others = sorted(f for f in self.ckpt_dir.iterdir() if f not in ours and not f.name.startswith(".")
                         ) if self.ckpt_dir.is_dir() else []  # (".": atomic_write's temporary files)

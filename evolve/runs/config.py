@@ -125,8 +125,22 @@ def check_config(raw: dict, source: str = "config", named_in: Path | None = None
 
 
 def load_config(path: str | Path, overrides: dict | None = None, named_in: Path | None = None) -> RunConfig:
-    """Read, override (CLI flags, a sweep's overrides: every key as given, None setting null),
-    resolve relative paths and validate a YAML config (`named_in`: see `check_config`)."""
+    """Read, override, resolve and validate a YAML config.
+
+    Relative paths in it are taken from the config's folder.
+
+    Args:
+        path: The YAML config.
+        overrides: Values set over its keys (CLI flags, a sweep's overrides): every key as given,
+            None setting null.
+        named_in: The file of a run or sweep folder the config was read back from (`check_config`).
+
+    Returns:
+        The resolved config.
+
+    Raises:
+        SgrError: The config is not valid; the message names the file and the key.
+    """
     path = Path(path)
     raw = read_yaml(path, "config file") or {}
     if not isinstance(raw, dict):
@@ -136,8 +150,20 @@ def load_config(path: str | Path, overrides: dict | None = None, named_in: Path 
 
 def config_from_dict(raw: dict, source: str = "config", base: Path | None = None,
                      named_in: Path | None = None) -> RunConfig:
-    """The resolved config of a dict (what a YAML file holds); relative file paths are taken from
-    `base` (default: the current folder)."""
+    """The resolved config of a dict (what a YAML file holds), defaults filled and validated.
+
+    Args:
+        raw: The config's keys and values.
+        source: What the config is called in error messages.
+        base: The folder relative file paths are taken from; None: the current folder.
+        named_in: The file of a run or sweep folder the config was read back from (`check_config`).
+
+    Returns:
+        The resolved config.
+
+    Raises:
+        SgrError: The config is not valid; the message names `source` and the key.
+    """
     if not isinstance(raw, dict):
         raise SgrError(f"{source}: a config must be a mapping of keys to values, "
                        f"got a {type(raw).__name__}")

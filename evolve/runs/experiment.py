@@ -64,8 +64,9 @@ def rollout_pool(workers: int | str) -> BasePool:
 
 
 class Experiment:
-    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers. It
-    holds worker processes and the run's lock: use it in a `with` block (or call `close`).
+    """One run: its directory, the method's `Problem`, the NEAT search and the rollout workers.
+
+    It holds worker processes and the run's lock: use it in a `with` block (or call `close`).
 
         cfg = {"method": "sgr", "task": "Walker-v0", "generations": 5}
         with Experiment.from_config(cfg, "runs/x") as exp:
@@ -116,16 +117,31 @@ class Experiment:
     @classmethod
     def create(cls, config_path: str | Path, out: str | Path, overrides: dict | None = None,
                quiet: bool = False, named_in: Path | None = None) -> Experiment:
-        """A new run in `out` from a YAML config with `overrides` set over its keys (a None value sets
-        null; the CLI leaves out the flags not given);
-        `named_in`: the config was read back from a run or sweep folder (`check_config`)."""
+        """A new run in `out` from a YAML config, with `overrides` set over its keys.
+
+        Args:
+            config_path: The YAML config.
+            out: The run's folder.
+            overrides: Values set over the config's keys; a None value sets null (the CLI leaves out
+                the flags not given).
+            quiet: Print no console lines.
+            named_in: The config was read back from this run or sweep folder (`check_config`).
+        """
         return cls._start(load_config(config_path, overrides, named_in), out, quiet)
 
     @classmethod
     def from_config(cls, config: dict, out: str | Path, quiet: bool = False) -> Experiment:
-        """A new run in `out` from a config dict (no YAML file needed; relative paths are taken
-        from the current folder, left-out files are the method's packaged defaults, left-out
-        `robust`/`final_selection` the honest evaluation of `sgr evolve`'s default run)."""
+        """A new run in `out` from a config dict (no YAML file needed).
+
+        Relative paths are taken from the current folder, left-out files are the method's packaged
+        defaults, left-out `robust`/`final_selection` the honest evaluation of `sgr evolve`'s default
+        run.
+
+        Args:
+            config: The config's keys and values, as a YAML config holds them.
+            out: The run's folder.
+            quiet: Print no console lines.
+        """
         return cls._start(config_from_dict(config, "config"), out, quiet)
 
     @classmethod
@@ -154,8 +170,19 @@ class Experiment:
     @classmethod
     def resume(cls, out: str | Path, quiet: bool = False, workers: int | str | None = None,
                generations: int | None = None) -> Experiment:
-        """Continue a run from its newest usable checkpoint; `generations` extends a run (finished
-        or not) to that many generations, exactly as if it had been asked for from the start."""
+        """Continue a run from its newest usable checkpoint.
+
+        Args:
+            out: The run's folder.
+            quiet: Print no console lines.
+            workers: Overrides the config's `workers` (a resumed run may use another machine's CPUs).
+            generations: Extend the run (finished or not) to that many generations, exactly as if
+                they had been asked for from the start.
+
+        Raises:
+            ValueError: The run cannot be resumed (no checkpoint, finished, or already past
+                `generations`); the message says why.
+        """
         run = RunDir(out)
         # the run's own task (its imports, or the one a script registered), then every value of its
         # config.yaml and neat.ini checked as a new run's are: the folder may be a stranger's
@@ -187,32 +214,50 @@ class Experiment:
             return exp
 
     def state(self) -> dict:
-        """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own
-        (evolve/runs/checkpoint.py)."""
+        """What a checkpoint holds, as JSON data: the NEAT search's state and the method's own.
+
+        The layout is evolve/runs/checkpoint.py's.
+        """
         return checkpoint_data(self.search, self.problem)
 
     def add_reporter(self, reporter) -> None:
-        """Watch the generation loop with `reporter`: an object with any of the methods start(exp),
-        generation(exp, row), end(exp) (evolve/runs/reporters.py)."""
+        """Watch the generation loop with `reporter`.
+
+        Args:
+            reporter (object): An object with any of the methods start(exp), generation(exp, row), end(exp)
+                (evolve/runs/reporters.py).
+        """
         self.reporters.add(reporter)
 
     def replace_reporter(self, kind: type, reporter) -> None:
-        """Use `reporter` in place of the built-in reporter of type `kind` (say `ConsoleProgress`:
-        evolve/runs/reporters.py), at its place in the order."""
+        """Use `reporter` in place of the built-in reporter of type `kind`, at its place in the order.
+
+        Args:
+            kind: The built-in reporter's type, say `ConsoleProgress` (evolve/runs/reporters.py).
+            reporter (object): The reporter that takes its place.
+        """
         self.reporters.replace(kind, reporter)
 
     @property
     def stopping(self) -> bool:
-        """Whether a stop (Ctrl-C, SIGTERM) was asked for: the loop ends after this generation,
-        once its reporters (the checkpoint's included) have run."""
+        """Whether a stop (Ctrl-C, SIGTERM) was asked for.
+
+        The loop then ends after this generation, once its reporters (the checkpoint's included)
+        have run.
+        """
         return self._stop is not None and self._stop.is_set()
 
     def run_all(self, after_generation: Callable[[Experiment], None] | None = None) -> None:
-        """Run to the configured number of generations; `after_generation(self)` is called once
-        each generation's row, champion and checkpoint are written (bench/soak.py measures there).
-        Ctrl-C (SIGINT) or SIGTERM: the generation under way ends, a checkpoint is written, then
-        `Interrupted` (a KeyboardInterrupt); a second one raises it at once, after a checkpoint of
-        the last finished generation where the newest is older."""
+        """Run to the configured number of generations.
+
+        On Ctrl-C (SIGINT) or SIGTERM, the generation under way ends, a checkpoint is written, then
+        `Interrupted` (a KeyboardInterrupt) is raised; a second one raises it at once, after a
+        checkpoint of the last finished generation where the newest is older.
+
+        Args:
+            after_generation: Called with this experiment once each generation's row, champion and
+                checkpoint are written (bench/soak.py measures there).
+        """
         self._check_open("run_all")
         cfg, search = self.cfg, self.search
         with stop_after_generation() as stop, self.reporters.running(self):
@@ -276,8 +321,14 @@ class Experiment:
                 f"final selection {explain(champ)}")
 
     def write_failed(self, exc: OSError) -> str:
-        """One line for a write that failed (a full disk): the file, why, where the run stands and
-        the command that completes it. Every file is still whole (written whole or not at all)."""
+        """One line for a write that failed (a full disk): the file, why, and how to complete the run.
+
+        The line says where the run stands and gives the command that completes it. Every file is
+        still whole (written whole or not at all).
+
+        Args:
+            exc: The write's error.
+        """
         what = f"cannot write {exc.filename or 'a file'}: {exc.strerror or exc}"
         resume = f"sgr evolve --resume {self.run.path}"
         done = self.search.generation
@@ -291,7 +342,9 @@ class Experiment:
 
     def close(self) -> None:
         """Stop the rollout worker processes and let go of the run directory (again: nothing).
-        The object then runs nothing more: another process may have taken the run."""
+
+        The object then runs nothing more: another process may have taken the run.
+        """
         self._closed = True
         self.pool.close()
         if self._marked_end and self._ran_to_end and not self._finishing:
@@ -316,9 +369,12 @@ class Experiment:
         self.close()
 
     def finish(self) -> None:
-        """End-of-run artefacts: fitness.png always, champion.gif when render_champion is set; each
-        written whole or not at all, and a run stopped while writing them (a full disk) writes
-        them again on `resume`. After `close` too (a `with` block's end): it writes files only."""
+        """Write the end-of-run artefacts: fitness.png always, champion.gif when render_champion is set.
+
+        Each is written whole or not at all, and a run stopped while writing them (a full disk)
+        writes them again on `resume`. It may be called after `close` too (a `with` block's end):
+        it writes files only.
+        """
         self._finishing = True
         self.close()
         write_end_files(self.run, self.cfg, champion=self.search.best is not None)

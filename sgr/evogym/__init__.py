@@ -1,11 +1,13 @@
-"""evogym 2.0's API on sgr's simulator: `evogym` code ports by changing `evogym` to `sgr.evogym` in
-its imports (`sed 's/\\bevogym\\b/sgr.evogym/g'`). Same layout as evogym: `sgr.evogym` (this
-package: EvoWorld, WorldObject, EvoSim, EvoViewer and the utils), `.envs` (EvoGymBase,
-BenchmarkBase and the 32 tasks under evogym's bare gym ids), `.utils`, `.world`, `.sim`, `.viewer`.
-docs/EVOGYM_COMPAT.md lists every public name of evogym and its status here.
+"""evogym 2.0's API on sgr's simulator: `evogym` code ports by importing `sgr.evogym` instead.
+
+Change `evogym` to `sgr.evogym` in its imports (`sed 's/\\bevogym\\b/sgr.evogym/g'`). Same layout
+as evogym: `sgr.evogym` (this package: EvoWorld, WorldObject, EvoSim, EvoViewer and the utils),
+`.envs` (EvoGymBase, BenchmarkBase and the 32 tasks under evogym's bare gym ids), `.utils`, `.world`,
+`.sim`, `.viewer`. docs/EVOGYM_COMPAT.md lists every public name of evogym and its status here.
 
 Where this API differs from sgr's native one (tsim, tasks, evolve; `import sgr`), on purpose, since
 it is evogym's:
+
 - `sgr.evogym.sample_robot(shape, pd)` returns (body, connections), the body a float matrix, drawn
   from Python's global `random` (so `random.seed(s)` gives evogym's robot); the native
   `sgr.sample_robot(shape, rng, pd)` returns the int matrix alone, drawn from the

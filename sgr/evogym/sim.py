@@ -140,8 +140,15 @@ class EvoSim:
         self._history = [self._snapshot()]
 
     def revert(self, time: int) -> None:
-        """Back to step `time` (evogym's `revert`): its positions and velocities, later history
-        dropped."""
+        """Back to step `time`: its positions and velocities, later history dropped (evogym's `revert`).
+
+        Args:
+            time: A step from 0 to `get_time()`.
+
+        Raises:
+            TypeError: `time` is not an int.
+            ValueError: `time` is outside [0, `get_time()`].
+        """
         self._check_time(time)
         snap = self._history[time]
         s = self._bs.state[0, :self._n_sim]
@@ -157,8 +164,17 @@ class EvoSim:
         return self._bs.read_state()[0, :self._n_sim, 0:4].copy()
 
     def set_action(self, robot_name: str, action: np.ndarray) -> None:
-        """Actuator targets of robot `robot_name` in `get_actuator_indices` order, as given (evogym
-        does not clip here; EvoGymBase.step clips to [0.6, 1.6])."""
+        """Set the actuator targets of robot `robot_name` for the next steps, as given.
+
+        evogym does not clip here; EvoGymBase.step clips to [0.6, 1.6].
+
+        Args:
+            robot_name: The robot's name in the world.
+            action: One target per actuator, in `get_actuator_indices` order.
+
+        Raises:
+            ValueError: An unknown robot, the wrong number of values, or a non-finite one.
+        """
         body = self._robot(robot_name)
         a = np.asarray(action, dtype=np.float64).reshape(-1)
         if a.shape != (body.n_actuators,):
@@ -170,8 +186,15 @@ class EvoSim:
         self._bs.actions[0, col:col + body.n_actuators] = a
 
     def step(self) -> bool:
-        """One step (30 substeps of dt = 1e-4). True when evogym's instability rule fired: then
-        time does not advance and the last snapshot stays the current state."""
+        """Advance one step (30 substeps of dt = 1e-4).
+
+        When evogym's instability rule fires, time does not advance and the last snapshot stays the
+        current state. Unlike evogym, which goes on from the unstable state, later steps do nothing
+        (and warn once) until `reset` or `revert`.
+
+        Returns:
+            True when evogym's instability rule fired (or the state stopped being finite).
+        """
         if self._stopped():
             if not self._unstable_warned:
                 warnings.warn("EvoSim.step after an unstable step: sgr keeps the last stable state "
@@ -286,8 +309,15 @@ class EvoSim:
         return self._object_points(time, object_name, 2).T / self.VOXEL_SIZE
 
     def object_orientation_at_time(self, time: int, object_name: str) -> float:
-        """evogym's orientation estimate of the object at step `time` against step 0, radians in
-        [0, 2 pi) counter-clockwise."""
+        """evogym's orientation estimate of the object at step `time` against step 0.
+
+        Args:
+            time: A step from 0 to `get_time()`.
+            object_name: The object's name in the world.
+
+        Returns:
+            The angle in radians, in [0, 2 pi), counter-clockwise.
+        """
         self._check_time(time)
         self._check_object(object_name)
         idx = self._slices[object_name]

@@ -45,10 +45,14 @@ def get_uniform(x: int) -> np.ndarray:
 
 
 def draw(pd) -> int:
-    """Index drawn from the relative weights `pd` with one `random.uniform(0, 1)`: the first index
-    whose running sum of normalised weights reaches the draw (evogym's order of additions, so the
-    same global random state gives evogym's index). ValueError for an empty, negative or all-zero
-    `pd`."""
+    """An index drawn from the relative weights `pd` with one `random.uniform(0, 1)`.
+
+    It is the first index whose running sum of normalised weights reaches the draw, added in
+    evogym's order, so the same global random state gives evogym's index.
+
+    Raises:
+        ValueError: `pd` is empty, negative or all zero.
+    """
     p = np.array(pd, dtype=float).reshape(-1)
     if p.size == 0:
         raise ValueError("invalid probability distribution: it has no entries")
@@ -68,9 +72,21 @@ def draw(pd) -> int:
 
 
 def sample_robot(robot_shape: tuple[int, int], pd: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
-    """A random valid robot and its full connectivity: cells drawn row by row with `draw` until the
-    matrix is connected and has an actuator. `pd` (5,) weights empty, rigid, soft, H_ACT, V_ACT
-    (default 0.6 for empty and 0.2 for each other). The body is a float array, as evogym's."""
+    """A random valid robot and its full connectivity, drawn from Python's global `random`.
+
+    Cells are drawn row by row with `draw` until the matrix is connected and has an actuator.
+
+    Args:
+        robot_shape: The body's (height, width).
+        pd: (5,) weights of empty, rigid, soft, H_ACT, V_ACT; None: 0.6 for empty and 0.2 for each
+            other.
+
+    Returns:
+        The body, a float array as evogym's, and its connections (`get_full_connectivity`).
+
+    Raises:
+        ValueError: `pd` is not (5,), gives actuators no chance, or gives non-empty voxels none.
+    """
     if pd is not None:
         pd = np.asarray(pd, dtype=float)
         if pd.shape != (5,):
@@ -104,9 +120,11 @@ def has_actuator(robot: np.ndarray) -> bool:
 
 
 def get_full_connectivity(robot: np.ndarray) -> np.ndarray:
-    """(2, k) connections of every pair of 4-adjacent non-empty voxels, as flat indices into
-    `robot.flatten()`: cell by cell in row-major order, its right then its lower neighbour (an int
-    array; (2, 0) floats when there is none, as evogym's)."""
+    """(2, k) connections of every pair of 4-adjacent non-empty voxels, flat indices into `robot.flatten()`.
+
+    Pairs go cell by cell in row-major order, each cell's right then its lower neighbour. An int
+    array; (2, 0) floats when there is none, as evogym's.
+    """
     m = np.asarray(robot)
     h, w = m.shape
     pairs = []
@@ -129,8 +147,11 @@ def hashable(robot: np.ndarray) -> str:
 
 
 class Timer:
-    """Paces a loop at `target_step_frequency` steps per second (None: never waits), as evogym's
-    viewer does for its target rps."""
+    """Paces a loop at a target number of steps per second, as evogym's viewer does for its target rps.
+
+    Args:
+        target_step_frequency: Steps per second; None: never waits.
+    """
 
     def __init__(self, target_step_frequency: int | None = None) -> None:
         self._target_rps = float("inf") if target_step_frequency is None else target_step_frequency

@@ -104,8 +104,16 @@ class EvoViewer:
         self._tracking_objects = list(objects)
 
     def set_tracking_settings(self, **settings) -> None:
-        """`padding` (x, y) voxels, `scale` (x, y) multiplier of the tracked span, and `lock_x`,
-        `lock_y`, `lock_width`, `lock_height` (a number fixes that value; False frees it)."""
+        """Set how the view follows the tracked objects, one keyword per setting.
+
+        The settings are `padding`, (x, y) voxels; `scale`, (x, y) multiplier of the tracked span;
+        and `lock_x`, `lock_y`, `lock_width`, `lock_height`, where a number fixes that value of the
+        view and False frees it.
+
+        Raises:
+            ValueError: An unknown setting.
+            TypeError: `padding` or `scale` is not a tuple of two numbers.
+        """
         for key, value in settings.items():
             if key in ("padding", "scale"):
                 v = _pair(value, key, float)
@@ -221,8 +229,24 @@ class EvoViewer:
     def render(self, mode: str = "screen", verbose: bool = False, hide_background: bool = False,
                hide_grid: bool = False, hide_edges: bool = False,
                hide_voxels: bool = False) -> np.ndarray | None:
-        """'img' / 'rgb_array': the view as an (H, W, 3) uint8 array; 'screen' / 'human': draw it
-        in a window (RuntimeError where no display exists). Paced to the target rps."""
+        """Draw the view, as an image array or in a window; paced to the target rps.
+
+        Args:
+            mode: 'img' / 'rgb_array' returns the view as an image; 'screen' / 'human' draws it in a
+                window.
+            verbose: Print the rate of renders and its mean, each second.
+            hide_background: Draw the background white.
+            hide_grid: Draw no grid lines.
+            hide_edges: Draw no voxel edges.
+            hide_voxels: Draw no voxels.
+
+        Returns:
+            The view as an (H, W, 3) uint8 array for 'img' / 'rgb_array'; None for 'screen' / 'human'.
+
+        Raises:
+            ValueError: An unknown mode.
+            RuntimeError: 'screen' / 'human' where no display exists.
+        """
         if mode not in MODES:
             raise ValueError(f"mode {mode!r} is not one of {', '.join(MODES)}")
         self._follow()

@@ -38,8 +38,14 @@ class EvoWorld:
         return out
 
     def add_from_json(self, file_path: str) -> None:
-        """Add every object of an evogym world file; ValueError for a corrupted object or a name
-        already in the world."""
+        """Add every object of an evogym world file (the Design Tool's JSON).
+
+        Args:
+            file_path: The world file.
+
+        Raises:
+            ValueError: A corrupted object, or a name already in the world.
+        """
         with open(file_path) as f:
             state = json.load(f)
         size = Pair(int(state["grid_width"]), int(state["grid_height"]))
@@ -55,15 +61,30 @@ class EvoWorld:
 
     def add_from_array(self, name: str, structure: np.ndarray, x: int, y: int,
                        connections: np.ndarray | None = None) -> None:
-        """Add one object from its structure (top row first), bottom-left at grid cell (x, y);
-        `connections` (2, k) default to every adjacent pair."""
+        """Add one object from its structure, its bottom-left at grid cell (x, y).
+
+        Args:
+            name: The object's name.
+            structure: Its voxel materials, top row first.
+            x: The grid column of its bottom-left.
+            y: The grid row of its bottom-left.
+            connections: (2, k) glued pairs, flat indices into `structure.flatten()`; None: every
+                adjacent pair.
+
+        Raises:
+            ValueError: A bad structure or connections, a negative position, a duplicate name, or
+                an overlap with an object already there.
+        """
         obj = WorldObject.from_array(name, structure, connections)
         obj.set_pos(x, y)
         self.add_object(obj)
 
     def add_object(self, obj: WorldObject) -> None:
-        """Add `obj` at its position, growing the grid to hold it; ValueError for a duplicate name
-        or an overlap with an object already there."""
+        """Add `obj` at its position, growing the grid to hold it.
+
+        Raises:
+            ValueError: A duplicate name, or an overlap with an object already there.
+        """
         if obj.name in self.objects:
             raise ValueError(f"cannot add object with duplicate name: {obj.name}")
         x0, y0 = obj.pos.x, obj.pos.y
@@ -115,8 +136,13 @@ class EvoWorld:
         return self.objects[obj_name]
 
     def pretty_print(self, voxels_per_line: int = 50) -> None:
-        """Print the grid, top row first: (R)igid, (S)oft, (H)/(V) actuators, (F)ixed, '.' empty,
-        `voxels_per_line` columns per block, with the row and column numbers mod 10."""
+        """Print the grid, top row first, with the row and column numbers mod 10.
+
+        Voxels print as (R)igid, (S)oft, (H)/(V) actuators, (F)ixed, '.' empty.
+
+        Args:
+            voxels_per_line: Columns per block: a wider world prints as several blocks.
+        """
         for x0 in range(0, self.grid_size.x, voxels_per_line):
             cols = range(x0, min(self.grid_size.x, x0 + voxels_per_line))
             for y in reversed(range(self.grid_size.y)):
@@ -128,8 +154,16 @@ class EvoWorld:
 
 
 class WorldObject:
-    """One named object: voxel grid (bottom row first), position, voxels and their neighbours
-    (evogym's WorldObject)."""
+    """One named object of a world, its voxels and their neighbours (evogym's WorldObject).
+
+    Attributes:
+        name (str): The object's name.
+        pos (Pair): The grid cell of its bottom-left.
+        grid_size (Pair): Its grid's (width, height).
+        voxels: Its non-empty cells, in its grid.
+        grid: Its voxel materials, bottom row first.
+        neighbors: The cells each voxel is glued to.
+    """
 
     def __init__(self) -> None:
         self.name = ""
@@ -162,8 +196,17 @@ class WorldObject:
 
     def load_from_array(self, name: str, structure: np.ndarray,
                         connections: np.ndarray | None = None) -> None:
-        """Become an object from a structure and (2, k) connections; ValueError when a connection
-        names an empty or missing cell."""
+        """Become an object from a structure and its connections, at position (0, 0).
+
+        Args:
+            name: The object's name.
+            structure: Its voxel materials, top row first (2-D).
+            connections: (2, k) glued pairs, flat indices into `structure.flatten()`; None: every
+                adjacent pair.
+
+        Raises:
+            ValueError: The structure is not 2-D, or a connection names an empty or missing cell.
+        """
         structure = np.asarray(structure)
         if structure.ndim != 2:
             raise ValueError(f"could not load object {name} from array -- structure must be 2-D, "
@@ -200,8 +243,16 @@ class WorldObject:
             self.neighbors.setdefault(at[fb], []).append(at[fa])
 
     def load_from_parsed_json(self, name: str, json_data: Any, grid_size: Pair) -> None:
-        """Become object `name` of a parsed world file whose grid is `grid_size` wide; ValueError
-        for an object without voxels or with a neighbour outside it."""
+        """Become object `name` of a parsed world file.
+
+        Args:
+            name: The object's name.
+            json_data: Its entry in the file's `objects`: `indices`, `types` and `neighbors`.
+            grid_size: The world's grid size: its width reads the flat indices.
+
+        Raises:
+            ValueError: The object has no voxels, or a neighbour outside it.
+        """
         self.name = name
         idx = [int(i) for i in json_data["indices"]]
         if not idx:
