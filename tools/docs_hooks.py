@@ -34,7 +34,7 @@ def _outside(page_src: Path, docs: Path, root: Path, target: str) -> Path | None
 def on_page_markdown(markdown: str, page, config, files) -> str:
     """Rewrite the page's links to repository files outside docs/ as code spans; warn (an error
     under --strict) for one that names no file."""
-    docs = Path(config["docs_dir"]).resolve()
+    docs = Path(config.docs_dir).resolve()
     root = docs.parent
     src = Path(page.file.abs_src_path)
 
