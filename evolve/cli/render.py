@@ -52,6 +52,8 @@ def register(sub) -> argparse.ArgumentParser:
     r.add_argument("--elites", type=positive(int, 24), metavar="N",
                    help="a map-elites run's N elites chosen across its archive, the best first, side by "
                         "side in one GIF (their exact episodes); default --out RUN_DIR/elites.gif")
+    r.add_argument("--every", type=positive(int, MAX_STEPS), metavar="K",
+                   help="with --elites: a frame every K steps (default 4; more: a smaller GIF)")
     r.set_defaults(fn=run)
     return r
 
@@ -76,6 +78,8 @@ def run(args: argparse.Namespace) -> int:
                            "its run's episode")
         if args.exact and args.replay is not None:
             raise SgrError("give either --exact or --replay I, not both")
+        if args.every is not None and args.elites is None:
+            raise SgrError("--every sets the frames of an --elites strip: give --elites N with it")
         if args.elites is not None:
             if args.cell or args.replay is not None:
                 raise SgrError("--elites shows several elites' exact episodes: leave out --cell and --replay")
@@ -83,7 +87,8 @@ def run(args: argparse.Namespace) -> int:
 
             width = args.width if args.width != 640 else 200  # (the defaults are a single champion's)
             height = args.height if args.height != 320 else 140
-            out = elite_strip(args.run_dir, args.out, args.elites, width=width, height=height, fps=args.fps)
+            out = elite_strip(args.run_dir, args.out, args.elites, width=width, height=height, fps=args.fps,
+                              every=args.every or 4)
             print(f"wrote {out}: {args.elites} elites across the archive, their exact episodes")
             return 0
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay

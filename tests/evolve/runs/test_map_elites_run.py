@@ -277,3 +277,10 @@ def test_sgr_render_elites_shows_elites_across_the_map_side_by_side(tiny, tmp_pa
     assert frames.shape[1:3] == (48, 3 * 64 + 2 * 2) and len(frames) >= 2
     assert main(["render", "--elites", "3", "--task", "Walker-v0", "--body", "33,33"]) == 2
     assert "give RUN_DIR" in capsys.readouterr().err
+    # --every K: a frame every K steps (4 by default): fewer frames, the same panels
+    assert main(["render", str(tiny.path), "--elites", "3", "--width", "64", "--height", "48",
+                 "--every", "8", "--out", str(gif)]) == 0
+    sparse = iio.imread(gif)
+    assert sparse.shape[1:] == frames.shape[1:] and len(sparse) < len(frames)
+    assert main(["render", str(tiny.path), "--every", "8"]) == 2
+    assert "--every sets the frames of an --elites strip" in capsys.readouterr().err
