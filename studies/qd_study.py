@@ -45,7 +45,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from studies.study_runs import RECORDS, evolve, finished, keep  # noqa: E402 (after sgr's folder is on the path)
+from studies.study_runs import RECORDS, evolve, finished, generations, keep  # noqa: E402 (after sgr's folder is on the path)
 
 TASKS = ("Walker-v0", "Climber-v2", "UpStepper-v0")
 SEARCH = {"selection": "curiosity", "exploit": 0.5}
@@ -144,20 +144,16 @@ def run_arm(arm: str, task: str, seed: int, out: Path, records: Path, workers: i
     if not twice:
         if not snapshot.is_dir():
             evolve(run, ["--config", str(config(arm, task, out / "configs")), "--seed", str(seed)], workers)
-            if finished(run) and _generations(run) == BUDGET:
+            if finished(run) and generations(run) == BUDGET:
                 shutil.copytree(run, snapshot, ignore=shutil.ignore_patterns("checkpoints"))
         if snapshot.is_dir():
             keep(snapshot, records, ARCHIVE_RECORDS)
         return
     if not snapshot.is_dir():
         return  # (its first part is not done)
-    evolve(run, [], workers, generations=TWICE)
+    evolve(run, [], workers, to=TWICE)
     if finished(run):
         keep(run, records, ARCHIVE_RECORDS)
-
-
-def _generations(run: Path) -> int:
-    return int(yaml.safe_load((run / "config.yaml").read_text())["generations"])
 
 
 def best_under_noise(run: Path) -> float | None:

@@ -12,12 +12,17 @@ import subprocess
 import sys
 from pathlib import Path
 
-import yaml
-
 ROOT = Path(__file__).resolve().parents[1]
 # a run's records: what a results folder keeps of it (its checkpoints and pictures stay behind)
 RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
 SGR = [sys.executable, "-m", "evolve.cli"]
+
+
+def generations(run: Path) -> int:
+    """The generations a run folder's config.yaml asks for (read as sgr reads it: `RunDir.config`)."""
+    from evolve.records.rundir import RunDir
+
+    return int(RunDir(run).config()["generations"])
 
 
 def finished(run: Path) -> bool:
@@ -26,22 +31,20 @@ def finished(run: Path) -> bool:
 
     if not (run / "config.yaml").is_file() or not (run / "champion.json").is_file():
         return False
-    rd = RunDir(run)
-    return rd.last_checkpoint_generation() == int(rd.config()["generations"])
+    return RunDir(run).last_checkpoint_generation() == generations(run)
 
 
-def evolve(run: Path, args: list[str], workers: int, generations: int | None = None) -> None:
+def evolve(run: Path, args: list[str], workers: int, to: int | None = None) -> None:
     """Run `sgr evolve ARGS --out RUN` to its end, or resume it; nothing when it is finished.
 
-    With `generations`, a run that exists is extended to that many (`--resume RUN --generations N`)
-    unless it has them already."""
-    if finished(run) and (generations is None or int(yaml.safe_load(
-            (run / "config.yaml").read_text())["generations"]) == generations):
+    With `to`, a run that exists is extended to that many generations (`--resume RUN --generations
+    N`) unless it has them already."""
+    if finished(run) and (to is None or generations(run) == to):
         return
     cmd = SGR + ["evolve", "--quiet", "--workers", str(workers)]
     cmd += ["--resume", str(run)] if (run / "config.yaml").is_file() else args + ["--out", str(run)]
-    if generations is not None and (run / "config.yaml").is_file():
-        cmd += ["--generations", str(generations)]
+    if to is not None and (run / "config.yaml").is_file():
+        cmd += ["--generations", str(to)]
     print("+", " ".join(cmd[2:]), flush=True)
     subprocess.run(cmd, check=True, cwd=ROOT)
 

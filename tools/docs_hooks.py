@@ -14,21 +14,12 @@ LINK = re.compile(r"(!?)\[([^\]\n]*)\]\(([^)\s#]+)(#[^)\s]*)?\)")
 FENCE = re.compile(r"^(```|~~~).*?^\1", re.M | re.S)
 
 
-def _outside(page_src: Path, docs: Path, root: Path, target: str) -> Path | None:
+def _outside(page_src: Path, docs: Path, target: str) -> Path | None:
     """The repository file a relative link names, when it lies outside the docs folder."""
     if re.match(r"^[a-z][a-z0-9+.-]*:", target) or target.startswith("/"):
         return None  # a URL or an absolute link: mkdocs judges it
     path = (page_src.parent / target).resolve()
-    try:
-        path.relative_to(docs)
-        return None
-    except ValueError:
-        pass
-    try:
-        path.relative_to(root)
-    except ValueError:
-        return path
-    return path
+    return None if path.is_relative_to(docs) else path
 
 
 def on_page_markdown(markdown: str, page, config, files) -> str:
@@ -40,7 +31,7 @@ def on_page_markdown(markdown: str, page, config, files) -> str:
 
     def rewrite(m: re.Match) -> str:
         image, text, target = m.group(1), m.group(2), m.group(3)
-        path = _outside(src, docs, root, target)
+        path = _outside(src, docs, target)
         if path is None:
             return m.group(0)
         if not path.exists():

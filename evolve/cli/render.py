@@ -87,8 +87,9 @@ def run(args: argparse.Namespace) -> int:
 
             width = args.width if args.width != 640 else 200  # (the defaults are a single champion's)
             height = args.height if args.height != 320 else 140
+            frames = {"every": args.every} if args.every is not None else {}  # (else elite_strip's)
             out = elite_strip(args.run_dir, args.out, args.elites, width=width, height=height, fps=args.fps,
-                              every=args.every or 4)
+                              **frames)
             print(f"wrote {out}: {args.elites} elites across the archive, their exact episodes")
             return 0
         replay = 0 if args.exact else MEDIAN if args.replay is None else args.replay
