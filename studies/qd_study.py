@@ -27,10 +27,10 @@ runs/qd/records, beside the runs).
     sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
 
 What results/qd/runs keeps of a record (the tree has a budget, tests/test_tree_size.py): its config,
-neat.ini, champion.json and champion-best-ever.json as written, generations.csv with its figures to
-6 significant digits and its timings to milliseconds, and for a run at twice the budget its archive,
-elites.json.gz (the 1x record's archive is the same run's at generation 100; archive.png is drawn
-again by `sgr report`).
+neat.ini and champion.json as written, champion-best-ever.json gzipped (no sgr command reads it),
+generations.csv with its figures to 6 significant digits and its timings to milliseconds, and for a
+run at twice the budget its archive, elites.json.gz (the 1x record's archive is the same run's at
+generation 100; archive.png is drawn again by `sgr report`).
 """
 
 from __future__ import annotations
@@ -45,7 +45,7 @@ import yaml
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from studies.study_runs import RECORDS, evolve, finished, generations, keep  # noqa: E402 (after sgr's folder is on the path)
+from studies.study_runs import RECORDS, copy_record, evolve, finished, generations, keep  # noqa: E402 (after sgr's folder is on the path)
 
 TASKS = ("Walker-v0", "Climber-v2", "UpStepper-v0")
 SEARCH = {"selection": "curiosity", "exploit": 0.5}
@@ -97,7 +97,7 @@ def commit(records: Path, dest: Path = COMMITTED) -> list[str]:
             if name == "generations.csv":
                 (out / name).write_text(_rounded_csv((rec / name).read_text()))
             elif (rec / name).is_file():
-                shutil.copy2(rec / name, out / name)
+                copy_record(rec / name, out)
         if (rec / "elites.json").is_file() and not rec.name.endswith(f"-g{BUDGET}"):
             archive = gzip.compress((rec / "elites.json").read_bytes(), 9, mtime=0)
             (out / "elites.json.gz").write_bytes(archive)

@@ -15,6 +15,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 # a run's records: what a results folder keeps of it (its checkpoints and pictures stay behind)
 RECORDS = ("config.yaml", "neat.ini", "generations.csv", "champion.json", "champion-best-ever.json")
+# records no sgr command reads, kept gzipped (name + ".gz", no timestamp) to keep the tree small
+GZIPPED = frozenset({"champion-best-ever.json"})
 SGR = [sys.executable, "-m", "evolve.cli"]
 
 
@@ -49,13 +51,24 @@ def evolve(run: Path, args: list[str], workers: int, to: int | None = None) -> N
     subprocess.run(cmd, check=True, cwd=ROOT)
 
 
+def copy_record(source: Path, dest: Path) -> Path:
+    """Copy one record file into the folder `dest`, gzipped where its name is in GZIPPED; the copy."""
+    import gzip
+
+    if source.name not in GZIPPED:
+        return Path(shutil.copy2(source, dest / source.name))
+    out = dest / (source.name + ".gz")
+    out.write_bytes(gzip.compress(source.read_bytes(), 9, mtime=0))
+    return out
+
+
 def keep(run: Path, records: Path, names: tuple[str, ...] = RECORDS) -> None:
     """Copy a finished run's records (`names`, those it has) into the committed folder."""
     dest = records / run.name
     dest.mkdir(parents=True, exist_ok=True)
     for name in names:
         if (run / name).is_file():
-            shutil.copy2(run / name, dest / name)
+            copy_record(run / name, dest)
 
 
 def champion_grid(grid: list[list[tuple[Path, str]]], out: Path) -> Path:
