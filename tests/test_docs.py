@@ -107,3 +107,16 @@ def test_every_figure_of_the_tolerances_page_is_a_link():
     assert not figures_outside_links((DOCS / "reference" / "tolerances.md").read_text())
     table = "| what | bound |\n|---|---|\n| x | [1e-6](a.md#b), 5e-5 |"
     assert figures_outside_links(table) == ["[1e-6](a.md#b), 5e-5"]
+
+
+def test_every_test_file_the_reliability_page_names_exists():
+    """docs/RELIABILITY.md names, in each row, the test that checks it (under tests/evolve/ unless
+    its path says otherwise): each file named is there (tests moved between folders left stale
+    names once)."""
+    root = DOCS.parent
+    text = (DOCS / "RELIABILITY.md").read_text()
+    named = set(re.findall(r"`((?:[\w/]+/)?test_\w+\.py)", text))
+    assert len(named) > 30  # the page still names its tests this way
+    bases = (root, root / "tests", root / "tests" / "evolve")
+    missing = sorted(f for f in named if not any((base / f).is_file() for base in bases))
+    assert not missing, f"docs/RELIABILITY.md names test files that do not exist: {missing}"

@@ -13,6 +13,11 @@ a stop on to its runs: it asks the same as a first signal but never counts as on
 got the scheduler's SIGTERM itself (Slurm signals every process of a job) and its sweep's SIGUSR1
 still finishes its generation. The exit code of a stop is 128 + the signal's number, the shell's
 convention: 130 for SIGINT, 143 for SIGTERM.
+
+A run's process started by a sweep holds SIGUSR1 blocked from before its program starts
+(`hold_passed_on`, the sweep's preexec) until its loop has set the handler: a stop passed on while
+the run is still starting waits, pending, and the run stops after its first generation, rather than
+dying of SIGUSR1's default action or being lost.
 """
 
 from __future__ import annotations
@@ -99,12 +104,23 @@ def stop_after_generation() -> Iterator[StopRequest]:
             stop.signum = signum
 
     old = {s: signal.signal(s, handler) for s in (*STOPS, PASSED_ON)}
+    held = PASSED_ON in signal.pthread_sigmask(signal.SIG_UNBLOCK, {PASSED_ON})  # a pending stop lands now
     try:
         yield stop
     finally:
         _outwait(stop.first_at if stop.counted else None)
+        if held:  # held again before the default action is back: a late stop is never a kill
+            signal.pthread_sigmask(signal.SIG_BLOCK, {PASSED_ON})
         for s, h in old.items():
             signal.signal(s, h)
+
+
+def hold_passed_on() -> None:
+    """Block the sweep's stop (SIGUSR1) in this thread, and in the program it executes, until a
+    loop's `stop_after_generation` sets its handler and lets it in: a run's process gets this
+    before its program starts (the sweeps' preexec), so a stop passed on while it starts is not
+    lost."""
+    signal.pthread_sigmask(signal.SIG_BLOCK, {PASSED_ON})
 
 
 def _outwait(first_at: float | None) -> None:

@@ -7,6 +7,12 @@ its run's process (SIGUSR1, evolve/runs/stops.py) and waits while the run ends i
 checkpoint. A second Ctrl-C or SIGTERM while the sweep waits cancels with force: the tasks' workers
 are killed, and the runs' processes with them, each keeping its last checkpoint.
 
+Ray's cancel is best effort: in tests/evolve/sweeps/test_ray_nodes.py a run went on to its end
+after the sweep's stop, a few times in some dozens (its task, it seems, began as the cancel came,
+which lost it). So the sweep also marks the stop in a
+file of its folder (`.stop-<token>`, on the filesystem the nodes share, made and removed by this
+sweep's process), which each task looks for before it starts its run and while it waits.
+
 A node that is lost takes its runs' processes with it; their tasks fail, and `run_sweep` resumes
 each run from its own checkpoints on a node that is left. A cluster that goes away altogether (its
 head unreachable, or no node with a CPU left) for CLUSTER_LOST_S stops the sweep with one line that
@@ -15,7 +21,9 @@ names the resume command; every run keeps its last checkpoint.
 
 from __future__ import annotations
 
+import contextlib
 import os
+import secrets
 import socket
 import subprocess
 import time
@@ -24,7 +32,7 @@ from pathlib import Path
 from evolve.own_modules import child_env, python_command
 from evolve.rollout.ray_cluster import connect
 from evolve.runs.stops import PASSED_ON
-from evolve.sweeps.sweep import BackendLost, die_with_parent, open_log, trust_flag
+from evolve.sweeps.sweep import BackendLost, open_log, run_process_setup, trust_flag
 from tsim.errors import SgrError
 
 CLUSTER_LOST_S = 10.0  # the cluster unusable this long: the sweep stops
@@ -32,22 +40,30 @@ HEALTH_EVERY_S = 1.0
 WAIT_TURN_S = 0.2  # a run's task looks for a cancel this often
 
 
-def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> int:
+STOPPED = 128 + PASSED_ON  # a run's exit code when its sweep stopped it (evolve/runs/stops.py)
+
+
+def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = (),
+                 stop_file: str | None = None) -> int:
     """A Ray task: advance one run to its end in a subprocess on this node; its exit code. Cancelled
-    without force (the sweep stops), it lets the run end its generation with a checkpoint first."""
+    without force, or finding `stop_file` (the sweep stops), it lets the run end its generation with
+    a checkpoint first; finding it before the run started, it starts nothing (STOPPED)."""
+    if stop_file is not None and os.path.lexists(stop_file):
+        return STOPPED
     env = child_env()  # -P (python_command) and sgr's folder first: no file of the working folder is imported
     proc = None
     try:
         log = open_log(Path(run_path) / "log.txt")  # never through a link (SgrError: the task fails)
         try:
             # the run dies with this worker (a task cancelled with force, a sweep killed): no run goes on
-            # alone
+            # alone; a stop passed on while it starts waits for its loop (run_process_setup)
             proc = subprocess.Popen(python_command("evolve.cli", "evolve", "--resume", run_path,
                                                    "--workers", str(workers), "--quiet", *flags),
-                                    stdout=log, stderr=subprocess.STDOUT, env=env, preexec_fn=die_with_parent)
+                                    stdout=log, stderr=subprocess.STDOUT, env=env,
+                                    preexec_fn=run_process_setup)
         finally:
             os.close(log)
-        return _wait(proc)
+        return _wait(proc, stop_file)
     except KeyboardInterrupt:  # ray.cancel(force=False): the sweep stops
         if proc is None:
             raise
@@ -59,14 +75,18 @@ def _run_on_node(run_path: str, workers: int, flags: tuple[str, ...] = ()) -> in
                 continue
 
 
-def _wait(proc: subprocess.Popen) -> int:
+def _wait(proc: subprocess.Popen, stop_file: str | None = None) -> int:
     """proc's exit code. Ray's KeyboardInterrupt (a cancel) reaches only Python code, not a process
-    blocked in waitpid: wait in short turns."""
+    blocked in waitpid: wait in short turns, in each of which `stop_file`, once it exists, passes
+    the sweep's stop on to the run (once)."""
+    passed = False
     while True:
         try:
             return proc.wait(timeout=WAIT_TURN_S)
         except subprocess.TimeoutExpired:
-            continue
+            if not passed and stop_file is not None and os.path.lexists(stop_file):
+                proc.send_signal(PASSED_ON)
+                passed = True
 
 
 class RayBackend:
@@ -89,6 +109,7 @@ class RayBackend:
         self._task = ray.remote(_run_on_node).options(num_cpus=self.cpus_per_run, max_retries=0)
         self.procs: dict = {}  # SweepRun -> ObjectRef of its task
         self._logs: dict = {}  # SweepRun -> its log.txt
+        self._stop_file: Path | None = None  # the sweep folder's stop mark for this process's tasks
 
     def start(self, sweep, run) -> None:
         """Submit `run` (already prepared) as one Ray task and return at once; `poll` reports its
@@ -96,7 +117,10 @@ class RayBackend:
         self._wait_for_cluster()  # a task submitted to a cluster that is gone could wait for ever
         path = sweep.run_dir(run).path.resolve()  # the same path on every node
         self._logs[run] = path / "log.txt"
-        self.procs[run] = self._task.remote(str(path), self.cpus_per_run, tuple(trust_flag(sweep)))
+        if self._stop_file is None:  # a name no earlier sweep process used: a mark left by one is never read
+            self._stop_file = sweep.path.resolve() / f".stop-{secrets.token_hex(8)}"
+        self.procs[run] = self._task.remote(str(path), self.cpus_per_run, tuple(trust_flag(sweep)),
+                                            str(self._stop_file))
 
     def poll(self) -> dict:
         """Runs that ended since the last call, with their exit codes (-1: the task failed; why is
@@ -179,6 +203,7 @@ class RayBackend:
         self.procs = {}
         if self._unwell_since is not None or not refs:
             return
+        marked = self._mark_stop()
         for ref in refs:
             ray.cancel(ref, force=False)
         try:
@@ -196,3 +221,17 @@ class RayBackend:
                 ray.cancel(ref, force=True)
             ray.wait(refs, num_returns=len(refs), timeout=30)
             raise
+        finally:
+            if marked:
+                with contextlib.suppress(OSError):
+                    os.unlink(self._stop_file)
+
+    def _mark_stop(self) -> bool:
+        """Make the stop mark the tasks look for (a new empty file, never through a link); whether
+        it was made (if not, Ray's cancel alone passes the stop on)."""
+        try:
+            os.close(os.open(self._stop_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW
+                             | os.O_CLOEXEC, 0o644))
+        except (OSError, TypeError):
+            return False
+        return True

@@ -50,6 +50,7 @@ from evolve.own_modules import child_env, python_command
 from evolve.records.files import atomic_write, read_yaml
 from evolve.records.rundir import RunDir
 from evolve.runs.config import configs_dir, short_repr
+from evolve.runs.stops import hold_passed_on
 from tasks.registry import import_tasks
 from tasks.specs import TASKS, closest, unknown_task
 from tsim.errors import SgrError
@@ -532,6 +533,14 @@ def die_with_parent() -> None:
         pass
 
 
+def run_process_setup() -> None:
+    """A run's process, before its program starts (Popen's preexec_fn): it dies with the sweep's
+    process (`die_with_parent`) and holds a stop passed on until its loop can honour it
+    (evolve/runs/stops.py `hold_passed_on`; imported already: nothing is imported after a fork)."""
+    die_with_parent()
+    hold_passed_on()
+
+
 class LocalBackend:
     """Runs on this machine, `parallel` at a time, each with cpus / parallel rollout workers."""
 
@@ -552,7 +561,7 @@ class LocalBackend:
             self.procs[run] = subprocess.Popen(
                 python_command("evolve.cli", "evolve", "--resume", str(sweep.run_dir(run).path),
                                "--workers", str(workers), "--quiet", *trust_flag(sweep)),
-                stdout=log, stderr=subprocess.STDOUT, env=child_env(), preexec_fn=die_with_parent)
+                stdout=log, stderr=subprocess.STDOUT, env=child_env(), preexec_fn=run_process_setup)
         finally:
             os.close(log)
 

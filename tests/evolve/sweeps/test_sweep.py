@@ -153,3 +153,41 @@ def test_report_names_champions_that_do_not_replay_to_their_fitness():
     assert "1 of 2 champions do not replay" in text and "direct-Walker-v0-s1 2 -> 1.5" in text
     rows[1]["replay"] = 2.0
     assert "do not replay" not in report_markdown(rows)
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_a_ray_task_passes_on_a_stop_marked_while_its_run_starts_and_starts_none_after_it(tmp_path):
+    """The Ray backend's stop mark (evolve/sweeps/ray_sweep.py: Ray's cancel can be lost), run as a
+    plain function: marked as the task's run is still starting (its program not yet in its loop), the
+    stop is held and the run ends its first generation with a checkpoint (exit 138: SIGUSR1's stop),
+    neither dying of SIGUSR1 nor going on to its end; a task that finds the mark starts no run."""
+    import threading
+
+    from evolve.sweeps.ray_sweep import STOPPED, _run_on_node
+    from evolve.sweeps.sweep import Sweep
+
+    spec = write_sweep(tmp_path, {**TINY, "methods": ["sgr"], "seeds": [0, 1]})
+    sweep = Sweep.create(spec, tmp_path / "sweep")
+    first, second = sweep.runs
+    for run in (first, second):
+        sweep.prepare(run)
+    mark = tmp_path / "sweep" / ".stop-test"
+    got = []
+    task = threading.Thread(target=lambda: got.append(_run_on_node(str(sweep.run_dir(first).path), 1, (),
+                                                                    str(mark))))
+    run = sweep.run_dir(first)
+    task.start()
+    deadline = time.monotonic() + 60
+    while not (run.path / "log.txt").exists():  # made just before the run's process starts
+        assert time.monotonic() < deadline and task.is_alive()
+        time.sleep(0.001)
+    mark.touch()  # the run's program is starting (Python, its imports, Taichi): not yet in its loop
+    task.join(timeout=300)
+    assert got == [STOPPED], (run.path / "log.txt").read_text()
+    assert len(run.rows()) == 1 and run.last_checkpoint_generation() == 1
+    assert "asked by the sweep: stopping after this generation" in (run.path / "log.txt").read_text()
+
+    assert _run_on_node(str(sweep.run_dir(second).path), 1, (), str(mark)) == STOPPED
+    assert not (sweep.run_dir(second).path / "log.txt").exists()  # no run was started
+    assert sweep.run_dir(second).last_checkpoint_generation() == 0
