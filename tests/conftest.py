@@ -21,7 +21,9 @@ def repo_root() -> Path:
 # rollout workers, pip), `ray` (a Ray instance or cluster), `browser` (headless Chromium), `vulkan`
 # (a Vulkan device or lavapipe); each of these is `slow` too (added here if the file left it out).
 # `slow` alone marks in-process tests that simulate long. `pytest -m "not slow"` is the inner
-# loop; `pytest` runs everything. tests/test_markers.py checks the marks against what tests do.
+# loop; `pytest` runs everything but `long` (a long scenario beside a shorter test of the same fact,
+# also `slow`: pyproject's addopts leave it out, so the suite stays under 10 minutes on 2 cores);
+# `pytest -m long` runs those. tests/test_markers.py checks the marks against what tests do.
 STARTS_PROGRAMS = ("subprocess", "ray", "browser", "vulkan")
 
 
@@ -38,7 +40,7 @@ def pytest_collection_modifyitems(config, items) -> None:
     root = Path(__file__).resolve().parents[1]
     for item in items:
         marks = {m.name for m in item.iter_markers()}
-        if marks & set(STARTS_PROGRAMS) and "slow" not in marks:
+        if (marks & set(STARTS_PROGRAMS) or "long" in marks) and "slow" not in marks:
             item.add_marker(pytest.mark.slow)
         rel = Path(str(item.path)).resolve().relative_to(root).as_posix()
         item.add_marker(pytest.mark.xdist_group(xdist_group(rel, marks)))

@@ -340,6 +340,9 @@ BENCH_RECORDS = {
 }
 
 
+LONG_BENCHES = ("ga_ppo_bench.py", "pinning_bench.py")  # 13-20 s each: `-m long`
+
+
 def test_every_bench_script_that_takes_record_is_listed_here():
     takes = {p.name for p in (ROOT / "bench").glob("*.py") if '"--record"' in p.read_text()}
     assert takes == set(BENCH_RECORDS)
@@ -347,7 +350,8 @@ def test_every_bench_script_that_takes_record_is_listed_here():
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-@pytest.mark.parametrize("script", sorted(BENCH_RECORDS))
+@pytest.mark.parametrize("script", [pytest.param(s, marks=pytest.mark.long) if s in LONG_BENCHES else s
+                                    for s in sorted(BENCH_RECORDS)])
 def test_a_bench_scripts_record_option_writes_a_record_of_its_figures(script, tmp_path):
     """The commands BENCHMARKS.md cites write their records (one wrote none: a stale key), from any
     folder."""

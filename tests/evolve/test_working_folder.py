@@ -1,7 +1,8 @@
 """A tasks.py, evolve.py and tsim.py in the working folder (invoke's tasks.py, say) replace none of
 sgr's modules, in the `sgr` process or in the processes it starts (rollout workers, a sweep's runs):
-every `sgr` command of the README runs from such a folder, with tiny settings (`sgr validate`,
-12 s, and `sgr demo` run in this process like `sgr bench`, which stands for them). And where another
+each kind of process runs from such a folder, and (`-m long`) every `sgr` command of the README,
+with tiny settings (`sgr validate`, 12 s, and `sgr demo` run in this process like `sgr bench`,
+which stands for them). And where another
 package of the same name comes first on the path, sgr uses its own and says so in one line."""
 
 from __future__ import annotations
@@ -44,6 +45,19 @@ def sgr(folder: tuple[Path, dict], *args: str) -> str:
     return out
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_each_kind_of_sgr_process_runs_beside_a_tasks_py_an_evolve_py_and_a_tsim_py(folder):
+    """The `sgr` process, its rollout workers (a run on two) and a sweep's run processes: none imports
+    the folder's modules (every command of the README: the long test below)."""
+    cwd, _ = folder
+    sgr(folder, "evolve", "--config", "tiny.yaml", "--out", "short/tiny")
+    sgr(folder, "sweep", "--config", "sweep.yaml", "--out", "short/sweep")
+    assert (cwd / "short/tiny/champion.json").is_file()
+    assert (cwd / "short/sweep/runs/sgr-Walker-v0-s0/champion.json").is_file()
+
+
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.subprocess
 def test_every_readme_command_runs_beside_a_tasks_py_an_evolve_py_and_a_tsim_py(folder):

@@ -74,7 +74,8 @@ def test_a_run_continues_at_another_size_with_its_decoder(decoder_run, tmp_path)
 
 
 @pytest.mark.subprocess
-@pytest.mark.parametrize("name", DECODERS)
+@pytest.mark.parametrize("name", [n if n == "cppn" else pytest.param(n, marks=pytest.mark.long)
+                                  for n in DECODERS])
 def test_a_sigkilled_run_resumes_to_the_same_run(tmp_path, repo_root, name):
     cfg = write_config(tmp_path, repo_root, "sgr", generations=7, pop_size=12, body_decoder=name)
     crashed = RunDir(tmp_path / "crashed")

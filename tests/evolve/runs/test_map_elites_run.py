@@ -104,7 +104,8 @@ BEHAVIOUR_QD = {"descriptors": ["gait_frequency", "contact"], "resolution": [4, 
 
 
 @pytest.mark.subprocess
-@pytest.mark.parametrize("qd", [TINY["qd"], BEHAVIOUR_QD], ids=["body", "behaviour"])
+@pytest.mark.parametrize("qd", [pytest.param(TINY["qd"], marks=pytest.mark.long), BEHAVIOUR_QD],
+                         ids=["body", "behaviour"])
 def test_a_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path, qd):
     """Killed after generation 5 or later, resumed from its newest checkpoint by a new process: the
     rows, the archive, the champion and the last checkpoint are the uninterrupted run's."""

@@ -91,7 +91,8 @@ def max_node_key(state: dict) -> int:
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-@pytest.mark.parametrize("method", list(METHODS))
+@pytest.mark.parametrize("method", [pytest.param(m, marks=pytest.mark.long) if m == "direct" else m
+                                    for m in METHODS])  # direct: NEAT as sgr's, on another genome
 def test_sigkilled_run_resumes_in_a_new_process_to_the_same_run(tmp_path, repo_root, method):
     cfg = write_config(tmp_path, repo_root, method)
     crashed = RunDir(tmp_path / "crashed")

@@ -140,6 +140,7 @@ def test_a_the_clusters_nodes_are_separate_raylets_with_their_own_resources(clus
     assert len({p.process.pid for n in cluster.worker_nodes for p in n.all_processes["raylet"]}) == 2
 
 
+@pytest.mark.long  # (b) compares a sweep on the cluster with the local one too
 def test_a_a_sweep_on_the_cluster_gives_the_local_backends_results(cluster, tmp_path, tmp_path_factory):
     backend = RayBackend(1)
     assert (backend.parallel, backend.cpus_per_run) == (2, 1)  # one run on each worker node
@@ -182,6 +183,7 @@ def test_b_a_node_removed_while_the_sweep_runs_its_run_resumes_on_the_other_node
     cluster.wait_for_nodes()
 
 
+@pytest.mark.long  # shorter: rollout/test_ray_cluster.py's actor killed mid-generation
 def test_c_workers_ray_a_node_removed_mid_generation_is_simulated_elsewhere_unchanged(
         cluster, tmp_path, shipped_config):
     cfg = shipped_config("sgr", generations=3, pop_size=8, episode_steps=10, render_champion=False)
@@ -249,6 +251,7 @@ def _ray_sweep_past_a_generation(cluster, tmp_path: Path, episode_steps: int):
     return spec, out, proc, runs, before
 
 
+@pytest.mark.long  # shorter: sweeps/test_sweep.py's Ray task stop, runs/test_stops.py's sweep stop
 def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_the_sweep_resumes(
         cluster, tmp_path):
     """SIGTERM to a `--backend ray` sweep (on the cluster, one run on each worker node) once a run
@@ -283,6 +286,7 @@ def test_c_a_sigterm_to_a_ray_sweep_lets_each_run_checkpoint_its_generation_and_
         assert len(fitness(run.path)) == 6
 
 
+@pytest.mark.long
 def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_checkpoint(cluster, tmp_path):
     """SIGTERM, then SIGTERM again 0.3 s later, early in a generation of seconds: the sweep cancels
     its tasks with force, so the runs' processes die with their workers without ending the
@@ -309,6 +313,7 @@ def test_c_a_second_sigterm_to_a_ray_sweep_kills_its_runs_at_once_at_their_last_
             time.sleep(0.05)
 
 
+@pytest.mark.long
 def test_d_a_sweep_whose_cluster_goes_away_stops_with_one_line_naming_the_resume_command(cluster, tmp_path):
     ray.shutdown()  # this process leaves the cluster before it goes
     out, address = tmp_path / "sweep", cluster.address

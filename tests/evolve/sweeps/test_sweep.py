@@ -50,6 +50,8 @@ def best_seeds(sweep: Path) -> list[tuple[str, int]]:
     return out
 
 
+# shorter: each method's SIGKILLed run resumes (runs/test_resume.py); a sweep's stop (runs/test_stops.py)
+@pytest.mark.long
 @pytest.mark.slow
 @pytest.mark.subprocess
 def test_a_killed_sweep_resumes_to_the_same_runs(tmp_path):
