@@ -17,7 +17,7 @@ STEPS = 5
 # every task, BidirectionalWalker-v0 (random goals) too: rollouts seed every world alike, so a
 # body's fitness does not depend on its slot in the batch and champion.json replays to it
 # BridgeWalker-v0 and Climber-v1 (worlds of a bigger capacity tier: ~50 s each to compile their
-# kernels from a cold cache) run with `-m long`; tsim/test_kernels.py simulates both in the suite
+# kernels from a cold cache) run with `-m long`; tests/tsim/test_kernels.py simulates both in the suite
 BIG_TIER = ("BridgeWalker-v0", "Climber-v1")
 NAMES = [pytest.param(n, marks=pytest.mark.long) if n in BIG_TIER else n for n in TASKS]
 
