@@ -87,8 +87,6 @@ def _rounded_csv(text: str) -> str:
 def commit(records: Path, dest: Path = COMMITTED) -> list[str]:
     """Copy the finished records in `records` compactly into `dest` (see the module docstring);
     the names of the records copied."""
-    import gzip
-
     done = []
     for rec in sorted(d for d in records.iterdir() if (d / "champion.json").is_file()):
         out = dest / rec.name
@@ -99,8 +97,7 @@ def commit(records: Path, dest: Path = COMMITTED) -> list[str]:
             elif (rec / name).is_file():
                 copy_record(rec / name, out)
         if (rec / "elites.json").is_file() and not rec.name.endswith(f"-g{BUDGET}"):
-            archive = gzip.compress((rec / "elites.json").read_bytes(), 9, mtime=0)
-            (out / "elites.json.gz").write_bytes(archive)
+            copy_record(rec / "elites.json", out, gzipped=True)
         done.append(rec.name)
     return done
 

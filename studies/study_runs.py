@@ -51,11 +51,12 @@ def evolve(run: Path, args: list[str], workers: int, to: int | None = None) -> N
     subprocess.run(cmd, check=True, cwd=ROOT)
 
 
-def copy_record(source: Path, dest: Path) -> Path:
-    """Copy one record file into the folder `dest`, gzipped where its name is in GZIPPED; the copy."""
+def copy_record(source: Path, dest: Path, gzipped: bool | None = None) -> Path:
+    """Copy one record file into the folder `dest`, gzipped (as NAME.gz, level 9, no timestamp)
+    where `gzipped` says so, by default where its name is in GZIPPED; the copy."""
     import gzip
 
-    if source.name not in GZIPPED:
+    if not (source.name in GZIPPED if gzipped is None else gzipped):
         return Path(shutil.copy2(source, dest / source.name))
     out = dest / (source.name + ".gz")
     out.write_bytes(gzip.compress(source.read_bytes(), 9, mtime=0))

@@ -9,9 +9,9 @@ are killed, and the runs' processes with them, each keeping its last checkpoint.
 
 Ray's cancel is best effort: in tests/evolve/sweeps/test_ray_nodes.py a run went on to its end
 after the sweep's stop, a few times in some dozens (its task, it seems, began as the cancel came,
-which lost it). So the sweep also marks the stop in a
-file of its folder (`.stop-<token>`, on the filesystem the nodes share, made and removed by this
-sweep's process), which each task looks for before it starts its run and while it waits.
+which lost it). So the sweep also marks the stop in a file of its folder (`.stop-<token>`, on the
+filesystem the nodes share, made and removed by this sweep's process), which each task looks for
+before it starts its run and while it waits.
 
 A node that is lost takes its runs' processes with it; their tasks fail, and `run_sweep` resumes
 each run from its own checkpoints on a node that is left. A cluster that goes away altogether (its
@@ -229,9 +229,9 @@ class RayBackend:
     def _mark_stop(self) -> bool:
         """Make the stop mark the tasks look for (a new empty file, never through a link); whether
         it was made (if not, Ray's cancel alone passes the stop on)."""
-        try:
+        try:  # (set by `start`: a sweep with tasks to stop has started one)
             os.close(os.open(self._stop_file, os.O_WRONLY | os.O_CREAT | os.O_EXCL | os.O_NOFOLLOW
                              | os.O_CLOEXEC, 0o644))
-        except (OSError, TypeError):
+        except OSError:
             return False
         return True
