@@ -20,8 +20,10 @@ TASKS = ["Walker-v0", "ObstacleTraverser-v1", "Climber-v2", "Thrower-v0"]
 
 def _tiny(shipped_config, method, task, **extra):
     nested = {"inner_pop_size": 4, "inner_generations": 2} if method == "nested" else {}
+    # one rollout process (the packaged configs' `workers: auto` would start one per CPU):
+    # tests/evolve/rollout/test_pool.py holds every method's runs equal on one or two workers
     return shipped_config(method, task, **{"generations": 2, "pop_size": 6, "episode_steps": 8,
-                                           "render_champion": False, **extra, **nested})
+                                           "render_champion": False, "workers": 1, **extra, **nested})
 
 
 @pytest.mark.parametrize("method", ["direct", "nested"])

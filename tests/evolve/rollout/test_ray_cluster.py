@@ -94,7 +94,11 @@ def _local(tmp_path, shipped_config, method):
     return _LOCAL[method]
 
 
-@pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
+# direct and nested in `pytest -m long`: Ray's actors run the rollout jobs the local pool runs,
+# whatever the method; tests/evolve/rollout/test_pool.py holds every method's runs equal on one
+# or two worker processes
+@pytest.mark.parametrize("method", ["sgr", pytest.param("direct", marks=pytest.mark.long),
+                                    pytest.param("nested", marks=pytest.mark.long)])
 def test_workers_ray_gives_the_results_of_one_local_worker(tmp_path, shipped_config, method):
     on_ray = _run(_config(shipped_config, method), tmp_path / "ray", "ray")
     assert on_ray == _local(tmp_path, shipped_config, method)

@@ -71,7 +71,9 @@ def test_one_episode_without_noise_is_the_nominal_run_bit_for_bit(tmp_path):
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-@pytest.mark.parametrize("method", ["sgr", "direct", "nested"])
+# direct in `pytest -m long`: sgr and nested (a method with inner searches) stay; the rollout that
+# adds the noise is the same for every method (test_episode_noise_follows_the_episode_...)
+@pytest.mark.parametrize("method", ["sgr", pytest.param("direct", marks=pytest.mark.long), "nested"])
 def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescores_exactly(
         tmp_path, method):
     one = run(tmp_path, "w1", config(method, robust=ROBUST))
@@ -90,7 +92,11 @@ def test_robust_runs_do_not_depend_on_the_worker_count_and_their_champion_rescor
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-@pytest.mark.parametrize("robust", [ROBUST, FAST, SETTLE], ids=["k3", "accumulate-race", "accumulate-settle"])
+# k3 and accumulate-race in `pytest -m long`: the packaged design (accumulate-settle) stays in the
+# suite, and the worker-count tests below hold those two evaluations' runs exact
+@pytest.mark.parametrize("robust", [pytest.param(ROBUST, marks=pytest.mark.long),
+                                    pytest.param(FAST, marks=pytest.mark.long), SETTLE],
+                         ids=["k3", "accumulate-race", "accumulate-settle"])
 def test_a_sigkilled_robust_run_resumes_in_a_new_process_on_two_workers_to_the_same_run(tmp_path, robust):
     cfg = config("sgr", robust=robust, generations=8, pop_size=24, checkpoint_every=2)
     (tmp_path / "c.yaml").write_text(yaml.safe_dump({**cfg, "neat_config": None}))
@@ -131,7 +137,7 @@ def test_with_reevaluate_elites_are_simulated_again_with_fresh_noise_and_the_run
     assert rescore_champion(once.path) == once.champion()["fitness"]
 
 
-@pytest.mark.parametrize("method", ["sgr", "direct"])
+@pytest.mark.parametrize("method", ["sgr", pytest.param("direct", marks=pytest.mark.long)])  # as above
 def test_accumulated_runs_do_not_depend_on_the_worker_count_and_their_champion_rescores_exactly(
         tmp_path, method):
     """One fresh episode per genome and generation, a survivor's fitness the mean of all its scores,

@@ -13,7 +13,7 @@ from evolve.runs.experiment import Experiment
 
 TINY = {"method": "sgr", "task": "Walker-v0", "generations": 4, "pop_size": 8, "seed": 5,
         "episode_steps": 15, "checkpoint_every": 2, "render_champion": False, "robust": None,
-        "final_selection": None}
+        "final_selection": None, "workers": 1}  # one rollout process: no worker start-up in each test
 
 
 def _write(tmp_path, repo_root, **changes):
