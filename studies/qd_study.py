@@ -24,6 +24,7 @@ runs/qd/records, beside the runs).
     python studies/qd_study.py                 # 18 map-elites runs and 3 SGR runs: ~8 h on 2 cores
     python studies/qd_study.py --commit        # the finished records, compact, into results/qd/runs
     python studies/qd_study.py --table         # docs: the table from the committed records
+    python studies/qd_study.py --record        # docs/records/qd-behaviour.json: RESULTS' figures
     sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
 
 What results/qd/runs keeps of a record (the tree has a budget, tests/test_tree_size.py): its config,
@@ -218,6 +219,48 @@ def table(records: Path, seeds: list[int], tasks: list[str]) -> str:
     return "\n".join(lines)
 
 
+def record(records: Path, seeds: list[int], tasks: list[str]) -> dict:
+    """docs/records/qd-behaviour.json: the figures of docs/RESULTS.md's table, from the committed
+    records alone (each champion's verdict: 20 replays under uniform ±1e-3, as the table's)."""
+    import datetime
+    import statistics
+    import subprocess
+
+    from evolve.records.replay import judge
+    from evolve.report.plots import read_generations
+
+    def noisy(runs: list[Path]) -> float:
+        return statistics.fmean(judge(d).noisy_mean for d in runs)
+
+    def coverage(runs: list[Path]) -> float:
+        return statistics.fmean(100 * float(read_generations(d)["coverage"][-1]) for d in runs)
+
+    figures: dict[str, dict] = {}
+    unit = f"mean over seeds {', '.join(map(str, seeds))} of the champion's return under uniform(±1e-3)"
+    for task in tasks:
+        arm = {a: [records / f"{a}-{task}-s{s}-g{BUDGET}" for s in seeds] for a in ARCHIVES}
+        twice = {a: [records / f"{a}-{task}-s{s}" for s in seeds] for a in ARCHIVES}
+        sgr = noisy([sgr_run(records, task, s) for s in seeds])
+        figures[f"{task}-sgr-noise"] = {"value": round(sgr, 6), "unit": unit + ", SGR at 100 generations"}
+        for a, runs in arm.items():
+            mean = noisy(runs)
+            figures[f"{task}-{a}-noise"] = {
+                "value": [round(mean, 6), round(mean / sgr, 6)],
+                "unit": unit + f", the {a} map at SGR's budget; its ratio to SGR's"}
+        figures[f"{task}-coverage"] = {"value": [round(coverage(arm[a]), 6) for a in ("behaviour", "body")],
+                                       "unit": "% of cells filled at SGR's budget, behaviour / body map"}
+        figures[f"{task}-twice-noise"] = {"value": [round(noisy(twice[a]), 6) for a in ("behaviour", "body")],
+                                          "unit": unit + ", at twice SGR's budget, behaviour / body map"}
+    commit = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"], capture_output=True,
+                            text=True).stdout.strip()
+    return {"name": "qd-behaviour", "figures": figures,
+            "machine": "2-vCPU shared VMs (AMD EPYC, then Intel Xeon), two or three runs at a time",
+            "commit": commit, "date": datetime.date.today().isoformat(),
+            "command": "python studies/qd_study.py && python studies/qd_study.py --commit --record",
+            "source": "docs/RESULTS.md 'Today'; results/qd/runs (champions replayed 20 times under "
+                      "uniform(±1e-3), `evolve.records.replay.judge`)"}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--tasks", nargs="+", default=list(TASKS))
@@ -231,9 +274,18 @@ def main() -> None:
     ap.add_argument("--table", action="store_true", help="only print the study's table (committed records)")
     ap.add_argument("--commit", action="store_true",
                     help="only copy the finished records into results/qd/runs")
+    ap.add_argument("--record", action="store_true",
+                    help="only write docs/records/qd-behaviour.json from the committed records")
     a = ap.parse_args()
     if a.table:
         print(table(COMMITTED, a.seeds, a.tasks))
+        return
+    if a.record:
+        import json
+
+        out = ROOT / "docs" / "records" / "qd-behaviour.json"
+        out.write_text(json.dumps(record(COMMITTED, a.seeds, a.tasks), indent=1, ensure_ascii=False) + "\n")
+        print(f"wrote {out}")
         return
     if a.commit:
         print("committed:", " ".join(commit(a.records)) or "none")

@@ -177,6 +177,8 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
         method = f"{method} ({raw['layout']})"
     if raw.get("body_decoder") not in (None, "substrate"):  # and so is sgr with another body decoder
         method = f"{method} ({raw['body_decoder']})"
+    if isinstance(raw.get("qd"), dict):  # and a map over other descriptors, or with other parents
+        method = _map_variant(method, raw["qd"])
     task = str(raw.get("task") or UNKNOWN)
     if not raw:
         return {"method": method, "task": task, **{k: "?" for k in POOLABLE}}
@@ -193,6 +195,24 @@ def run_settings(run_dir: Path, raw: dict | None = None) -> dict[str, str]:
             "evaluation": _evaluation(raw.get("robust")), "selection": _selection(raw.get("final_selection")),
             "precision": str(raw.get("precision") or DEFAULT_PRECISION), "arch": _arches(run_dir),
             "start": f"from g{start.get('generation', '?')}" if isinstance(start, dict) else "fresh"}
+
+
+def _map_variant(method: str, qd: dict) -> str:
+    """A map-elites run's method as a report names it: its descriptors where they are not the
+    default body ones, its parent choice where it is not uniform ("map-elites (gait_frequency x
+    contact, curiosity, exploit 0.5)"): maps over other descriptors or bred otherwise are other
+    methods, never averaged with each other (config.yaml read as data: any odd value is shown)."""
+    from evolve.methods.map_elites import DEFAULT_DESCRIPTORS
+
+    names = qd.get("descriptors")
+    parts = []
+    if names is not None and names != list(DEFAULT_DESCRIPTORS):
+        parts.append(" x ".join(map(str, names)) if isinstance(names, list) else str(names))
+    if qd.get("selection") not in (None, "uniform"):
+        parts.append(str(qd["selection"]))
+    if qd.get("exploit") not in (None, 0, 0.0):
+        parts.append(f"exploit {qd['exploit']}")
+    return f"{method} ({', '.join(parts)})" if parts else method
 
 
 def _arches(run_dir: Path) -> str:

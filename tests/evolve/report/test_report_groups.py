@@ -88,6 +88,28 @@ def test_runs_of_different_populations_precisions_or_arches_are_separate_rows(tm
                                                 "sgr (f64, arch cuda) / Walker-v0"}
 
 
+def test_maps_over_other_descriptors_or_bred_otherwise_are_other_methods(tmp_path):
+    """Map-elites over the body (the default descriptors), over behaviour, and over the body with
+    curiosity parents (issue 58's three arms, seeds 0 and 1 each): three rows, each the mean of its
+    own two seeds, named by what its map does differently, never one mean of six runs."""
+    runs = tmp_path / "runs"
+    arms = {"body": ({"descriptors": ["actuator", "rigid"]}, (1.0, 3.0)),
+            "behaviour": ({"descriptors": ["gait_frequency", "contact"], "selection": "curiosity",
+                           "exploit": 0.5}, (10.0, 20.0)),
+            "curious": ({"selection": "curiosity", "exploit": 0.0}, (100.0, 300.0))}
+    for arm, (qd, bests) in arms.items():
+        for seed, b in enumerate(bests):
+            make_run(runs / f"{arm}-{seed}", method="map-elites", seed=seed, best=(b,), qd=qd)
+    rows = table_rows(report(runs)[0])
+    assert set(rows) == {"map-elites / Walker-v0",
+                         "map-elites (gait_frequency x contact, curiosity, exploit 0.5) / Walker-v0",
+                         "map-elites (curiosity) / Walker-v0"}
+    assert rows["map-elites / Walker-v0"]["end"] == "2.00 ± 1.41"
+    assert rows["map-elites (gait_frequency x contact, curiosity, exploit 0.5) / Walker-v0"]["end"] == \
+        "15.00 ± 7.07"
+    assert rows["map-elites (curiosity) / Walker-v0"]["runs (seeds)"] == "2 (seeds 0, 1)"
+
+
 def test_runs_at_depth_two_and_more_are_reported_and_what_is_not_a_run_is_named(tmp_path):
     """Runs two and three folders down are found; a decoded champion, a half-made run, a folder
     of pictures and a file given are listed as skipped, each with why, on the console and in
