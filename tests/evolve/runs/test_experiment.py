@@ -172,13 +172,19 @@ def test_packaged_configs_resolve_by_name_from_any_folder(tmp_path, monkeypatch)
 
 
 @pytest.mark.slow
-def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_path, monkeypatch, capsys):
+def test_evolve_task_and_method_run_the_packaged_config_in_a_named_folder(tmp_path, monkeypatch, capsys,
+                                                                            repo_root):
     monkeypatch.chdir(tmp_path)
+    # 60-step episodes (the packaged length, 500, made the test 18 s, most of it the champion's GIF
+    # and final selection; tests/evolve/runs/test_run_config.py holds the paper length resolved)
     assert main(["evolve", "--task", "Walker-v0", "--method", "direct", "--generations", "1", "--pop", "4",
-                 "--workers", "1", "--quiet"]) == 0
+                 "--workers", "1", "--episode-steps", "60", "--quiet"]) == 0
     (run,) = (tmp_path / "runs").iterdir()
     assert run.name.startswith("direct-Walker-v0-seed0-")
     raw = RunDir(run).config()
-    assert raw["method"] == "direct" and raw["task"] == "Walker-v0" and raw["episode_steps"] == 500
+    packaged = yaml.safe_load((repo_root / "configs/direct/Walker-v0.yaml").read_text())
+    assert raw["method"] == "direct" and raw["task"] == "Walker-v0" and raw["episode_steps"] == 60
+    for key in ("robust", "final_selection", "body_distance_weight", "checkpoint_every"):  # as packaged
+        assert raw[key] == packaged[key], key
     out = capsys.readouterr().out.splitlines()  # the first line names the backend (issue 45)
     assert out[0].startswith("backend: cpu (") and out[1] == f"run directory: {Path('runs') / run.name}"
