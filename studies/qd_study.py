@@ -25,7 +25,7 @@ runs/qd/records, beside the runs).
     python studies/qd_study.py --commit        # the finished records, compact, into results/qd/runs
     python studies/qd_study.py --table         # docs: the table from the committed records
     python studies/qd_study.py --record        # docs/records/qd-behaviour.json: RESULTS' figures
-    sgr report results/qd/runs --replays 20    # then the report (archives, QD curves)
+    sgr report results/qd --replays 20 --no-gallery   # then report.md and summary.csv
 
 What results/qd/runs keeps of a record (the tree has a budget, tests/test_tree_size.py): its config,
 neat.ini and champion.json as written, champion-best-ever.json gzipped (no sgr command reads it),
@@ -256,7 +256,8 @@ def record(records: Path, seeds: list[int], tasks: list[str]) -> dict:
     return {"name": "qd-behaviour", "figures": figures,
             "machine": "2-vCPU shared VMs (AMD EPYC, then Intel Xeon), two or three runs at a time",
             "commit": commit, "date": datetime.date.today().isoformat(),
-            "command": "python studies/qd_study.py && python studies/qd_study.py --commit --record",
+            "command": "python studies/qd_study.py && python studies/qd_study.py --commit && "
+                       "python studies/qd_study.py --record",
             "source": "docs/RESULTS.md 'Today'; results/qd/runs (champions replayed 20 times under "
                       "uniform(±1e-3), `evolve.records.replay.judge`)"}
 

@@ -210,7 +210,7 @@ def _map_variant(method: str, qd: dict) -> str:
         parts.append(" x ".join(map(str, names)) if isinstance(names, list) else str(names))
     if qd.get("selection") not in (None, "uniform"):
         parts.append(str(qd["selection"]))
-    if qd.get("exploit") not in (None, 0, 0.0):
+    if qd.get("exploit") not in (None, 0):  # (0.0 == 0)
         parts.append(f"exploit {qd['exploit']}")
     return f"{method} ({', '.join(parts)})" if parts else method
 
